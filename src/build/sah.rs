@@ -1,0 +1,283 @@
+//! Binned SAH construction, parallel with rayon.
+//!
+//! Each triangle becomes a 32-byte reference (its box and id). A subtree over
+//! `n` references owns exactly `2n - 1` node slots laid out in pre-order: the
+//! subtree root, then the left subtree's `2n_l - 1` slots, then the right
+//! subtree's. The slot slices of the two children are disjoint, so the two
+//! recursions run under `rayon::join` with plain `split_at_mut`, no locks and
+//! no unsafe code. A leaf over `k > 1` triangles leaves `2k - 2` slots unused;
+//! the layout pass drops them.
+//!
+//! Splits minimise the surface area heuristic over `bins` centroid bins on
+//! each axis. A node over identical centroids splits at the median of its
+//! range. Past depth [`MAX_SAH_DEPTH`] (pathological, e.g. exponentially
+//! clustered input) splits switch to the object median on the longest axis,
+//! which bounds the height by `MAX_SAH_DEPTH + log2 n`.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use glam::Vec3A;
+
+use super::{BuildOptions, CanonicalNode, LEAF_FLAG};
+use crate::geom::Aabb;
+use crate::mesh::Mesh;
+
+/// Depth beyond which splits use the object median.
+const MAX_SAH_DEPTH: usize = 64;
+/// Subtrees smaller than this are built on the current thread.
+const PARALLEL_THRESHOLD: usize = 4096;
+
+/// A tree in build order (pre-order with unused slots), before layout.
+pub(super) struct BuiltTree {
+    pub nodes: Vec<CanonicalNode>,
+    pub leaf_triangles: Vec<u32>,
+}
+
+#[derive(Clone, Copy)]
+#[repr(C)]
+struct Ref {
+    min: [f32; 3],
+    id: u32,
+    max: [f32; 3],
+    _pad: u32,
+}
+
+impl Ref {
+    #[inline]
+    fn aabb(&self) -> Aabb {
+        Aabb::from_arrays(self.min, self.max)
+    }
+    #[inline]
+    fn centroid(&self) -> Vec3A {
+        (Vec3A::from(self.min) + Vec3A::from(self.max)) * 0.5
+    }
+}
+
+struct Ctx<'a> {
+    max_leaf: usize,
+    bins: usize,
+    done: AtomicU64,
+    total: u64,
+    step: u64,
+    progress: &'a (dyn Fn(u64, u64) + Sync),
+}
+
+impl Ctx<'_> {
+    fn report(&self, k: u64) {
+        let before = self.done.fetch_add(k, Ordering::Relaxed);
+        if (before + k) / self.step != before / self.step {
+            (self.progress)(before + k, self.total);
+        }
+    }
+}
+
+const UNUSED: CanonicalNode = CanonicalNode {
+    min: [0.0; 3],
+    max: [0.0; 3],
+    a: u32::MAX,
+    b: u32::MAX,
+};
+
+pub(super) fn build_tree(
+    mesh: &Mesh,
+    options: &BuildOptions,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> BuiltTree {
+    use rayon::prelude::*;
+    let n = mesh.triangles.len();
+    if n == 0 {
+        return BuiltTree {
+            nodes: vec![CanonicalNode {
+                min: [f32::INFINITY; 3],
+                max: [f32::NEG_INFINITY; 3],
+                a: 0,
+                b: LEAF_FLAG,
+            }],
+            leaf_triangles: Vec::new(),
+        };
+    }
+    let mut refs: Vec<Ref> = (0..n as u32)
+        .into_par_iter()
+        .map(|id| {
+            let [a, b, c] = mesh.triangle_vertices(id as usize);
+            let mut min = a;
+            let mut max = a;
+            for p in [b, c] {
+                for k in 0..3 {
+                    min[k] = min[k].min(p[k]);
+                    max[k] = max[k].max(p[k]);
+                }
+            }
+            Ref {
+                min,
+                id,
+                max,
+                _pad: 0,
+            }
+        })
+        .collect();
+    let mut nodes = vec![UNUSED; 2 * n - 1];
+    let ctx = Ctx {
+        max_leaf: options.max_leaf_triangles,
+        bins: options.bins,
+        done: AtomicU64::new(0),
+        total: n as u64,
+        step: (n as u64 / 100).max(1),
+        progress,
+    };
+    build_rec(&ctx, &mut refs, &mut nodes, 0, 0, 0);
+    let leaf_triangles = refs.par_iter().map(|r| r.id).collect();
+    BuiltTree {
+        nodes,
+        leaf_triangles,
+    }
+}
+
+fn bounds_of(refs: &[Ref]) -> (Aabb, Aabb) {
+    let mut b = Aabb::EMPTY;
+    let mut c = Aabb::EMPTY;
+    for r in refs {
+        b = b.union(&r.aabb());
+        c.grow(r.centroid());
+    }
+    (b, c)
+}
+
+/// Builds the subtree over `refs` into `nodes` (of length `2 refs.len() - 1`).
+/// `node_base` / `ref_base` are the global indices of `nodes[0]` / `refs[0]`.
+fn build_rec(
+    ctx: &Ctx,
+    refs: &mut [Ref],
+    nodes: &mut [CanonicalNode],
+    node_base: u32,
+    ref_base: u32,
+    depth: usize,
+) {
+    debug_assert_eq!(nodes.len(), 2 * refs.len() - 1);
+    let n = refs.len();
+    let (bounds, cbounds) = bounds_of(refs);
+    if n <= ctx.max_leaf {
+        nodes[0] = CanonicalNode {
+            min: bounds.min.into(),
+            max: bounds.max.into(),
+            a: ref_base,
+            b: LEAF_FLAG | n as u32,
+        };
+        ctx.report(n as u64);
+        return;
+    }
+    let mid = if depth >= MAX_SAH_DEPTH {
+        median_split(refs, &cbounds)
+    } else {
+        sah_split(refs, &cbounds, ctx.bins).unwrap_or_else(|| median_split(refs, &cbounds))
+    };
+    debug_assert!(mid > 0 && mid < n);
+    let (left_refs, right_refs) = refs.split_at_mut(mid);
+    let (head, rest) = nodes.split_at_mut(1);
+    let (left_nodes, right_nodes) = rest.split_at_mut(2 * mid - 1);
+    let left = node_base + 1;
+    let right = node_base + 2 * mid as u32;
+    head[0] = CanonicalNode {
+        min: bounds.min.into(),
+        max: bounds.max.into(),
+        a: left,
+        b: right,
+    };
+    let right_ref_base = ref_base + mid as u32;
+    if n >= PARALLEL_THRESHOLD {
+        rayon::join(
+            || build_rec(ctx, left_refs, left_nodes, left, ref_base, depth + 1),
+            || build_rec(ctx, right_refs, right_nodes, right, right_ref_base, depth + 1),
+        );
+    } else {
+        build_rec(ctx, left_refs, left_nodes, left, ref_base, depth + 1);
+        build_rec(ctx, right_refs, right_nodes, right, right_ref_base, depth + 1);
+    }
+}
+
+/// Object-median split on the longest centroid axis.
+fn median_split(refs: &mut [Ref], cbounds: &Aabb) -> usize {
+    let e = cbounds.extent();
+    let axis = if e.x >= e.y && e.x >= e.z {
+        0
+    } else if e.y >= e.z {
+        1
+    } else {
+        2
+    };
+    let mid = refs.len() / 2;
+    refs.select_nth_unstable_by(mid, |a, b| {
+        let ca = a.min[axis] + a.max[axis];
+        let cb = b.min[axis] + b.max[axis];
+        ca.total_cmp(&cb)
+    });
+    mid
+}
+
+/// The best binned-SAH split, partitioning `refs` in place; `None` if every
+/// centroid is the same point (no plane separates them).
+fn sah_split(refs: &mut [Ref], cbounds: &Aabb, bins: usize) -> Option<usize> {
+    const MAX_BINS: usize = 255;
+    let ext = cbounds.extent();
+    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, split bin)
+    let mut counts = [0u32; MAX_BINS];
+    let mut boxes = [Aabb::EMPTY; MAX_BINS];
+    let mut right_area = [0f32; MAX_BINS];
+    for axis in 0..3 {
+        if ext[axis] <= 0.0 || !ext[axis].is_finite() {
+            continue;
+        }
+        let scale = bins as f32 / ext[axis];
+        let lo = cbounds.min[axis];
+        counts[..bins].fill(0);
+        boxes[..bins].fill(Aabb::EMPTY);
+        for r in refs.iter() {
+            let b = bin_of(r.centroid()[axis], lo, scale, bins);
+            counts[b] += 1;
+            boxes[b] = boxes[b].union(&r.aabb());
+        }
+        // Sweep from the right: area and count of bins [i, bins).
+        let mut acc = Aabb::EMPTY;
+        let mut right_count = [0u32; MAX_BINS];
+        let mut cnt = 0;
+        for i in (1..bins).rev() {
+            acc = acc.union(&boxes[i]);
+            cnt += counts[i];
+            right_area[i] = acc.half_area();
+            right_count[i] = cnt;
+        }
+        let mut acc = Aabb::EMPTY;
+        let mut cnt = 0;
+        for i in 1..bins {
+            acc = acc.union(&boxes[i - 1]);
+            cnt += counts[i - 1];
+            if cnt == 0 || right_count[i] == 0 {
+                continue;
+            }
+            let cost = acc.half_area() * cnt as f32 + right_area[i] * right_count[i] as f32;
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, i));
+            }
+        }
+    }
+    let (_, axis, split) = best?;
+    let scale = bins as f32 / ext[axis];
+    let lo = cbounds.min[axis];
+    // In-place partition: bins [0, split) to the left.
+    let mut i = 0;
+    let mut j = refs.len();
+    while i < j {
+        if bin_of(refs[i].centroid()[axis], lo, scale, bins) < split {
+            i += 1;
+        } else {
+            j -= 1;
+            refs.swap(i, j);
+        }
+    }
+    Some(i)
+}
+
+#[inline]
+fn bin_of(c: f32, lo: f32, scale: f32, bins: usize) -> usize {
+    (((c - lo) * scale) as usize).min(bins - 1)
+}

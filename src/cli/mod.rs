@@ -1,0 +1,73 @@
+//! Subcommands of the `cbvh` binary and what they share.
+
+pub mod build;
+pub mod generate;
+pub mod info;
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+use cbvh::Mesh;
+use cbvh::scene::Kind;
+use indicatif::{ProgressBar, ProgressStyle};
+
+/// A subcommand's error: printed after `error: `, exit status 1.
+pub type CliResult = Result<(), Box<dyn std::error::Error>>;
+
+/// A progress bar on stderr when it is a terminal, hidden otherwise.
+pub fn progress_bar(message: &str, total: u64) -> ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::new(total);
+    pb.set_style(
+        ProgressStyle::with_template("{msg:>12} [{bar:40}] {percent:>3}% {elapsed_precise} eta {eta}")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    pb.set_message(message.to_string());
+    pb
+}
+
+/// Where a subcommand's mesh comes from: a file, or a generator.
+#[derive(clap::Args, Debug, Clone)]
+pub struct MeshSource {
+    /// A mesh file (.off, .ply, .obj, .stl).
+    #[arg(required_unless_present = "gen_kind", conflicts_with = "gen_kind")]
+    pub mesh: Option<PathBuf>,
+    /// Generate the mesh instead: statue, turbine, plant, robot or isosurface.
+    #[arg(long = "gen", value_name = "KIND")]
+    pub gen_kind: Option<Kind>,
+    /// Triangle count to generate (default: the kind's default).
+    #[arg(long, requires = "gen_kind")]
+    pub tris: Option<usize>,
+    /// Generator seed.
+    #[arg(long, default_value_t = 0, requires = "gen_kind")]
+    pub seed: u64,
+}
+
+impl MeshSource {
+    /// Loads or generates the mesh, with a progress bar for generation.
+    /// Returns the mesh and a name for reports.
+    pub fn load(&self) -> Result<(Mesh, String), Box<dyn std::error::Error>> {
+        if let Some(kind) = self.gen_kind {
+            let tris = self.tris.unwrap_or_else(|| cbvh::scene::default_tris(kind));
+            let mesh = generate(kind, tris, self.seed)?;
+            Ok((mesh, format!("{kind} ({tris} requested, seed {})", self.seed)))
+        } else {
+            let path = self.mesh.as_ref().expect("clap requires a mesh or --gen");
+            Ok((cbvh::mesh::load(path)?, path.display().to_string()))
+        }
+    }
+}
+
+/// Generates a mesh with a progress bar on a terminal.
+pub fn generate(kind: Kind, tris: usize, seed: u64) -> Result<Mesh, cbvh::scene::GenError> {
+    let pb = progress_bar("generating", 1);
+    let mesh = cbvh::scene::generate(kind, tris, seed, &mut |done, total| {
+        pb.set_length(total);
+        pb.set_position(done);
+    })?;
+    pb.finish_and_clear();
+    Ok(mesh)
+}

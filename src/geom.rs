@@ -1,0 +1,441 @@
+//! Small geometry types shared by the builder, the codecs and the queries.
+//!
+//! Vectors are glam's (the same glam that parry3d uses through `glamx`), so
+//! the parry integration converts nothing. [`Aabb`] uses `Vec3A` for SIMD.
+
+use glam::{Mat3A, Vec3, Vec3A};
+
+/// An axis-aligned bounding box. An *empty* box has `min > max`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    /// Minimum corner.
+    pub min: Vec3A,
+    /// Maximum corner.
+    pub max: Vec3A,
+}
+
+impl Default for Aabb {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}
+
+impl Aabb {
+    /// The empty box: the identity of [`Aabb::union`].
+    pub const EMPTY: Aabb = Aabb {
+        min: Vec3A::splat(f32::INFINITY),
+        max: Vec3A::splat(f32::NEG_INFINITY),
+    };
+
+    /// A box from its corners.
+    #[inline]
+    pub fn new(min: Vec3A, max: Vec3A) -> Self {
+        Self { min, max }
+    }
+
+    /// A box from `[f32; 3]` corners.
+    #[inline]
+    pub fn from_arrays(min: [f32; 3], max: [f32; 3]) -> Self {
+        Self::new(Vec3A::from(min), Vec3A::from(max))
+    }
+
+    /// The tight box around a triangle.
+    #[inline]
+    pub fn of_triangle(t: &Triangle) -> Self {
+        Self::new(t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]))
+    }
+
+    /// Whether the box contains no point.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.min.cmpgt(self.max).any()
+    }
+
+    /// The smallest box containing both.
+    #[inline]
+    pub fn union(&self, o: &Aabb) -> Aabb {
+        Aabb::new(self.min.min(o.min), self.max.max(o.max))
+    }
+
+    /// Grows the box to contain `p`.
+    #[inline]
+    pub fn grow(&mut self, p: Vec3A) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    /// The box grown by `margin` on every side.
+    #[inline]
+    pub fn loosened(&self, margin: f32) -> Aabb {
+        Aabb::new(self.min - Vec3A::splat(margin), self.max + Vec3A::splat(margin))
+    }
+
+    /// Centre point.
+    #[inline]
+    pub fn center(&self) -> Vec3A {
+        (self.min + self.max) * 0.5
+    }
+
+    /// Half of the extents.
+    #[inline]
+    pub fn half_extents(&self) -> Vec3A {
+        (self.max - self.min) * 0.5
+    }
+
+    /// Extents (`max - min`).
+    #[inline]
+    pub fn extent(&self) -> Vec3A {
+        self.max - self.min
+    }
+
+    /// Half the surface area (the SAH only needs ratios); 0 for empty boxes.
+    #[inline]
+    pub fn half_area(&self) -> f32 {
+        if self.is_empty() {
+            return 0.0;
+        }
+        let d = self.extent();
+        d.x * d.y + d.y * d.z + d.z * d.x
+    }
+
+    /// Whether the two boxes share at least one point (touching counts).
+    #[inline]
+    pub fn intersects(&self, o: &Aabb) -> bool {
+        self.min.cmple(o.max).all() && o.min.cmple(self.max).all()
+    }
+
+    /// Whether `o` lies inside this box (boundary included).
+    #[inline]
+    pub fn contains(&self, o: &Aabb) -> bool {
+        self.min.cmple(o.min).all() && o.max.cmple(self.max).all()
+    }
+
+    /// Whether the point lies inside the box (boundary included).
+    #[inline]
+    pub fn contains_point(&self, p: Vec3A) -> bool {
+        self.min.cmple(p).all() && p.cmple(self.max).all()
+    }
+
+    /// Squared distance from `p` to the box (0 inside).
+    #[inline]
+    pub fn distance_squared(&self, p: Vec3A) -> f32 {
+        let d = (self.min - p).max(p - self.max).max(Vec3A::ZERO);
+        d.length_squared()
+    }
+
+    /// The box of this box after the rigid transform `pose`: conservative
+    /// (it contains every transformed point of the box, rounding included).
+    #[inline]
+    pub fn transformed(&self, pose: &Pose) -> Aabb {
+        let c = pose.transform_point(self.center());
+        let e = pose.abs_rotation() * self.half_extents();
+        // Pad by a few ulps of the magnitudes involved, so that rounding in
+        // this computation cannot leave a transformed point of the box
+        // outside the result.
+        let mag = c.abs().max_element()
+            + e.max_element()
+            + pose.translation.abs().max_element()
+            + self.min.abs().max(self.max.abs()).max_element();
+        let e = e + Vec3A::splat(mag * 8.0 * f32::EPSILON);
+        Aabb::new(c - e, c + e)
+    }
+
+    /// The eight corners.
+    pub fn corners(&self) -> [Vec3A; 8] {
+        let (a, b) = (self.min, self.max);
+        [
+            Vec3A::new(a.x, a.y, a.z),
+            Vec3A::new(b.x, a.y, a.z),
+            Vec3A::new(a.x, b.y, a.z),
+            Vec3A::new(b.x, b.y, a.z),
+            Vec3A::new(a.x, a.y, b.z),
+            Vec3A::new(b.x, a.y, b.z),
+            Vec3A::new(a.x, b.y, b.z),
+            Vec3A::new(b.x, b.y, b.z),
+        ]
+    }
+}
+
+/// A triangle as its three corners.
+pub type Triangle = [Vec3A; 3];
+
+/// Converts `[f32; 3]` corners into a [`Triangle`].
+#[inline]
+pub fn triangle_from_arrays(v: [[f32; 3]; 3]) -> Triangle {
+    [Vec3A::from(v[0]), Vec3A::from(v[1]), Vec3A::from(v[2])]
+}
+
+/// A rigid transform: rotation then translation, `p ↦ R p + t`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pose {
+    /// Rotation matrix (orthonormal).
+    pub rotation: Mat3A,
+    /// Translation.
+    pub translation: Vec3A,
+}
+
+impl Default for Pose {
+    fn default() -> Self {
+        Self::IDENTITY
+    }
+}
+
+impl Pose {
+    /// The identity transform.
+    pub const IDENTITY: Pose = Pose {
+        rotation: Mat3A::IDENTITY,
+        translation: Vec3A::ZERO,
+    };
+
+    /// A pose from a unit quaternion and a translation.
+    pub fn from_rotation_translation(rotation: glam::Quat, translation: Vec3) -> Self {
+        Self {
+            rotation: Mat3A::from_quat(rotation),
+            translation: translation.into(),
+        }
+    }
+
+    /// Transforms a point.
+    #[inline]
+    pub fn transform_point(&self, p: Vec3A) -> Vec3A {
+        self.rotation * p + self.translation
+    }
+
+    /// Rotates a vector (no translation).
+    #[inline]
+    pub fn transform_vector(&self, v: Vec3A) -> Vec3A {
+        self.rotation * v
+    }
+
+    /// The inverse transform.
+    pub fn inverse(&self) -> Pose {
+        let rt = self.rotation.transpose();
+        Pose {
+            rotation: rt,
+            translation: -(rt * self.translation),
+        }
+    }
+
+    /// `self ∘ other`: first `other`, then `self`.
+    pub fn mul(&self, other: &Pose) -> Pose {
+        Pose {
+            rotation: self.rotation * other.rotation,
+            translation: self.transform_point(other.translation),
+        }
+    }
+
+    /// The element-wise absolute value of the rotation matrix, used to
+    /// bound a rotated box.
+    #[inline]
+    pub fn abs_rotation(&self) -> Mat3A {
+        Mat3A::from_cols(
+            self.rotation.x_axis.abs(),
+            self.rotation.y_axis.abs(),
+            self.rotation.z_axis.abs(),
+        )
+    }
+}
+
+/// A ray `origin + t · dir`, with the reciprocal direction precomputed for
+/// slab tests.
+#[derive(Clone, Copy, Debug)]
+pub struct Ray {
+    /// Origin.
+    pub origin: Vec3A,
+    /// Direction (need not be normalised; `t` is measured in its units).
+    pub dir: Vec3A,
+    /// `1 / dir`, component-wise (infinite where a component is 0).
+    pub inv_dir: Vec3A,
+}
+
+impl Ray {
+    /// A ray from an origin and a direction.
+    #[inline]
+    pub fn new(origin: Vec3A, dir: Vec3A) -> Self {
+        Self {
+            origin,
+            dir,
+            inv_dir: dir.recip(),
+        }
+    }
+
+    /// The point at parameter `t`.
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3A {
+        self.origin + self.dir * t
+    }
+
+    /// Slab test: the entry parameter if the ray meets `b` within
+    /// `[0, t_max]`, else `None`. Robust to zero direction components
+    /// (NaN from `0 * inf` is treated as "no constraint").
+    #[inline]
+    pub fn intersect_aabb(&self, b: &Aabb, t_max: f32) -> Option<f32> {
+        let t1 = (b.min - self.origin) * self.inv_dir;
+        let t2 = (b.max - self.origin) * self.inv_dir;
+        // `min`/`max` of glam propagate the non-NaN operand on x86 SSE
+        // (minps returns the second operand when either is NaN), so order
+        // the operands so that a NaN slab yields ±inf, i.e. no constraint.
+        let tmin = t1.min(t2);
+        let tmax = t1.max(t2);
+        let t_enter = tmin.x.max(tmin.y).max(tmin.z).max(0.0);
+        let t_exit = tmax.x.min(tmax.y).min(tmax.z).min(t_max);
+        if t_enter <= t_exit { Some(t_enter) } else { None }
+    }
+}
+
+/// A ray–triangle hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriHit {
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// Barycentric coordinate of the second corner.
+    pub u: f32,
+    /// Barycentric coordinate of the third corner.
+    pub v: f32,
+}
+
+/// Möller–Trumbore ray/triangle intersection, two-sided. Returns the hit
+/// if `t` lies in `[0, t_max]`.
+#[inline]
+pub fn ray_triangle(ray: &Ray, tri: &Triangle, t_max: f32) -> Option<TriHit> {
+    let e1 = tri[1] - tri[0];
+    let e2 = tri[2] - tri[0];
+    let p = ray.dir.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let s = ray.origin - tri[0];
+    let u = s.dot(p) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = s.cross(e1);
+    let v = ray.dir.dot(q) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    let t = e2.dot(q) * inv;
+    if t >= 0.0 && t <= t_max {
+        Some(TriHit { t, u, v })
+    } else {
+        None
+    }
+}
+
+/// The point of triangle `t` closest to `p` (Ericson, *Real-Time Collision
+/// Detection*, §5.1.5), with its barycentric coordinates of corners 1 and 2.
+/// Degenerate triangles (segments, points) are handled as their edges.
+pub fn closest_point_on_triangle(p: Vec3A, t: &Triangle) -> (Vec3A, f32, f32) {
+    let r = ericson_closest(p, t);
+    if r.0.is_finite() && r.1.is_finite() && r.2.is_finite() {
+        return r;
+    }
+    // Degenerate: the closest point of the three edges.
+    let seg = |a: Vec3A, b: Vec3A| {
+        let d = b - a;
+        let l2 = d.length_squared();
+        let s = if l2 > 0.0 { ((p - a).dot(d) / l2).clamp(0.0, 1.0) } else { 0.0 };
+        (a + d * s, s)
+    };
+    let (q0, s0) = seg(t[0], t[1]);
+    let (q1, s1) = seg(t[1], t[2]);
+    let (q2, s2) = seg(t[2], t[0]);
+    [(q0, s0, 0.0), (q1, 1.0 - s1, s1), (q2, 0.0, 1.0 - s2)]
+        .into_iter()
+        .min_by(|x, y| (x.0 - p).length_squared().total_cmp(&(y.0 - p).length_squared()))
+        .unwrap_or((t[0], 0.0, 0.0))
+}
+
+fn ericson_closest(p: Vec3A, t: &Triangle) -> (Vec3A, f32, f32) {
+    let (a, b, c) = (t[0], t[1], t[2]);
+    let ab = b - a;
+    let ac = c - a;
+    let ap = p - a;
+    let d1 = ab.dot(ap);
+    let d2 = ac.dot(ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (a, 0.0, 0.0);
+    }
+    let bp = p - b;
+    let d3 = ab.dot(bp);
+    let d4 = ac.dot(bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return (b, 1.0, 0.0);
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return (a + ab * v, v, 0.0);
+    }
+    let cp = p - c;
+    let d5 = ab.dot(cp);
+    let d6 = ac.dot(cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return (c, 0.0, 1.0);
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return (a + ac * w, 0.0, w);
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (b + (c - b) * w, 1.0 - w, w);
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let v = vb * denom;
+    let w = vc * denom;
+    (a + ab * v + ac * w, v, w)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slab_test_handles_axis_parallel_rays() {
+        let b = Aabb::from_arrays([0.0; 3], [1.0; 3]);
+        let r = Ray::new(Vec3A::new(0.5, 0.5, -1.0), Vec3A::new(0.0, 0.0, 1.0));
+        assert_eq!(r.intersect_aabb(&b, f32::INFINITY), Some(1.0));
+        let miss = Ray::new(Vec3A::new(2.0, 0.5, -1.0), Vec3A::new(0.0, 0.0, 1.0));
+        assert_eq!(miss.intersect_aabb(&b, f32::INFINITY), None);
+        assert_eq!(r.intersect_aabb(&b, 0.5), None);
+    }
+
+    #[test]
+    fn transformed_box_contains_transformed_corners() {
+        let b = Aabb::from_arrays([-1.0, 0.0, 2.0], [3.0, 1.0, 2.5]);
+        let pose = Pose::from_rotation_translation(
+            glam::Quat::from_euler(glam::EulerRot::XYZ, 0.3, -1.1, 2.0),
+            Vec3::new(1.0, -2.0, 0.5),
+        );
+        let tb = b.transformed(&pose).loosened(1e-5);
+        for c in b.corners() {
+            assert!(tb.contains_point(pose.transform_point(c)));
+        }
+        let back = pose.inverse().mul(&pose);
+        assert!((back.transform_point(Vec3A::ONE) - Vec3A::ONE).length() < 1e-5);
+    }
+
+    #[test]
+    fn closest_point_regions() {
+        let t = [Vec3A::ZERO, Vec3A::X, Vec3A::Y];
+        assert_eq!(closest_point_on_triangle(Vec3A::new(-1.0, -1.0, 0.0), &t).0, Vec3A::ZERO);
+        let (p, _, _) = closest_point_on_triangle(Vec3A::new(0.25, 0.25, 3.0), &t);
+        assert!((p - Vec3A::new(0.25, 0.25, 0.0)).length() < 1e-6);
+        let (p, _, _) = closest_point_on_triangle(Vec3A::new(1.0, 1.0, 0.0), &t);
+        assert!((p - Vec3A::new(0.5, 0.5, 0.0)).length() < 1e-6);
+    }
+
+    #[test]
+    fn ray_hits_triangle_with_barycentrics() {
+        let t = [Vec3A::ZERO, Vec3A::X, Vec3A::Y];
+        let r = Ray::new(Vec3A::new(0.2, 0.3, 1.0), Vec3A::new(0.0, 0.0, -1.0));
+        let h = ray_triangle(&r, &t, f32::INFINITY).unwrap();
+        assert!((h.t - 1.0).abs() < 1e-6 && (h.u - 0.2).abs() < 1e-6 && (h.v - 0.3).abs() < 1e-6);
+        assert!(ray_triangle(&r, &t, 0.5).is_none());
+    }
+}

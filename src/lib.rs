@@ -1,0 +1,32 @@
+//! # cbvh — compressed bounding volume hierarchies for collision detection and ray tracing
+//!
+//! cbvh stores triangle meshes as compressed bounding volume hierarchies and
+//! uses them directly: as parry3d / rapier3d collision shapes, and as the
+//! acceleration structure of a CPU ray tracer.
+//!
+//! The crate is organised as in `DESIGN.md`:
+//!
+//! - [`mesh`]: the [`Mesh`] type and its loaders/writers (OFF, PLY, OBJ, STL).
+//! - [`scene`]: deterministic procedural scenes standing in for the papers' models.
+//! - [`build`]: the one builder, producing a [`CanonicalBvh`] in a chosen layout.
+//! - [`cursor`]: [`NodeCursor`], the traversal trait every codec implements.
+//! - [`codec`]: storage forms (`plain` now; compressed codecs later).
+//! - [`query`]: ray, overlap, closest-point and tree-vs-tree queries over any cursor.
+//! - [`parry`]: the parry3d / rapier3d integration (the only folder importing them).
+//! - [`geom`]: the small geometry types (glam-based) shared by all of them.
+#![warn(missing_docs)]
+
+pub mod build;
+pub mod codec;
+pub mod cursor;
+/// Deterministic procedural scenes (`gen` is a reserved word in edition 2024).
+#[path = "gen/mod.rs"]
+pub mod scene;
+pub mod geom;
+pub mod mesh;
+pub mod parry;
+pub mod query;
+
+pub use build::{BuildOptions, CanonicalBvh, Layout};
+pub use cursor::{NodeCursor, TraversalStats};
+pub use mesh::{Mesh, MeshError};

@@ -1,0 +1,249 @@
+//! The STL reader (ASCII and binary) with vertex welding.
+//!
+//! A file is binary when its size is exactly `84 + 50 * count` for the
+//! count stored at byte 80, otherwise ASCII when it starts with `solid` and
+//! its first bytes are text, otherwise binary (many binary files also start
+//! with `solid`, so the keyword alone decides nothing). Corners with bitwise
+//! equal positions (`-0.0` counted as `0.0`) become one vertex, so the mesh
+//! is indexed. ASCII loops with more than three vertices are
+//! fan-triangulated. Normals and attribute bytes are ignored.
+
+use std::collections::HashMap;
+use std::collections::hash_map::Entry;
+use std::hash::{BuildHasherDefault, Hasher};
+use std::io::{BufRead, Read};
+
+use super::{Bytes, Encoding, Lines, Src, fan, finite, parse_f32, show, tokens};
+use crate::mesh::{Mesh, MeshError, Place};
+
+/// How many leading bytes decide between ASCII and binary.
+const PROBE: u64 = 512;
+
+pub(super) fn read<R: BufRead>(mut reader: R, src: &Src) -> Result<(Mesh, Encoding), MeshError> {
+    let mut head = Vec::with_capacity(PROBE as usize);
+    (&mut reader)
+        .take(PROBE)
+        .read_to_end(&mut head)
+        .map_err(|e| src.io(e))?;
+    let exact_binary = match head.get(80..84) {
+        Some(&[a, b, c, d]) => 84 + 50 * u64::from(u32::from_le_bytes([a, b, c, d])) == src.len,
+        _ => false,
+    };
+    let starts_solid = head
+        .trim_ascii_start()
+        .get(..5)
+        .is_some_and(|k| k.eq_ignore_ascii_case(b"solid"));
+    let text = head.iter().all(|&b| b >= 0x20 || b.is_ascii_whitespace());
+    let rest = (&head[..]).chain(reader);
+    if starts_solid && text && !exact_binary {
+        Ok((read_ascii(rest, src)?, Encoding::Ascii))
+    } else {
+        Ok((read_binary(rest, src)?, Encoding::BinaryLittleEndian))
+    }
+}
+
+/// Hashes the 96-bit keys of the welder (std's default SipHash is several
+/// times slower, and keys here do not come from an adversary that matters).
+#[derive(Default)]
+struct WeldHasher(u64);
+
+impl Hasher for WeldHasher {
+    fn finish(&self) -> u64 {
+        // murmur3's finaliser: every input bit affects the high and low bits.
+        let mut h = self.0;
+        h ^= h >> 33;
+        h = h.wrapping_mul(0xff51_afd7_ed55_8ccd);
+        h ^= h >> 33;
+        h = h.wrapping_mul(0xc4ce_b9fe_1a85_ec53);
+        h ^ (h >> 33)
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0.rotate_left(8) ^ u64::from(b)).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+        }
+    }
+
+    fn write_u128(&mut self, x: u128) {
+        let (lo, hi) = (x as u64, (x >> 64) as u64);
+        self.0 ^= lo.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ hi.rotate_left(29);
+    }
+}
+
+/// Merges corners with bitwise equal positions into indexed vertices.
+#[derive(Default)]
+struct Welder {
+    map: HashMap<u128, u32, BuildHasherDefault<WeldHasher>>,
+    vertices: Vec<[f32; 3]>,
+}
+
+impl Welder {
+    fn index(&mut self, v: [f32; 3], place: Place, src: &Src) -> Result<u32, MeshError> {
+        if !finite(&v) {
+            return Err(src.non_finite(place, self.vertices.len()));
+        }
+        // -0.0 == 0.0, so both get the bits of +0.0.
+        let [x, y, z] = v.map(|c| {
+            if c == 0.0 {
+                0u128
+            } else {
+                u128::from(c.to_bits())
+            }
+        });
+        match self.map.entry(x | (y << 32) | (z << 64)) {
+            Entry::Occupied(e) => Ok(*e.get()),
+            Entry::Vacant(e) => {
+                let i = u32::try_from(self.vertices.len())
+                    .map_err(|_| src.malformed(place, "more than 2^32 distinct vertices"))?;
+                e.insert(i);
+                self.vertices.push(v);
+                Ok(i)
+            }
+        }
+    }
+}
+
+fn read_binary<R: BufRead>(reader: R, src: &Src) -> Result<Mesh, MeshError> {
+    let mut bytes = Bytes::new(reader, 0);
+    let mut header = [0u8; 84];
+    if !bytes.fill(&mut header).map_err(|e| src.io(e))? {
+        return Err(src.truncated(
+            Place::Byte(bytes.offset()),
+            "the 84-byte binary STL header (80 bytes of text and a 4-byte triangle count)",
+        ));
+    }
+    let n = u32::from_le_bytes([header[80], header[81], header[82], header[83]]);
+    let cap = src.capacity(u64::from(n), 84, 50);
+    let mut welder = Welder::default();
+    welder.map.reserve(cap / 2);
+    welder.vertices.reserve(cap / 2);
+    let mut triangles = Vec::with_capacity(cap);
+    let mut record = [0u8; 50];
+    for t in 0..n {
+        let start = bytes.offset();
+        if !bytes.fill(&mut record).map_err(|e| src.io(e))? {
+            return Err(src.truncated(
+                Place::Byte(bytes.offset()),
+                format!("triangle {t} of {n} (50 bytes from byte {start})"),
+            ));
+        }
+        let f =
+            |o: usize| f32::from_le_bytes([record[o], record[o + 1], record[o + 2], record[o + 3]]);
+        let mut tri = [0u32; 3];
+        for (k, corner) in tri.iter_mut().enumerate() {
+            let o = 12 + 12 * k;
+            let place = Place::Byte(start + o as u64);
+            *corner = welder.index([f(o), f(o + 4), f(o + 8)], place, src)?;
+        }
+        triangles.push(tri);
+    }
+    Ok(Mesh::new(welder.vertices, triangles))
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum State {
+    Outside,
+    Solid,
+    Facet,
+    Loop,
+    LoopDone,
+}
+
+impl State {
+    fn expected(self) -> &'static str {
+        match self {
+            State::Outside => "\"solid\"",
+            State::Solid => "\"facet\" or \"endsolid\"",
+            State::Facet => "\"outer loop\"",
+            State::Loop => "\"vertex x y z\" or \"endloop\"",
+            State::LoopDone => "\"endfacet\"",
+        }
+    }
+}
+
+fn read_ascii<R: BufRead>(reader: R, src: &Src) -> Result<Mesh, MeshError> {
+    let mut lines = Lines::new(reader);
+    let mut welder = Welder::default();
+    let mut triangles = Vec::new();
+    let mut polygon: Vec<u32> = Vec::new();
+    let mut state = State::Outside;
+    let mut facet = 0usize;
+    while lines.advance().map_err(|e| src.io(e))? {
+        let place = lines.place();
+        let mut toks = tokens(lines.text());
+        let Some(keyword) = toks.next() else { continue };
+        let is = |k: &[u8]| keyword.eq_ignore_ascii_case(k);
+        let unexpected = || {
+            src.malformed(
+                place,
+                format!("expected {}, found {}", state.expected(), show(keyword)),
+            )
+        };
+        state = match state {
+            State::Outside if is(b"solid") => State::Solid,
+            State::Solid if is(b"facet") => State::Facet,
+            State::Solid if is(b"endsolid") => State::Outside,
+            State::Facet if is(b"outer") => {
+                match toks.next() {
+                    Some(t) if t.eq_ignore_ascii_case(b"loop") => {}
+                    _ => return Err(src.malformed(place, "expected \"outer loop\"")),
+                }
+                polygon.clear();
+                State::Loop
+            }
+            State::Loop if is(b"vertex") => {
+                let mut v = [0f32; 3];
+                for (k, c) in v.iter_mut().enumerate() {
+                    let axis = ["x", "y", "z"][k];
+                    let Some(t) = toks.next() else {
+                        let what = format!("the {axis} coordinate of a vertex of facet {facet}");
+                        return Err(if lines.cut_off() {
+                            src.truncated(place, what)
+                        } else {
+                            src.malformed(place, format!("missing {what}"))
+                        });
+                    };
+                    *c = parse_f32(t).ok_or_else(|| {
+                        src.malformed(
+                            place,
+                            format!("expected the {axis} coordinate, found {}", show(t)),
+                        )
+                    })?;
+                }
+                if let Some(t) = toks.next() {
+                    return Err(src.malformed(
+                        place,
+                        format!(
+                            "unexpected {} after the three coordinates of a vertex",
+                            show(t)
+                        ),
+                    ));
+                }
+                polygon.push(welder.index(v, place, src)?);
+                State::Loop
+            }
+            State::Loop if is(b"endloop") => {
+                if polygon.len() < 3 {
+                    return Err(src.malformed(
+                        place,
+                        format!(
+                            "facet {facet} has {} vertices; at least 3 are needed",
+                            polygon.len()
+                        ),
+                    ));
+                }
+                fan(&polygon, &mut triangles);
+                State::LoopDone
+            }
+            State::LoopDone if is(b"endfacet") => {
+                facet += 1;
+                State::Solid
+            }
+            _ => return Err(unexpected()),
+        };
+    }
+    if state != State::Outside {
+        return Err(src.truncated(lines.eof_place(), state.expected()));
+    }
+    Ok(Mesh::new(welder.vertices, triangles))
+}

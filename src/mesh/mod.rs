@@ -1,0 +1,112 @@
+//! Triangle meshes: the [`Mesh`] type, its statistics, and file input/output.
+//!
+//! A [`Mesh`] is an indexed triangle mesh with `f32` vertex positions and
+//! `[u32; 3]` triangles. Files are loaded by extension with [`load`]
+//! (OFF, PLY ASCII/binary of either endianness, OBJ, STL ASCII/binary with
+//! coincident vertices welded) and written with [`save`] (binary PLY, OBJ).
+//! Polygons are fan-triangulated on input.
+//!
+//! Bad input never panics: every loader returns a [`MeshError`] that names
+//! the file, the place (line for text formats, byte offset for binary ones)
+//! and what is wrong.
+
+mod error;
+mod io;
+mod stats;
+
+pub use error::{MeshError, Place};
+pub use io::{
+    Encoding, Format, FormatDetail, load, load_bytes, load_bytes_with_detail, load_with_detail, save,
+};
+pub use stats::{MeshStats, boundary_edges, degenerate_triangles};
+
+/// An indexed triangle mesh.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// Vertex positions.
+    pub vertices: Vec<[f32; 3]>,
+    /// Triangles as indices into [`Mesh::vertices`].
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    /// Creates a mesh from vertices and triangles without validating it
+    /// (see [`Mesh::validate`]).
+    pub fn new(vertices: Vec<[f32; 3]>, triangles: Vec<[u32; 3]>) -> Self {
+        Self {
+            vertices,
+            triangles,
+        }
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Number of vertices.
+    pub fn vertex_count(&self) -> usize {
+        self.vertices.len()
+    }
+
+    /// The three corner positions of triangle `t`.
+    ///
+    /// # Panics
+    /// If `t` is out of range or the triangle refers to a missing vertex
+    /// (a validated mesh never does).
+    #[inline]
+    pub fn triangle_vertices(&self, t: usize) -> [[f32; 3]; 3] {
+        let [a, b, c] = self.triangles[t];
+        [
+            self.vertices[a as usize],
+            self.vertices[b as usize],
+            self.vertices[c as usize],
+        ]
+    }
+
+    /// Axis-aligned bounds `(min, max)` of the vertices referenced or not;
+    /// `None` for a mesh without vertices.
+    pub fn bounds(&self) -> Option<([f32; 3], [f32; 3])> {
+        let first = *self.vertices.first()?;
+        let mut lo = first;
+        let mut hi = first;
+        for v in &self.vertices {
+            for k in 0..3 {
+                lo[k] = lo[k].min(v[k]);
+                hi[k] = hi[k].max(v[k]);
+            }
+        }
+        Some((lo, hi))
+    }
+
+    /// Checks what every consumer of a mesh relies on: at least one
+    /// triangle, every index in range, every coordinate finite.
+    /// `source` names the mesh in the error (a file path, or a generator).
+    pub fn validate(&self, source: &str) -> Result<(), MeshError> {
+        if let Some(vertex) = self.vertices.iter().position(|v| !v.iter().all(|c| c.is_finite())) {
+            return Err(MeshError::NonFinite {
+                path: source.into(),
+                place: Place::Unknown,
+                vertex,
+            });
+        }
+        if self.triangles.is_empty() {
+            return Err(MeshError::NoFaces {
+                path: source.into(),
+            });
+        }
+        let n = self.vertices.len();
+        for (face, tri) in self.triangles.iter().enumerate() {
+            if let Some(&index) = tri.iter().find(|&&i| i as usize >= n) {
+                return Err(MeshError::IndexOutOfRange {
+                    path: source.into(),
+                    place: Place::Unknown,
+                    face,
+                    index: index as u64,
+                    vertices: n,
+                });
+            }
+        }
+        Ok(())
+    }
+}

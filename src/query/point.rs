@@ -1,0 +1,78 @@
+//! Closest point of a mesh to a point.
+
+use glam::Vec3A;
+
+use crate::cursor::{MAX_CHILDREN, NodeCursor, TraversalStats};
+use crate::geom::closest_point_on_triangle;
+
+/// The closest point found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointHit {
+    /// Distance from the query point.
+    pub distance: f32,
+    /// The triangle the closest point lies on.
+    pub triangle: u32,
+    /// The closest point.
+    pub point: Vec3A,
+}
+
+/// The point of the mesh closest to `p` among points within `max_dist`
+/// (`f32::INFINITY` for no limit). Ties go to the lower triangle id.
+pub fn closest_point<C: NodeCursor>(
+    c: &C,
+    p: Vec3A,
+    max_dist: f32,
+    stats: &mut TraversalStats,
+) -> Option<PointHit> {
+    let (root, root_box) = c.root();
+    stats.nodes_visited += 1;
+    let mut best_d2 = max_dist * max_dist;
+    let d0 = root_box.distance_squared(p);
+    if d0 > best_d2 {
+        return None;
+    }
+    let mut best: Option<(f32, u32, Vec3A)> = None;
+    let mut stack: Vec<(C::Node, f32)> = Vec::with_capacity(64);
+    stack.push((root, d0));
+    let mut kids: [(f32, Option<C::Node>); MAX_CHILDREN] = [(0.0, None); MAX_CHILDREN];
+    while let Some((node, d2)) = stack.pop() {
+        if d2 > best_d2 {
+            continue;
+        }
+        if c.is_leaf(&node) {
+            c.for_each_triangle(&node, |id, tri| {
+                stats.primitive_tests += 1;
+                let (q, _, _) = closest_point_on_triangle(p, tri);
+                let dd = (q - p).length_squared();
+                let better = dd < best_d2
+                    || (dd == best_d2 && best.is_none_or(|b| id < b.1));
+                if better {
+                    best_d2 = dd;
+                    best = Some((dd, id, q));
+                }
+            });
+            continue;
+        }
+        let mut n = 0;
+        c.for_each_child(&node, |child, b| {
+            stats.nodes_visited += 1;
+            let d = b.distance_squared(p);
+            if d <= best_d2 {
+                kids[n] = (d, Some(child));
+                n += 1;
+            }
+        });
+        let kids = &mut kids[..n];
+        kids.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+        for (d, k) in kids.iter() {
+            if let Some(k) = k {
+                stack.push((*k, *d));
+            }
+        }
+    }
+    best.map(|(d2, triangle, point)| PointHit {
+        distance: d2.sqrt(),
+        triangle,
+        point,
+    })
+}

@@ -1,0 +1,143 @@
+//! Ray queries: closest hit and any hit.
+
+use crate::cursor::{MAX_CHILDREN, NodeCursor, TraversalStats};
+use crate::geom::{Ray, TriHit, Triangle, ray_triangle};
+
+/// The closest intersection of a ray with a mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayHit {
+    /// Ray parameter of the hit (distance if the direction is a unit vector).
+    pub t: f32,
+    /// Id of the triangle hit.
+    pub triangle: u32,
+    /// Barycentric coordinate of the triangle's second corner.
+    pub u: f32,
+    /// Barycentric coordinate of the triangle's third corner.
+    pub v: f32,
+}
+
+/// The closest hit of `ray` within `[0, t_max]`, with the two-sided
+/// Möller–Trumbore triangle test.
+pub fn closest_hit<C: NodeCursor>(
+    c: &C,
+    ray: &Ray,
+    t_max: f32,
+    stats: &mut TraversalStats,
+) -> Option<RayHit> {
+    closest_hit_with(c, ray, t_max, stats, |_, tri, t_max| ray_triangle(ray, tri, t_max))
+}
+
+/// The closest hit with a caller-given primitive test `test(id, triangle,
+/// t_max)`, which returns a hit no farther than `t_max` or `None`.
+pub fn closest_hit_with<C: NodeCursor>(
+    c: &C,
+    ray: &Ray,
+    t_max: f32,
+    stats: &mut TraversalStats,
+    mut test: impl FnMut(u32, &Triangle, f32) -> Option<TriHit>,
+) -> Option<RayHit> {
+    let (root, root_box) = c.root();
+    stats.nodes_visited += 1;
+    let t0 = ray.intersect_aabb(&root_box, t_max)?;
+    let mut best: Option<RayHit> = None;
+    let mut best_t = t_max;
+    let mut stack: Vec<(C::Node, f32)> = Vec::with_capacity(64);
+    stack.push((root, t0));
+    let mut kids: [(f32, Option<C::Node>); MAX_CHILDREN] = [(0.0, None); MAX_CHILDREN];
+    while let Some((node, t_enter)) = stack.pop() {
+        if t_enter > best_t {
+            continue;
+        }
+        if c.is_leaf(&node) {
+            c.for_each_triangle(&node, |id, tri| {
+                stats.primitive_tests += 1;
+                if let Some(h) = test(id, tri, best_t) {
+                    let closer = h.t < best_t
+                        || best.is_none_or(|b| h.t == b.t && id < b.triangle);
+                    if closer {
+                        best_t = h.t;
+                        best = Some(RayHit {
+                            t: h.t,
+                            triangle: id,
+                            u: h.u,
+                            v: h.v,
+                        });
+                    }
+                }
+            });
+            continue;
+        }
+        let mut n = 0;
+        c.for_each_child(&node, |child, b| {
+            stats.nodes_visited += 1;
+            if let Some(t) = ray.intersect_aabb(&b, best_t) {
+                kids[n] = (t, Some(child));
+                n += 1;
+            }
+        });
+        // Push far children first so the nearest is popped next.
+        let kids = &mut kids[..n];
+        if n == 2 {
+            if kids[0].0 < kids[1].0 {
+                kids.swap(0, 1);
+            }
+        } else {
+            kids.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+        }
+        for (t, k) in kids.iter() {
+            if let Some(k) = k {
+                stack.push((*k, *t));
+            }
+        }
+    }
+    best
+}
+
+/// Whether `ray` hits any triangle within `[0, t_max]` (shadow rays).
+pub fn any_hit<C: NodeCursor>(
+    c: &C,
+    ray: &Ray,
+    t_max: f32,
+    stats: &mut TraversalStats,
+) -> bool {
+    any_hit_with(c, ray, t_max, stats, |_, tri| ray_triangle(ray, tri, t_max).is_some())
+}
+
+/// Any hit with a caller-given primitive test.
+pub fn any_hit_with<C: NodeCursor>(
+    c: &C,
+    ray: &Ray,
+    t_max: f32,
+    stats: &mut TraversalStats,
+    mut test: impl FnMut(u32, &Triangle) -> bool,
+) -> bool {
+    let (root, root_box) = c.root();
+    stats.nodes_visited += 1;
+    if ray.intersect_aabb(&root_box, t_max).is_none() {
+        return false;
+    }
+    let mut stack: Vec<C::Node> = Vec::with_capacity(64);
+    stack.push(root);
+    while let Some(node) = stack.pop() {
+        if c.is_leaf(&node) {
+            let mut hit = false;
+            c.for_each_triangle(&node, |id, tri| {
+                if !hit {
+                    stats.primitive_tests += 1;
+                    hit = test(id, tri);
+                }
+            });
+            if hit {
+                return true;
+            }
+            continue;
+        }
+        c.for_each_child(&node, |child, b| {
+            stats.nodes_visited += 1;
+            if ray.intersect_aabb(&b, t_max).is_some() {
+                stack.push(child);
+            }
+        });
+    }
+    false
+}

@@ -1,0 +1,228 @@
+//! The shared codec test suite: every codec's cursor is checked against
+//! brute force over the mesh it was built from.
+#![allow(dead_code)]
+
+use std::collections::BTreeSet;
+use std::ops::ControlFlow;
+
+use cbvh::cursor::NodeCursor;
+use cbvh::geom::{Aabb, Pose, Ray, Triangle, closest_point_on_triangle, ray_triangle, triangle_from_arrays};
+use cbvh::query;
+use cbvh::{Mesh, TraversalStats};
+use glam::{Quat, Vec3, Vec3A};
+
+/// A small deterministic PRNG for test inputs (SplitMix64).
+pub struct Rng(pub u64);
+impl Rng {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in `[lo, hi)`.
+    pub fn f32(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * ((self.next_u64() >> 40) as f32 / (1u64 << 24) as f32)
+    }
+    pub fn vec(&mut self, lo: f32, hi: f32) -> Vec3A {
+        Vec3A::new(self.f32(lo, hi), self.f32(lo, hi), self.f32(lo, hi))
+    }
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n as u64) as usize
+    }
+}
+
+/// A random triangle soup of `n` triangles in a box of size `extent`, with
+/// some tiny and some degenerate triangles.
+pub fn soup(seed: u64, n: usize, extent: f32) -> Mesh {
+    let mut rng = Rng(seed);
+    let mut vertices = Vec::new();
+    let mut triangles = Vec::new();
+    for t in 0..n {
+        let c = rng.vec(-extent, extent);
+        let size = if t % 7 == 0 { extent * 0.001 } else { extent * 0.2 };
+        let base = vertices.len() as u32;
+        for _ in 0..3 {
+            vertices.push((c + rng.vec(-size, size)).to_array());
+        }
+        if t % 11 == 5 {
+            // Degenerate: repeated corner.
+            triangles.push([base, base, base + 1]);
+        } else {
+            triangles.push([base, base + 1, base + 2]);
+        }
+    }
+    Mesh::new(vertices, triangles)
+}
+
+fn tri(mesh: &Mesh, id: u32) -> Triangle {
+    triangle_from_arrays(mesh.triangle_vertices(id as usize))
+}
+
+/// Every node's box contains every triangle below it, each triangle id
+/// appears exactly once, and the cursor's triangles equal the mesh's.
+pub fn check_structure<C: NodeCursor>(c: &C, mesh: &Mesh) {
+    let (root, root_box) = c.root();
+    let mut seen = vec![0u32; mesh.triangles.len()];
+    // Stack of (node, chain of ancestor boxes incl. own).
+    let mut stack = vec![(root, vec![root_box])];
+    while let Some((n, boxes)) = stack.pop() {
+        if c.is_leaf(&n) {
+            c.for_each_triangle(&n, |id, t| {
+                seen[id as usize] += 1;
+                assert_eq!(*t, tri(mesh, id), "triangle {id} differs from the mesh");
+                let tb = Aabb::of_triangle(t);
+                for b in &boxes {
+                    assert!(b.contains(&tb), "box {b:?} does not contain triangle {id} {tb:?}");
+                }
+            });
+        } else {
+            c.for_each_child(&n, |child, b| {
+                let mut chain = boxes.clone();
+                chain.push(b);
+                stack.push((child, chain));
+            });
+        }
+    }
+    assert!(seen.iter().all(|&k| k == 1), "every triangle appears exactly once");
+    assert_eq!(c.triangle_count(), mesh.triangles.len());
+}
+
+pub fn brute_closest(mesh: &Mesh, ray: &Ray, t_max: f32) -> Option<(f32, u32)> {
+    let mut best: Option<(f32, u32)> = None;
+    for id in 0..mesh.triangles.len() as u32 {
+        if let Some(h) = ray_triangle(ray, &tri(mesh, id), t_max) {
+            if best.is_none_or(|b| h.t < b.0) {
+                best = Some((h.t, id));
+            }
+        }
+    }
+    best
+}
+
+/// Rays: random ones and ones aimed at triangle centroids.
+pub fn test_rays(mesh: &Mesh, seed: u64, n: usize) -> Vec<Ray> {
+    let mut rng = Rng(seed);
+    let (lo, hi) = mesh.bounds().unwrap_or(([0.0; 3], [1.0; 3]));
+    let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
+    let size = (hi - lo).length().max(1e-3);
+    (0..n)
+        .map(|k| {
+            let origin = (lo + hi) * 0.5 + rng.vec(-1.0, 1.0).normalize_or(Vec3A::X) * size;
+            let target = if k % 2 == 0 && !mesh.triangles.is_empty() {
+                let t = tri(mesh, rng.below(mesh.triangles.len()) as u32);
+                (t[0] + t[1] + t[2]) / 3.0
+            } else {
+                lo + (hi - lo) * Vec3A::new(rng.f32(0.0, 1.0), rng.f32(0.0, 1.0), rng.f32(0.0, 1.0))
+            };
+            let mut dir = target - origin;
+            if k % 5 == 1 {
+                // An axis-parallel ray.
+                let a = rng.below(3);
+                dir = Vec3A::ZERO;
+                dir[a] = if target[a] > origin[a] { 1.0 } else { -1.0 };
+            }
+            Ray::new(origin, dir.normalize_or(Vec3A::Z))
+        })
+        .collect()
+}
+
+/// Closest hit, any hit, overlap and closest point equal brute force.
+pub fn check_queries<C: NodeCursor>(c: &C, mesh: &Mesh, seed: u64) {
+    let mut stats = TraversalStats::default();
+    for ray in test_rays(mesh, seed, 64) {
+        for t_max in [f32::INFINITY, 1.0] {
+            let got = query::closest_hit(c, &ray, t_max, &mut stats);
+            let want = brute_closest(mesh, &ray, t_max);
+            match (got, want) {
+                (None, None) => {}
+                (Some(g), Some((t, id))) => {
+                    assert!((g.t - t).abs() <= 1e-5 * t.abs().max(1.0), "t {} vs {t}", g.t);
+                    if g.triangle != id {
+                        // A tie: both triangles are hit at the same distance.
+                        let other = ray_triangle(&ray, &tri(mesh, id), t_max).unwrap();
+                        assert!((other.t - g.t).abs() <= 1e-5 * t.abs().max(1.0));
+                    }
+                }
+                (g, w) => panic!("closest hit {g:?} but brute force {w:?} for {ray:?}"),
+            }
+            let any = query::any_hit(c, &ray, t_max, &mut stats);
+            assert_eq!(any, want.is_some(), "any hit disagrees for {ray:?}");
+        }
+    }
+    let mut rng = Rng(seed ^ 0xABCD);
+    let (lo, hi) = mesh.bounds().unwrap_or(([0.0; 3], [1.0; 3]));
+    let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
+    for _ in 0..32 {
+        let p = lo + (hi - lo) * Vec3A::new(rng.f32(-0.2, 1.2), rng.f32(-0.2, 1.2), rng.f32(-0.2, 1.2));
+        let q = p + (hi - lo) * rng.f32(0.0, 0.3) * Vec3A::new(rng.f32(0.0, 1.0), rng.f32(0.0, 1.0), rng.f32(0.0, 1.0));
+        let qbox = Aabb::new(p.min(q), p.max(q));
+        let mut got = BTreeSet::new();
+        query::overlap(c, &qbox, &mut stats, |id, _| {
+            assert!(got.insert(id), "triangle {id} reported twice");
+            ControlFlow::Continue(())
+        });
+        let want: BTreeSet<u32> = (0..mesh.triangles.len() as u32)
+            .filter(|&id| Aabb::of_triangle(&tri(mesh, id)).intersects(&qbox))
+            .collect();
+        assert_eq!(got, want, "overlap set differs for {qbox:?}");
+
+        let got = query::closest_point(c, p, f32::INFINITY, &mut stats);
+        let want = (0..mesh.triangles.len() as u32)
+            .map(|id| ((closest_point_on_triangle(p, &tri(mesh, id)).0 - p).length_squared(), id))
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        match (got, want) {
+            (None, None) => {}
+            (Some(g), Some((d2, _))) => {
+                assert!(g.distance == d2.sqrt() || (g.distance - d2.sqrt()).abs() <= 1e-5 * d2.sqrt().max(1.0), "{g:?} vs {} {:?}", d2.sqrt(), want);
+            }
+            (g, w) => panic!("closest point {g:?} vs brute force {w:?}"),
+        }
+    }
+    assert!(stats.nodes_visited > 0);
+}
+
+/// A few relative poses of B in A's frame: identity, shifted, rotated.
+pub fn test_poses(mesh: &Mesh, seed: u64) -> Vec<Pose> {
+    let mut rng = Rng(seed);
+    let (lo, hi) = mesh.bounds().unwrap_or(([0.0; 3], [1.0; 3]));
+    let size = (Vec3A::from(hi) - Vec3A::from(lo)).length();
+    let mut poses = vec![Pose::IDENTITY];
+    for _ in 0..4 {
+        let q = Quat::from_euler(glam::EulerRot::XYZ, rng.f32(-3.0, 3.0), rng.f32(-3.0, 3.0), rng.f32(-3.0, 3.0));
+        let t = Vec3::from(rng.vec(-0.5, 0.5) * size);
+        poses.push(Pose::from_rotation_translation(q, t));
+    }
+    poses
+}
+
+/// BVTT pairs between `a` and `b` equal brute force for several poses and
+/// prediction distances.
+pub fn check_bvtt<A: NodeCursor, B: NodeCursor>(a: &A, ma: &Mesh, b: &B, mb: &Mesh, seed: u64) {
+    let mut stats = TraversalStats::default();
+    for pose in test_poses(ma, seed) {
+        for prediction in [0.0, 0.05] {
+            let got = query::bvtt_pairs(a, b, &pose, prediction, &mut stats);
+            let mut want = Vec::new();
+            for i in 0..ma.triangles.len() as u32 {
+                let bi = Aabb::of_triangle(&tri(ma, i)).loosened(prediction);
+                for j in 0..mb.triangles.len() as u32 {
+                    let moved = tri(mb, j).map(|p| pose.transform_point(p));
+                    if bi.intersects(&Aabb::of_triangle(&moved)) {
+                        want.push((i, j));
+                    }
+                }
+            }
+            assert_eq!(got, want, "BVTT pairs differ at {pose:?}, prediction {prediction}");
+        }
+    }
+    // Early exit stops at the first pair.
+    let mut count = 0;
+    let stopped = query::bvtt(a, b, &Pose::IDENTITY, 0.0, &mut stats, |_, _, _, _| {
+        count += 1;
+        ControlFlow::Break(())
+    });
+    assert_eq!(stopped, count == 1);
+    assert!(count <= 1);
+}

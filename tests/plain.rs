@@ -1,0 +1,131 @@
+//! The plain codec and the builder, checked against brute force with the
+//! shared suite in `common`.
+
+mod common;
+
+use cbvh::build::{BuildOptions, Layout, build};
+use cbvh::codec::plain::PlainBvh;
+use cbvh::{Mesh, query, TraversalStats};
+use common::*;
+use proptest::prelude::*;
+
+fn plain(mesh: &Mesh, layout: Layout, leaf: usize) -> PlainBvh {
+    let opts = BuildOptions {
+        layout,
+        max_leaf_triangles: leaf,
+        ..Default::default()
+    };
+    let bvh = build(mesh, &opts, &|_, _| {}).expect("build");
+    assert_eq!(bvh.layout, layout);
+    assert_eq!(bvh.nodes.len(), if leaf == 1 { (2 * mesh.triangles.len()).max(2) - 1 } else { bvh.nodes.len() });
+    // Parents agree with children.
+    for (i, n) in bvh.nodes.iter().enumerate() {
+        if !n.is_leaf() {
+            for c in n.children() {
+                assert_eq!(bvh.parents[c as usize], i as u32);
+            }
+        }
+    }
+    PlainBvh::new(&bvh, mesh)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    #[test]
+    fn soups_match_brute_force(seed in any::<u64>(), n in 1usize..160, leaf in 1usize..5) {
+        let mesh = soup(seed, n, 10.0);
+        for layout in Layout::ALL {
+            let p = plain(&mesh, layout, leaf);
+            check_structure(&p, &mesh);
+            check_queries(&p, &mesh, seed);
+        }
+    }
+
+    #[test]
+    fn bvtt_matches_brute_force(seed in any::<u64>(), na in 1usize..60, nb in 1usize..60) {
+        let ma = soup(seed, na, 2.0);
+        let mb = soup(seed.wrapping_add(1), nb, 2.0);
+        let a = plain(&ma, Layout::DepthFirst, 1);
+        let b = plain(&mb, Layout::CacheEfficient, 2);
+        check_bvtt(&a, &ma, &b, &mb, seed);
+    }
+}
+
+#[test]
+fn every_layout_gives_the_same_answers() {
+    let mesh = soup(7, 500, 5.0);
+    let trees: Vec<PlainBvh> = Layout::ALL.iter().map(|&l| plain(&mesh, l, 1)).collect();
+    let mut stats = TraversalStats::default();
+    for ray in test_rays(&mesh, 3, 200) {
+        let hits: Vec<_> = trees.iter().map(|t| query::closest_hit(t, &ray, f32::INFINITY, &mut stats)).collect();
+        assert!(hits.windows(2).all(|w| w[0] == w[1]), "layouts disagree: {hits:?}");
+    }
+    let pairs: Vec<_> = trees
+        .iter()
+        .map(|t| query::bvtt_pairs(t, t, &cbvh::geom::Pose::IDENTITY, 0.01, &mut stats))
+        .collect();
+    assert!(!pairs[0].is_empty());
+    assert!(pairs.windows(2).all(|w| w[0] == w[1]));
+}
+
+#[test]
+fn layouts_are_permutations_with_root_first() {
+    let mesh = soup(11, 3000, 5.0);
+    for layout in Layout::ALL {
+        let bvh = build(&mesh, &BuildOptions { layout, ..Default::default() }, &|_, _| {}).unwrap();
+        assert_eq!(bvh.parents[0], u32::MAX);
+        // Every node but the root has exactly one parent, and parents come first
+        // in every layout we produce.
+        for (i, &p) in bvh.parents.iter().enumerate().skip(1) {
+            assert!((p as usize) < i, "{layout}: parent {p} after child {i}");
+        }
+        let mut ids = bvh.leaf_triangles.clone();
+        ids.sort_unstable();
+        assert!(ids.iter().enumerate().all(|(k, &id)| k as u32 == id));
+    }
+}
+
+#[test]
+fn edge_cases() {
+    // One triangle, all-degenerate, identical triangles, huge coordinates
+    // (1e9: ray and distance arithmetic multiplies coordinates, and must
+    // stay finite in f32).
+    let one = Mesh::new(vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![[0, 1, 2]]);
+    let same = Mesh::new(one.vertices.clone(), vec![[0, 1, 2]; 40]);
+    let flat = Mesh::new(vec![[1.0; 3]; 3], vec![[0, 1, 2]; 9]);
+    let huge = Mesh::new(
+        vec![[1e9, 1e9, 1e9], [-1e9, 1e9, 0.0], [0.0, -1e9, 1e9], [3e9, 0.0, 0.0]],
+        vec![[0, 1, 2], [1, 2, 3], [0, 2, 3]],
+    );
+    for mesh in [one, same, flat, huge] {
+        for layout in Layout::ALL {
+            for leaf in [1, 4] {
+                let p = plain(&mesh, layout, leaf);
+                check_structure(&p, &mesh);
+                check_queries(&p, &mesh, 5);
+                check_bvtt(&p, &mesh, &p, &mesh, 9);
+            }
+        }
+    }
+}
+
+#[test]
+fn empty_mesh_builds_and_answers_nothing() {
+    let mesh = Mesh::default();
+    let p = plain(&mesh, Layout::VanEmdeBoas, 1);
+    let ray = cbvh::geom::Ray::new(glam::Vec3A::ZERO, glam::Vec3A::X);
+    let mut stats = TraversalStats::default();
+    assert!(query::closest_hit(&p, &ray, f32::INFINITY, &mut stats).is_none());
+    assert!(query::bvtt_pairs(&p, &p, &cbvh::geom::Pose::IDENTITY, 1.0, &mut stats).is_empty());
+}
+
+#[test]
+fn bad_options_are_errors() {
+    let mesh = soup(1, 3, 1.0);
+    let e = build(&mesh, &BuildOptions { max_leaf_triangles: 0, ..Default::default() }, &|_, _| {});
+    assert!(e.unwrap_err().to_string().contains("max_leaf_triangles"));
+    let bad = Mesh::new(vec![[0.0; 3]], vec![[0, 0, 5]]);
+    let e = build(&bad, &BuildOptions::default(), &|_, _| {}).unwrap_err();
+    assert!(e.to_string().contains("vertex index 5"), "{e}");
+}
