@@ -67,7 +67,10 @@ impl Aabb {
     /// The box grown by `margin` on every side.
     #[inline]
     pub fn loosened(&self, margin: f32) -> Aabb {
-        Aabb::new(self.min - Vec3A::splat(margin), self.max + Vec3A::splat(margin))
+        Aabb::new(
+            self.min - Vec3A::splat(margin),
+            self.max + Vec3A::splat(margin),
+        )
     }
 
     /// Centre point.
@@ -279,7 +282,11 @@ impl Ray {
         let tmax = t1.max(t2);
         let t_enter = tmin.x.max(tmin.y).max(tmin.z).max(0.0);
         let t_exit = tmax.x.min(tmax.y).min(tmax.z).min(t_max);
-        if t_enter <= t_exit { Some(t_enter) } else { None }
+        if t_enter <= t_exit {
+            Some(t_enter)
+        } else {
+            None
+        }
     }
 }
 
@@ -336,7 +343,11 @@ pub fn closest_point_on_triangle(p: Vec3A, t: &Triangle) -> (Vec3A, f32, f32) {
     let seg = |a: Vec3A, b: Vec3A| {
         let d = b - a;
         let l2 = d.length_squared();
-        let s = if l2 > 0.0 { ((p - a).dot(d) / l2).clamp(0.0, 1.0) } else { 0.0 };
+        let s = if l2 > 0.0 {
+            ((p - a).dot(d) / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
         (a + d * s, s)
     };
     let (q0, s0) = seg(t[0], t[1]);
@@ -344,7 +355,11 @@ pub fn closest_point_on_triangle(p: Vec3A, t: &Triangle) -> (Vec3A, f32, f32) {
     let (q2, s2) = seg(t[2], t[0]);
     [(q0, s0, 0.0), (q1, 1.0 - s1, s1), (q2, 0.0, 1.0 - s2)]
         .into_iter()
-        .min_by(|x, y| (x.0 - p).length_squared().total_cmp(&(y.0 - p).length_squared()))
+        .min_by(|x, y| {
+            (x.0 - p)
+                .length_squared()
+                .total_cmp(&(y.0 - p).length_squared())
+        })
         .unwrap_or((t[0], 0.0, 0.0))
 }
 
@@ -423,7 +438,10 @@ mod tests {
     #[test]
     fn closest_point_regions() {
         let t = [Vec3A::ZERO, Vec3A::X, Vec3A::Y];
-        assert_eq!(closest_point_on_triangle(Vec3A::new(-1.0, -1.0, 0.0), &t).0, Vec3A::ZERO);
+        assert_eq!(
+            closest_point_on_triangle(Vec3A::new(-1.0, -1.0, 0.0), &t).0,
+            Vec3A::ZERO
+        );
         let (p, _, _) = closest_point_on_triangle(Vec3A::new(0.25, 0.25, 3.0), &t);
         assert!((p - Vec3A::new(0.25, 0.25, 0.0)).length() < 1e-6);
         let (p, _, _) = closest_point_on_triangle(Vec3A::new(1.0, 1.0, 0.0), &t);

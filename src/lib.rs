@@ -13,19 +13,23 @@
 //! - [`codec`]: storage forms (`plain` now; compressed codecs later).
 //! - [`query`]: ray, overlap, closest-point and tree-vs-tree queries over any cursor.
 //! - [`parry`]: the parry3d / rapier3d integration (the only folder importing them).
+//! - [`render`]: a Whitted-style ray tracer over any cursor (and parry's `TriMesh`).
+//! - [`plot`]: PNG line plots for the sims.
 //! - [`geom`]: the small geometry types (glam-based) shared by all of them.
 #![warn(missing_docs)]
 
 pub mod build;
 pub mod codec;
 pub mod cursor;
-/// Deterministic procedural scenes (`gen` is a reserved word in edition 2024).
-#[path = "gen/mod.rs"]
-pub mod scene;
 pub mod geom;
 pub mod mesh;
 pub mod parry;
+pub mod plot;
 pub mod query;
+pub mod render;
+/// Deterministic procedural scenes (`gen` is a reserved word in edition 2024).
+#[path = "gen/mod.rs"]
+pub mod scene;
 
 pub use build::{BuildOptions, CanonicalBvh, Layout};
 pub use cursor::{NodeCursor, TraversalStats};

@@ -23,6 +23,8 @@ enum Command {
     Info(cli::info::InfoArgs),
     /// Build a BVH with a codec and report its size and build time.
     Build(cli::build::BuildArgs),
+    /// Ray-trace a mesh (Whitted: shadows, reflections) through a codec and write a PNG.
+    Render(cli::render::RenderArgs),
 }
 
 fn main() -> ExitCode {
@@ -31,6 +33,7 @@ fn main() -> ExitCode {
         Command::Gen(a) => cli::generate::run(a),
         Command::Info(a) => cli::info::run(a),
         Command::Build(a) => cli::build::run(a),
+        Command::Render(a) => cli::render::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -5,7 +5,7 @@ mod common;
 
 use cbvh::build::{BuildOptions, Layout, build};
 use cbvh::codec::plain::PlainBvh;
-use cbvh::{Mesh, query, TraversalStats};
+use cbvh::{Mesh, TraversalStats, query};
 use common::*;
 use proptest::prelude::*;
 
@@ -17,7 +17,14 @@ fn plain(mesh: &Mesh, layout: Layout, leaf: usize) -> PlainBvh {
     };
     let bvh = build(mesh, &opts, &|_, _| {}).expect("build");
     assert_eq!(bvh.layout, layout);
-    assert_eq!(bvh.nodes.len(), if leaf == 1 { (2 * mesh.triangles.len()).max(2) - 1 } else { bvh.nodes.len() });
+    assert_eq!(
+        bvh.nodes.len(),
+        if leaf == 1 {
+            (2 * mesh.triangles.len()).max(2) - 1
+        } else {
+            bvh.nodes.len()
+        }
+    );
     // Parents agree with children.
     for (i, n) in bvh.nodes.iter().enumerate() {
         if !n.is_leaf() {
@@ -58,8 +65,14 @@ fn every_layout_gives_the_same_answers() {
     let trees: Vec<PlainBvh> = Layout::ALL.iter().map(|&l| plain(&mesh, l, 1)).collect();
     let mut stats = TraversalStats::default();
     for ray in test_rays(&mesh, 3, 200) {
-        let hits: Vec<_> = trees.iter().map(|t| query::closest_hit(t, &ray, f32::INFINITY, &mut stats)).collect();
-        assert!(hits.windows(2).all(|w| w[0] == w[1]), "layouts disagree: {hits:?}");
+        let hits: Vec<_> = trees
+            .iter()
+            .map(|t| query::closest_hit(t, &ray, f32::INFINITY, &mut stats))
+            .collect();
+        assert!(
+            hits.windows(2).all(|w| w[0] == w[1]),
+            "layouts disagree: {hits:?}"
+        );
     }
     let pairs: Vec<_> = trees
         .iter()
@@ -73,7 +86,15 @@ fn every_layout_gives_the_same_answers() {
 fn layouts_are_permutations_with_root_first() {
     let mesh = soup(11, 3000, 5.0);
     for layout in Layout::ALL {
-        let bvh = build(&mesh, &BuildOptions { layout, ..Default::default() }, &|_, _| {}).unwrap();
+        let bvh = build(
+            &mesh,
+            &BuildOptions {
+                layout,
+                ..Default::default()
+            },
+            &|_, _| {},
+        )
+        .unwrap();
         assert_eq!(bvh.parents[0], u32::MAX);
         // Every node but the root has exactly one parent, and parents come first
         // in every layout we produce.
@@ -91,11 +112,19 @@ fn edge_cases() {
     // One triangle, all-degenerate, identical triangles, huge coordinates
     // (1e9: ray and distance arithmetic multiplies coordinates, and must
     // stay finite in f32).
-    let one = Mesh::new(vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![[0, 1, 2]]);
+    let one = Mesh::new(
+        vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        vec![[0, 1, 2]],
+    );
     let same = Mesh::new(one.vertices.clone(), vec![[0, 1, 2]; 40]);
     let flat = Mesh::new(vec![[1.0; 3]; 3], vec![[0, 1, 2]; 9]);
     let huge = Mesh::new(
-        vec![[1e9, 1e9, 1e9], [-1e9, 1e9, 0.0], [0.0, -1e9, 1e9], [3e9, 0.0, 0.0]],
+        vec![
+            [1e9, 1e9, 1e9],
+            [-1e9, 1e9, 0.0],
+            [0.0, -1e9, 1e9],
+            [3e9, 0.0, 0.0],
+        ],
         vec![[0, 1, 2], [1, 2, 3], [0, 2, 3]],
     );
     for mesh in [one, same, flat, huge] {
@@ -123,7 +152,14 @@ fn empty_mesh_builds_and_answers_nothing() {
 #[test]
 fn bad_options_are_errors() {
     let mesh = soup(1, 3, 1.0);
-    let e = build(&mesh, &BuildOptions { max_leaf_triangles: 0, ..Default::default() }, &|_, _| {});
+    let e = build(
+        &mesh,
+        &BuildOptions {
+            max_leaf_triangles: 0,
+            ..Default::default()
+        },
+        &|_, _| {},
+    );
     assert!(e.unwrap_err().to_string().contains("max_leaf_triangles"));
     let bad = Mesh::new(vec![[0.0; 3]], vec![[0, 0, 5]]);
     let e = build(&bad, &BuildOptions::default(), &|_, _| {}).unwrap_err();

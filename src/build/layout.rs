@@ -219,7 +219,14 @@ fn cache_efficient(nodes: &[CanonicalNode]) -> Vec<u32> {
     while let Some(root) = outer_roots.pop() {
         cluster.clear();
         outer_frontier.clear();
-        grow(nodes, root, outer, |_| true, &mut cluster, &mut outer_frontier);
+        grow(
+            nodes,
+            root,
+            outer,
+            |_| true,
+            &mut cluster,
+            &mut outer_frontier,
+        );
         for &i in &cluster {
             member[i as usize] = cluster_id;
         }

@@ -33,7 +33,11 @@ pub enum Layout {
 
 impl Layout {
     /// Every layout, in command-line order.
-    pub const ALL: [Layout; 3] = [Layout::DepthFirst, Layout::VanEmdeBoas, Layout::CacheEfficient];
+    pub const ALL: [Layout; 3] = [
+        Layout::DepthFirst,
+        Layout::VanEmdeBoas,
+        Layout::CacheEfficient,
+    ];
 
     /// The command-line name.
     pub fn name(self) -> &'static str {

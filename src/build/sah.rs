@@ -187,11 +187,27 @@ fn build_rec(
     if n >= PARALLEL_THRESHOLD {
         rayon::join(
             || build_rec(ctx, left_refs, left_nodes, left, ref_base, depth + 1),
-            || build_rec(ctx, right_refs, right_nodes, right, right_ref_base, depth + 1),
+            || {
+                build_rec(
+                    ctx,
+                    right_refs,
+                    right_nodes,
+                    right,
+                    right_ref_base,
+                    depth + 1,
+                )
+            },
         );
     } else {
         build_rec(ctx, left_refs, left_nodes, left, ref_base, depth + 1);
-        build_rec(ctx, right_refs, right_nodes, right, right_ref_base, depth + 1);
+        build_rec(
+            ctx,
+            right_refs,
+            right_nodes,
+            right,
+            right_ref_base,
+            depth + 1,
+        );
     }
 }
 

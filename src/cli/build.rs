@@ -59,43 +59,50 @@ pub fn run(a: BuildArgs) -> CliResult {
     let tris = mesh.triangle_count();
     let mesh_rss = peak_rss_bytes();
     let t0 = Instant::now();
-    let (parts, layout, extra): (Vec<(&str, usize)>, Option<Layout>, serde_json::Value) = match a.codec {
-        CodecName::Plain => {
-            let opts = BuildOptions {
-                layout: a.layout,
-                max_leaf_triangles: a.leaf_size,
-                ..Default::default()
-            };
-            let pb = progress_bar("building", tris as u64);
-            let bvh = build(&mesh, &opts, &|done, total| {
-                pb.set_length(total);
-                pb.set_position(done);
-            })?;
-            pb.finish_and_clear();
-            let height = bvh.height();
-            let nodes = bvh.node_count();
-            let plain = PlainBvh::new(&bvh, &mesh);
-            drop(bvh);
-            (
-                plain.bytes_by_part(),
-                Some(a.layout),
-                serde_json::json!({ "nodes": nodes, "height": height }),
-            )
-        }
-        CodecName::Parry => {
-            let t = cbvh::parry::parry_trimesh(&mesh)
-                .map_err(|e| format!("parry could not build a TriMesh: {e:?}"))?;
-            (cbvh::parry::trimesh_bytes_by_part(&t), None, serde_json::json!({}))
-        }
-    };
+    let (parts, layout, extra): (Vec<(&str, usize)>, Option<Layout>, serde_json::Value) =
+        match a.codec {
+            CodecName::Plain => {
+                let opts = BuildOptions {
+                    layout: a.layout,
+                    max_leaf_triangles: a.leaf_size,
+                    ..Default::default()
+                };
+                let pb = progress_bar("building", tris as u64);
+                let bvh = build(&mesh, &opts, &|done, total| {
+                    pb.set_length(total);
+                    pb.set_position(done);
+                })?;
+                pb.finish_and_clear();
+                let height = bvh.height();
+                let nodes = bvh.node_count();
+                let plain = PlainBvh::new(&bvh, &mesh);
+                drop(bvh);
+                (
+                    plain.bytes_by_part(),
+                    Some(a.layout),
+                    serde_json::json!({ "nodes": nodes, "height": height }),
+                )
+            }
+            CodecName::Parry => {
+                let t = cbvh::parry::parry_trimesh(&mesh)
+                    .map_err(|e| format!("parry could not build a TriMesh: {e:?}"))?;
+                (
+                    cbvh::parry::trimesh_bytes_by_part(&t),
+                    None,
+                    serde_json::json!({}),
+                )
+            }
+        };
     let secs = t0.elapsed().as_secs_f64();
     let total: usize = parts.iter().map(|p| p.1).sum();
     let per_tri = total as f64 / tris.max(1) as f64;
     let peak = peak_rss_bytes();
     let threads = rayon::current_num_threads();
     if a.json {
-        let by_part: serde_json::Map<String, serde_json::Value> =
-            parts.iter().map(|(k, v)| (k.to_string(), (*v).into())).collect();
+        let by_part: serde_json::Map<String, serde_json::Value> = parts
+            .iter()
+            .map(|(k, v)| (k.to_string(), (*v).into()))
+            .collect();
         let mut v = serde_json::json!({
             "mesh": name,
             "triangles": tris,
@@ -132,7 +139,10 @@ pub fn run(a: BuildArgs) -> CliResult {
             }
         }
         for (k, v) in &parts {
-            println!("  {k:<15} {v:>14} bytes  {:>8.2} B/triangle", *v as f64 / tris.max(1) as f64);
+            println!(
+                "  {k:<15} {v:>14} bytes  {:>8.2} B/triangle",
+                *v as f64 / tris.max(1) as f64
+            );
         }
         println!("total             {total} bytes, {per_tri:.2} B/triangle");
         if let Some(p) = peak {

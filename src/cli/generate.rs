@@ -3,7 +3,6 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-
 use cbvh::scene::Kind;
 
 use super::CliResult;
@@ -30,11 +29,9 @@ pub fn run(a: GenArgs) -> CliResult {
     match cbvh::mesh::Format::from_path(&a.output)? {
         cbvh::mesh::Format::Ply | cbvh::mesh::Format::Obj => {}
         _ => {
-            return Err(format!(
-                "{}: can only write .ply or .obj files",
-                a.output.display()
-            )
-            .into());
+            return Err(
+                format!("{}: can only write .ply or .obj files", a.output.display()).into(),
+            );
         }
     }
     let tris = a.tris.unwrap_or_else(|| cbvh::scene::default_tris(a.kind));

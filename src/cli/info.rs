@@ -45,7 +45,11 @@ pub fn run(a: InfoArgs) -> CliResult {
         println!(
             "boundary edges        {}{}",
             s.boundary_edges,
-            if s.boundary_edges == 0 { " (closed)" } else { " (open)" }
+            if s.boundary_edges == 0 {
+                " (closed)"
+            } else {
+                " (open)"
+            }
         );
     }
     Ok(())

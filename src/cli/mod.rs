@@ -3,6 +3,7 @@
 pub mod build;
 pub mod generate;
 pub mod info;
+pub mod render;
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -21,9 +22,11 @@ pub fn progress_bar(message: &str, total: u64) -> ProgressBar {
     }
     let pb = ProgressBar::new(total);
     pb.set_style(
-        ProgressStyle::with_template("{msg:>12} [{bar:40}] {percent:>3}% {elapsed_precise} eta {eta}")
-            .expect("static template")
-            .progress_chars("=> "),
+        ProgressStyle::with_template(
+            "{msg:>12} [{bar:40}] {percent:>3}% {elapsed_precise} eta {eta}",
+        )
+        .expect("static template")
+        .progress_chars("=> "),
     );
     pb.set_message(message.to_string());
     pb
@@ -53,7 +56,10 @@ impl MeshSource {
         if let Some(kind) = self.gen_kind {
             let tris = self.tris.unwrap_or_else(|| cbvh::scene::default_tris(kind));
             let mesh = generate(kind, tris, self.seed)?;
-            Ok((mesh, format!("{kind} ({tris} requested, seed {})", self.seed)))
+            Ok((
+                mesh,
+                format!("{kind} ({tris} requested, seed {})", self.seed),
+            ))
         } else {
             let path = self.mesh.as_ref().expect("clap requires a mesh or --gen");
             Ok((cbvh::mesh::load(path)?, path.display().to_string()))

@@ -4,8 +4,12 @@
 //!
 //! - [`plain`]: the uncompressed reference (the papers' "Ori."): 32-byte
 //!   nodes, an `f32` vertex array and `u32` triangle indices.
+//! - [`racbvh`]: RACBVH (Kim et al. 2010): clusters of consecutive nodes,
+//!   front-based structure coding, predicted quantized boxes, a dictionary
+//!   coder and a cache of decompressed clusters.
 
 pub mod plain;
+pub mod racbvh;
 
 /// Memory of a stored structure, by component.
 pub trait ByteSize {

@@ -16,7 +16,8 @@ mod stats;
 
 pub use error::{MeshError, Place};
 pub use io::{
-    Encoding, Format, FormatDetail, load, load_bytes, load_bytes_with_detail, load_with_detail, save,
+    Encoding, Format, FormatDetail, load, load_bytes, load_bytes_with_detail, load_with_detail,
+    save,
 };
 pub use stats::{MeshStats, boundary_edges, degenerate_triangles};
 
@@ -83,7 +84,11 @@ impl Mesh {
     /// triangle, every index in range, every coordinate finite.
     /// `source` names the mesh in the error (a file path, or a generator).
     pub fn validate(&self, source: &str) -> Result<(), MeshError> {
-        if let Some(vertex) = self.vertices.iter().position(|v| !v.iter().all(|c| c.is_finite())) {
+        if let Some(vertex) = self
+            .vertices
+            .iter()
+            .position(|v| !v.iter().all(|c| c.is_finite()))
+        {
             return Err(MeshError::NonFinite {
                 path: source.into(),
                 place: Place::Unknown,

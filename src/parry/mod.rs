@@ -1,10 +1,31 @@
 //! The parry3d / rapier3d integration. This folder is the only place in
 //! the crate that imports parry3d or rapier3d.
 //!
+//! - [`CbvhShape`]: one parry shape over any cbvh codec (`Shape`, `RayCast`,
+//!   `PointQuery`, `CompositeShape`, `TypedCompositeShape`), with mass
+//!   properties computed once at build time.
+//! - [`Dispatcher`]: handles every pair with a cbvh shape on the cbvh trees
+//!   (BVTT for cbvh vs cbvh, overlap queries for cbvh vs convex), chained to
+//!   parry's default dispatcher for everything else. One file per query pair:
+//!   [`cbvh_cbvh`], [`cbvh_convex`].
+//! - [`droptest`]: the rapier drop test behind the sims, timing the narrow
+//!   phase per step through [`timed::Timed`].
 //! - [`trimesh`]: parry's own `TriMesh` built from a [`Mesh`](crate::Mesh),
 //!   the baseline every comparison is made against, with its memory counted
 //!   by part the same way cbvh's codecs count theirs.
 
+pub mod cast;
+pub mod cbvh_cbvh;
+pub mod cbvh_convex;
+mod dispatcher;
+pub mod droptest;
+pub mod raycast_target;
+pub mod shape;
+pub mod timed;
 pub mod trimesh;
+mod workspace;
 
+pub use dispatcher::Dispatcher;
+pub use shape::{CbvhShape, Codec, pose_from_parry};
 pub use trimesh::{parry_trimesh, trimesh_bytes_by_part};
+pub use workspace::CbvhWorkspace;

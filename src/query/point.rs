@@ -44,8 +44,7 @@ pub fn closest_point<C: NodeCursor>(
                 stats.primitive_tests += 1;
                 let (q, _, _) = closest_point_on_triangle(p, tri);
                 let dd = (q - p).length_squared();
-                let better = dd < best_d2
-                    || (dd == best_d2 && best.is_none_or(|b| id < b.1));
+                let better = dd < best_d2 || (dd == best_d2 && best.is_none_or(|b| id < b.1));
                 if better {
                     best_d2 = dd;
                     best = Some((dd, id, q));

@@ -24,7 +24,9 @@ pub fn closest_hit<C: NodeCursor>(
     t_max: f32,
     stats: &mut TraversalStats,
 ) -> Option<RayHit> {
-    closest_hit_with(c, ray, t_max, stats, |_, tri, t_max| ray_triangle(ray, tri, t_max))
+    closest_hit_with(c, ray, t_max, stats, |_, tri, t_max| {
+        ray_triangle(ray, tri, t_max)
+    })
 }
 
 /// The closest hit with a caller-given primitive test `test(id, triangle,
@@ -52,8 +54,7 @@ pub fn closest_hit_with<C: NodeCursor>(
             c.for_each_triangle(&node, |id, tri| {
                 stats.primitive_tests += 1;
                 if let Some(h) = test(id, tri, best_t) {
-                    let closer = h.t < best_t
-                        || best.is_none_or(|b| h.t == b.t && id < b.triangle);
+                    let closer = h.t < best_t || best.is_none_or(|b| h.t == b.t && id < b.triangle);
                     if closer {
                         best_t = h.t;
                         best = Some(RayHit {
@@ -94,13 +95,10 @@ pub fn closest_hit_with<C: NodeCursor>(
 }
 
 /// Whether `ray` hits any triangle within `[0, t_max]` (shadow rays).
-pub fn any_hit<C: NodeCursor>(
-    c: &C,
-    ray: &Ray,
-    t_max: f32,
-    stats: &mut TraversalStats,
-) -> bool {
-    any_hit_with(c, ray, t_max, stats, |_, tri| ray_triangle(ray, tri, t_max).is_some())
+pub fn any_hit<C: NodeCursor>(c: &C, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> bool {
+    any_hit_with(c, ray, t_max, stats, |_, tri| {
+        ray_triangle(ray, tri, t_max).is_some()
+    })
 }
 
 /// Any hit with a caller-given primitive test.

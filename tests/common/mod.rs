@@ -6,7 +6,9 @@ use std::collections::BTreeSet;
 use std::ops::ControlFlow;
 
 use cbvh::cursor::NodeCursor;
-use cbvh::geom::{Aabb, Pose, Ray, Triangle, closest_point_on_triangle, ray_triangle, triangle_from_arrays};
+use cbvh::geom::{
+    Aabb, Pose, Ray, Triangle, closest_point_on_triangle, ray_triangle, triangle_from_arrays,
+};
 use cbvh::query;
 use cbvh::{Mesh, TraversalStats};
 use glam::{Quat, Vec3, Vec3A};
@@ -41,7 +43,11 @@ pub fn soup(seed: u64, n: usize, extent: f32) -> Mesh {
     let mut triangles = Vec::new();
     for t in 0..n {
         let c = rng.vec(-extent, extent);
-        let size = if t % 7 == 0 { extent * 0.001 } else { extent * 0.2 };
+        let size = if t % 7 == 0 {
+            extent * 0.001
+        } else {
+            extent * 0.2
+        };
         let base = vertices.len() as u32;
         for _ in 0..3 {
             vertices.push((c + rng.vec(-size, size)).to_array());
@@ -74,7 +80,10 @@ pub fn check_structure<C: NodeCursor>(c: &C, mesh: &Mesh) {
                 assert_eq!(*t, tri(mesh, id), "triangle {id} differs from the mesh");
                 let tb = Aabb::of_triangle(t);
                 for b in &boxes {
-                    assert!(b.contains(&tb), "box {b:?} does not contain triangle {id} {tb:?}");
+                    assert!(
+                        b.contains(&tb),
+                        "box {b:?} does not contain triangle {id} {tb:?}"
+                    );
                 }
             });
         } else {
@@ -85,17 +94,20 @@ pub fn check_structure<C: NodeCursor>(c: &C, mesh: &Mesh) {
             });
         }
     }
-    assert!(seen.iter().all(|&k| k == 1), "every triangle appears exactly once");
+    assert!(
+        seen.iter().all(|&k| k == 1),
+        "every triangle appears exactly once"
+    );
     assert_eq!(c.triangle_count(), mesh.triangles.len());
 }
 
 pub fn brute_closest(mesh: &Mesh, ray: &Ray, t_max: f32) -> Option<(f32, u32)> {
     let mut best: Option<(f32, u32)> = None;
     for id in 0..mesh.triangles.len() as u32 {
-        if let Some(h) = ray_triangle(ray, &tri(mesh, id), t_max) {
-            if best.is_none_or(|b| h.t < b.0) {
-                best = Some((h.t, id));
-            }
+        if let Some(h) = ray_triangle(ray, &tri(mesh, id), t_max)
+            && best.is_none_or(|b| h.t < b.0)
+        {
+            best = Some((h.t, id));
         }
     }
     best
@@ -138,7 +150,11 @@ pub fn check_queries<C: NodeCursor>(c: &C, mesh: &Mesh, seed: u64) {
             match (got, want) {
                 (None, None) => {}
                 (Some(g), Some((t, id))) => {
-                    assert!((g.t - t).abs() <= 1e-5 * t.abs().max(1.0), "t {} vs {t}", g.t);
+                    assert!(
+                        (g.t - t).abs() <= 1e-5 * t.abs().max(1.0),
+                        "t {} vs {t}",
+                        g.t
+                    );
                     if g.triangle != id {
                         // A tie: both triangles are hit at the same distance.
                         let other = ray_triangle(&ray, &tri(mesh, id), t_max).unwrap();
@@ -155,8 +171,12 @@ pub fn check_queries<C: NodeCursor>(c: &C, mesh: &Mesh, seed: u64) {
     let (lo, hi) = mesh.bounds().unwrap_or(([0.0; 3], [1.0; 3]));
     let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
     for _ in 0..32 {
-        let p = lo + (hi - lo) * Vec3A::new(rng.f32(-0.2, 1.2), rng.f32(-0.2, 1.2), rng.f32(-0.2, 1.2));
-        let q = p + (hi - lo) * rng.f32(0.0, 0.3) * Vec3A::new(rng.f32(0.0, 1.0), rng.f32(0.0, 1.0), rng.f32(0.0, 1.0));
+        let p =
+            lo + (hi - lo) * Vec3A::new(rng.f32(-0.2, 1.2), rng.f32(-0.2, 1.2), rng.f32(-0.2, 1.2));
+        let q = p
+            + (hi - lo)
+                * rng.f32(0.0, 0.3)
+                * Vec3A::new(rng.f32(0.0, 1.0), rng.f32(0.0, 1.0), rng.f32(0.0, 1.0));
         let qbox = Aabb::new(p.min(q), p.max(q));
         let mut got = BTreeSet::new();
         query::overlap(c, &qbox, &mut stats, |id, _| {
@@ -170,12 +190,23 @@ pub fn check_queries<C: NodeCursor>(c: &C, mesh: &Mesh, seed: u64) {
 
         let got = query::closest_point(c, p, f32::INFINITY, &mut stats);
         let want = (0..mesh.triangles.len() as u32)
-            .map(|id| ((closest_point_on_triangle(p, &tri(mesh, id)).0 - p).length_squared(), id))
+            .map(|id| {
+                (
+                    (closest_point_on_triangle(p, &tri(mesh, id)).0 - p).length_squared(),
+                    id,
+                )
+            })
             .min_by(|a, b| a.0.total_cmp(&b.0));
         match (got, want) {
             (None, None) => {}
             (Some(g), Some((d2, _))) => {
-                assert!(g.distance == d2.sqrt() || (g.distance - d2.sqrt()).abs() <= 1e-5 * d2.sqrt().max(1.0), "{g:?} vs {} {:?}", d2.sqrt(), want);
+                assert!(
+                    g.distance == d2.sqrt()
+                        || (g.distance - d2.sqrt()).abs() <= 1e-5 * d2.sqrt().max(1.0),
+                    "{g:?} vs {} {:?}",
+                    d2.sqrt(),
+                    want
+                );
             }
             (g, w) => panic!("closest point {g:?} vs brute force {w:?}"),
         }
@@ -190,7 +221,12 @@ pub fn test_poses(mesh: &Mesh, seed: u64) -> Vec<Pose> {
     let size = (Vec3A::from(hi) - Vec3A::from(lo)).length();
     let mut poses = vec![Pose::IDENTITY];
     for _ in 0..4 {
-        let q = Quat::from_euler(glam::EulerRot::XYZ, rng.f32(-3.0, 3.0), rng.f32(-3.0, 3.0), rng.f32(-3.0, 3.0));
+        let q = Quat::from_euler(
+            glam::EulerRot::XYZ,
+            rng.f32(-3.0, 3.0),
+            rng.f32(-3.0, 3.0),
+            rng.f32(-3.0, 3.0),
+        );
         let t = Vec3::from(rng.vec(-0.5, 0.5) * size);
         poses.push(Pose::from_rotation_translation(q, t));
     }
@@ -214,7 +250,10 @@ pub fn check_bvtt<A: NodeCursor, B: NodeCursor>(a: &A, ma: &Mesh, b: &B, mb: &Me
                     }
                 }
             }
-            assert_eq!(got, want, "BVTT pairs differ at {pose:?}, prediction {prediction}");
+            assert_eq!(
+                got, want,
+                "BVTT pairs differ at {pose:?}, prediction {prediction}"
+            );
         }
     }
     // Early exit stops at the first pair.

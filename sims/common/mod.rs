@@ -1,0 +1,279 @@
+//! What both drop-test sims share: options, running every shape, the
+//! table, the JSON report and the plot.
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+use cbvh::Mesh;
+use cbvh::parry::droptest::{self, DropScene, Placement, RunReport, ShapeKind};
+use cbvh::scene::Kind;
+use indicatif::{ProgressBar, ProgressStyle};
+
+/// Options common to the sims.
+#[derive(clap::Args, Debug, Clone)]
+pub struct SimArgs {
+    /// Number of steps at 60 Hz.
+    #[arg(long, default_value_t = 215)]
+    pub steps: usize,
+    /// Comma-separated shapes to run: parry, plain.
+    #[arg(long, default_value = "parry,plain", value_delimiter = ',')]
+    pub shapes: Vec<ShapeKindArg>,
+    /// Write the report as JSON to this file.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Draw the per-step narrow-phase time of every shape to this PNG.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Worker threads for building trees (rapier's step runs on one thread).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Generator seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Width of the dropped mesh as a fraction of the base's width.
+    #[arg(long, default_value_t = 0.5)]
+    pub width_fraction: f32,
+    /// Gap above the base's top, as a fraction of the dropped mesh's height.
+    #[arg(long, default_value_t = 0.05)]
+    pub gap: f32,
+    /// Let rapier reuse the contacts of pairs that barely moved (skips the
+    /// narrow phase on those steps, so off by default when timing).
+    #[arg(long)]
+    pub contact_recycling: bool,
+    /// Horizontal offset of the drop point, as fractions of the base width: X,Z.
+    #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [0.0, 0.0])]
+    pub offset: Vec<f32>,
+}
+
+/// A shape name on the command line.
+#[derive(Clone, Copy, Debug)]
+pub struct ShapeKindArg(pub ShapeKind);
+
+impl std::str::FromStr for ShapeKindArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        s.parse().map(ShapeKindArg)
+    }
+}
+
+/// A mesh from a file, or generated.
+pub fn mesh_from(
+    file: &Option<PathBuf>,
+    kind: Kind,
+    tris: usize,
+    seed: u64,
+    what: &str,
+) -> Result<(Mesh, String), String> {
+    match file {
+        Some(p) => cbvh::mesh::load(p)
+            .map(|m| (m, p.display().to_string()))
+            .map_err(|e| e.to_string()),
+        None => {
+            let pb = bar(&format!("gen {what}"), 1);
+            let m = cbvh::scene::generate(kind, tris, seed, &mut |d, t| {
+                pb.set_length(t);
+                pb.set_position(d);
+            })
+            .map_err(|e| e.to_string())?;
+            pb.finish_and_clear();
+            Ok((
+                m,
+                format!("generated {kind} ({tris} requested, seed {seed})"),
+            ))
+        }
+    }
+}
+
+fn bar(msg: &str, total: u64) -> ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::new(total);
+    pb.set_style(
+        ProgressStyle::with_template(
+            "{msg:>14} [{bar:40}] {pos}/{len} {elapsed_precise} eta {eta}",
+        )
+        .expect("static template")
+        .progress_chars("=> "),
+    );
+    pb.set_message(msg.to_string());
+    pb
+}
+
+/// Places `dropped` over `base`, runs every shape, prints the table and
+/// writes the JSON and plot. `names` = (dropped, base) for the report.
+pub fn run_sim(
+    title: &str,
+    mut dropped: Mesh,
+    base: Mesh,
+    names: (String, String),
+    args: &SimArgs,
+) -> Result<(), String> {
+    if let Some(t) = args.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .map_err(|e| e.to_string())?;
+    }
+    if args.steps == 0 {
+        return Err("--steps must be at least 1".into());
+    }
+    let placement = Placement {
+        width_fraction: args.width_fraction,
+        gap_fraction: args.gap,
+        offset_fraction: [args.offset[0], args.offset[1]],
+    };
+    let scale = droptest::place(&mut dropped, &base, &placement);
+    let (dlo, dhi) = dropped.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
+    let (blo, bhi) = base.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
+    let statue_size = (0..3).map(|k| dhi[k] - dlo[k]).fold(0.0f32, f32::max);
+    let scene = DropScene {
+        dropped,
+        base,
+        steps: args.steps,
+        dt: 1.0 / 60.0,
+        contact_recycling: args.contact_recycling,
+    };
+    let threads = rayon::current_num_threads();
+    eprintln!(
+        "{title}: dropping {} ({} triangles, scaled ×{scale:.4}) onto {} ({} triangles), {} steps at 60 Hz",
+        names.0,
+        scene.dropped.triangle_count(),
+        names.1,
+        scene.base.triangle_count(),
+        scene.steps
+    );
+    let mut runs: Vec<RunReport> = Vec::new();
+    for ShapeKindArg(kind) in &args.shapes {
+        let pb = bar(kind.name(), scene.steps as u64);
+        let r = droptest::run(&scene, *kind, &mut |s, _| pb.set_position(s as u64))?;
+        pb.finish_and_clear();
+        eprintln!(
+            "  {:<7} done: narrow phase median {:.3} ms",
+            r.shape, r.narrow_phase_ms.median
+        );
+        runs.push(r);
+    }
+    print_table(&runs, statue_size);
+    let scene_json = serde_json::json!({
+        "title": title,
+        "dropped": names.0,
+        "base": names.1,
+        "dropped_triangles": scene.dropped.triangle_count(),
+        "base_triangles": scene.base.triangle_count(),
+        "dropped_scale": scale,
+        "dropped_size": statue_size,
+        "base_bounds": [blo, bhi],
+        "steps": scene.steps,
+        "dt": scene.dt,
+        "threads": threads,
+        "machine": machine(),
+    });
+    if let Some(path) = &args.json {
+        let v = serde_json::json!({ "scene": scene_json, "runs": runs });
+        std::fs::write(
+            path,
+            serde_json::to_string_pretty(&v).map_err(|e| e.to_string())?,
+        )
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+        eprintln!("wrote {}", path.display());
+    }
+    if let Some(path) = &args.plot {
+        let series: Vec<(String, Vec<f64>)> = runs
+            .iter()
+            .map(|r| (r.shape.clone(), r.narrow_phase_ms_per_step.clone()))
+            .collect();
+        cbvh::plot::line_plot_png(
+            path,
+            &format!("{title}: narrow phase per step"),
+            "ms",
+            &series,
+            (1000, 600),
+        )?;
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// The CPU model and core count, for reports.
+pub fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    format!(
+        "{cpu}, {} cores",
+        std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+    )
+}
+
+fn print_table(runs: &[RunReport], size: f32) {
+    println!();
+    println!(
+        "{:<8} {:>10} {:>10} {:>10} {:>10} {:>9} {:>8} {:>7} {:>7} {:>8} {:>9} {:>9}",
+        "shape",
+        "np median",
+        "np mean",
+        "np p95",
+        "np max",
+        "step med",
+        "contact",
+        "pairs",
+        "points",
+        "B/tri",
+        "final y",
+        "fallback"
+    );
+    println!(
+        "{:<8} {:>10} {:>10} {:>10} {:>10} {:>9} {:>8} {:>7} {:>7}",
+        "", "ms", "ms", "ms", "ms", "ms", "steps", "max", "max"
+    );
+    for r in runs {
+        println!(
+            "{:<8} {:>10.3} {:>10.3} {:>10.3} {:>10.3} {:>9.3} {:>8} {:>7} {:>7} {:>8.1} {:>9.4} {:>9}",
+            r.shape,
+            r.narrow_phase_ms.median,
+            r.narrow_phase_ms.mean,
+            r.narrow_phase_ms.p95,
+            r.narrow_phase_ms.max,
+            r.step_ms.median,
+            r.steps_in_contact,
+            r.max_contact_pairs,
+            r.max_contact_points,
+            r.bytes_per_triangle,
+            r.final_translation[1],
+            if r.fallback_bvh_built { "BUILT" } else { "no" }
+        );
+    }
+    if let Some(base) = runs.iter().find(|r| r.shape == "parry") {
+        println!();
+        for r in runs.iter().filter(|r| r.shape != "parry") {
+            let speedup = base.narrow_phase_ms.median / r.narrow_phase_ms.median.max(1e-9);
+            let dy = (r.final_translation[1] - base.final_translation[1]).abs();
+            println!(
+                "{}: narrow phase {speedup:.1}× faster than parry (median); {:.2}× the memory per triangle; final height differs by {:.2} % of the dropped mesh's size",
+                r.shape,
+                r.bytes_per_triangle / base.bytes_per_triangle,
+                100.0 * dy / size.max(1e-9)
+            );
+        }
+    }
+    for r in runs {
+        let rest = r.final_speed < 0.05 * size.max(1e-6);
+        println!(
+            "{}: final speed {:.4} ({}), final translation ({:.4}, {:.4}, {:.4})",
+            r.shape,
+            r.final_speed,
+            if rest { "at rest" } else { "still moving" },
+            r.final_translation[0],
+            r.final_translation[1],
+            r.final_translation[2]
+        );
+    }
+}

@@ -1,0 +1,95 @@
+//! cbvh shape vs cbvh shape: simultaneous BVH-vs-BVH traversal (BVTT) on
+//! both trees; triangle pairs go through parry's convex-convex code.
+
+use std::ops::ControlFlow;
+
+use parry3d::math::{Pose as PPose, Real};
+use parry3d::query::{
+    Contact, ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher,
+    PersistentQueryDispatcher, QueryDispatcher, ShapeIntersection,
+};
+
+use super::shape::{CbvhShape, pose_from_parry, to_parry_triangle, with_cursor};
+use super::workspace::ManifoldUpdate;
+use crate::cursor::TraversalStats;
+use crate::geom::Triangle;
+use crate::query::bvtt;
+
+/// Calls `f` with every triangle pair of `s1` and `s2` (shape 2 placed by
+/// `pos12` in shape 1's frame) whose boxes come within `prediction`.
+pub fn for_each_pair(
+    s1: &CbvhShape,
+    s2: &CbvhShape,
+    pos12: &PPose,
+    prediction: Real,
+    stats: &mut TraversalStats,
+    mut f: impl FnMut(u32, &Triangle, u32, &Triangle) -> ControlFlow<()>,
+) {
+    let pose = pose_from_parry(pos12);
+    with_cursor!(s1.codec(), |a| with_cursor!(s2.codec(), |b| {
+        bvtt(a, b, &pose, prediction, stats, &mut f);
+    }));
+}
+
+/// Contact manifolds, one per triangle pair, persistent across steps.
+pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + Send + Sync>(
+    pos12: &PPose,
+    s1: &CbvhShape,
+    s2: &CbvhShape,
+    prediction: Real,
+    manifolds: &mut Vec<ContactManifold<M, C>>,
+    workspace: &mut Option<ContactManifoldsWorkspace>,
+) {
+    let mut update = ManifoldUpdate::begin(workspace, manifolds);
+    let mut stats = TraversalStats::default();
+    for_each_pair(s1, s2, pos12, prediction, &mut stats, |i, t1, j, t2| {
+        let manifold = update.manifold(i, j);
+        let _ = DefaultQueryDispatcher.contact_manifold_convex_convex(
+            pos12,
+            &to_parry_triangle(t1),
+            &to_parry_triangle(t2),
+            None,
+            None,
+            prediction,
+            manifold,
+        );
+        ControlFlow::Continue(())
+    });
+}
+
+/// Whether any triangle of `s1` intersects one of `s2`.
+pub fn intersection_test(pos12: &PPose, s1: &CbvhShape, s2: &CbvhShape) -> ShapeIntersection {
+    let mut stats = TraversalStats::default();
+    let mut found = ShapeIntersection::new(false);
+    for_each_pair(s1, s2, pos12, 0.0, &mut stats, |i, t1, j, t2| {
+        let hit = DefaultQueryDispatcher
+            .intersection_test(pos12, &to_parry_triangle(t1), &to_parry_triangle(t2))
+            .is_ok_and(|r| r.intersecting);
+        if hit {
+            found = ShapeIntersection::new(true).with_subshapes(i, j);
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    });
+    found
+}
+
+/// The deepest (smallest distance) contact within `prediction`.
+pub fn contact(pos12: &PPose, s1: &CbvhShape, s2: &CbvhShape, prediction: Real) -> Option<Contact> {
+    let mut stats = TraversalStats::default();
+    let mut best: Option<Contact> = None;
+    for_each_pair(s1, s2, pos12, prediction, &mut stats, |_, t1, _, t2| {
+        if let Ok(Some(c)) = DefaultQueryDispatcher.contact(
+            pos12,
+            &to_parry_triangle(t1),
+            &to_parry_triangle(t2),
+            prediction,
+        ) && best.is_none_or(|b| c.dist < b.dist)
+        {
+            best = Some(c);
+        }
+        ControlFlow::Continue(())
+    });
+    best
+}

@@ -1,0 +1,120 @@
+//! cbvh shape vs a convex shape (ball, cuboid, capsule, convex polyhedron,
+//! …): an overlap query on the cbvh tree with the convex shape's box, then
+//! parry's convex-convex code per triangle.
+
+use std::ops::ControlFlow;
+
+use parry3d::math::{Pose as PPose, Real};
+use parry3d::query::{
+    Contact, ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher,
+    PersistentQueryDispatcher, QueryDispatcher, ShapeIntersection,
+};
+use parry3d::shape::Shape;
+
+use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle, with_cursor};
+use super::workspace::ManifoldUpdate;
+use crate::cursor::TraversalStats;
+use crate::geom::Triangle;
+use crate::query::overlap;
+
+/// Calls `f` for each triangle of `mesh` whose box comes within
+/// `prediction` of the box of `convex` placed at `pose` (in the mesh's frame).
+fn for_each_triangle_near(
+    mesh: &CbvhShape,
+    convex: &dyn Shape,
+    pose: &PPose,
+    prediction: Real,
+    mut f: impl FnMut(u32, &Triangle) -> ControlFlow<()>,
+) {
+    let query = from_parry_aabb(&convex.compute_aabb(pose)).loosened(prediction);
+    let mut stats = TraversalStats::default();
+    with_cursor!(mesh.codec(), |c| {
+        overlap(c, &query, &mut stats, &mut f);
+    });
+}
+
+/// Contact manifolds between a cbvh shape and a convex shape. `flipped`
+/// says the cbvh shape is the second shape of the pair.
+pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + Send + Sync>(
+    pos12: &PPose,
+    mesh: &CbvhShape,
+    convex: &dyn Shape,
+    flipped: bool,
+    prediction: Real,
+    manifolds: &mut Vec<ContactManifold<M, C>>,
+    workspace: &mut Option<ContactManifoldsWorkspace>,
+) {
+    let mut update = ManifoldUpdate::begin(workspace, manifolds);
+    // The convex shape's pose in the mesh's frame.
+    let pose = if flipped { pos12.inverse() } else { *pos12 };
+    for_each_triangle_near(mesh, convex, &pose, prediction, |i, t| {
+        let tri = to_parry_triangle(t);
+        if flipped {
+            let m = update.manifold(0, i);
+            let _ = DefaultQueryDispatcher
+                .contact_manifold_convex_convex(pos12, convex, &tri, None, None, prediction, m);
+        } else {
+            let m = update.manifold(i, 0);
+            let _ = DefaultQueryDispatcher
+                .contact_manifold_convex_convex(pos12, &tri, convex, None, None, prediction, m);
+        }
+        ControlFlow::Continue(())
+    });
+}
+
+/// Whether the convex shape intersects a triangle of the cbvh shape.
+pub fn intersection_test(
+    pos12: &PPose,
+    mesh: &CbvhShape,
+    convex: &dyn Shape,
+    flipped: bool,
+) -> ShapeIntersection {
+    let pose = if flipped { pos12.inverse() } else { *pos12 };
+    let mut found = ShapeIntersection::new(false);
+    for_each_triangle_near(mesh, convex, &pose, 0.0, |i, t| {
+        let tri = to_parry_triangle(t);
+        let r = if flipped {
+            DefaultQueryDispatcher.intersection_test(pos12, convex, &tri)
+        } else {
+            DefaultQueryDispatcher.intersection_test(pos12, &tri, convex)
+        };
+        if r.is_ok_and(|r| r.intersecting) {
+            found = if flipped {
+                ShapeIntersection::new(true).with_subshapes(0, i)
+            } else {
+                ShapeIntersection::new(true).with_subshapes(i, 0)
+            };
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    });
+    found
+}
+
+/// The deepest contact within `prediction`.
+pub fn contact(
+    pos12: &PPose,
+    mesh: &CbvhShape,
+    convex: &dyn Shape,
+    flipped: bool,
+    prediction: Real,
+) -> Option<Contact> {
+    let pose = if flipped { pos12.inverse() } else { *pos12 };
+    let mut best: Option<Contact> = None;
+    for_each_triangle_near(mesh, convex, &pose, prediction, |_, t| {
+        let tri = to_parry_triangle(t);
+        let r = if flipped {
+            DefaultQueryDispatcher.contact(pos12, convex, &tri, prediction)
+        } else {
+            DefaultQueryDispatcher.contact(pos12, &tri, convex, prediction)
+        };
+        if let Ok(Some(c)) = r
+            && best.is_none_or(|b| c.dist < b.dist)
+        {
+            best = Some(c);
+        }
+        ControlFlow::Continue(())
+    });
+    best
+}

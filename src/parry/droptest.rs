@@ -1,0 +1,331 @@
+//! The drop test behind the sims: a dynamic mesh dropped onto a fixed mesh
+//! in rapier, once per shape kind, from the same initial conditions, with
+//! the narrow phase timed per step (see [`Timed`](super::timed::Timed)).
+
+use std::str::FromStr;
+use std::sync::atomic::Ordering;
+use std::time::Instant;
+
+use parry3d::math::Vector;
+use parry3d::query::{DefaultQueryDispatcher, QueryDispatcher};
+use parry3d::shape::SharedShape;
+use rapier3d::prelude::{
+    ColliderBuilder, ColliderHandle, NarrowPhase, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle,
+};
+
+use super::Dispatcher;
+use super::shape::CbvhShape;
+use super::timed::Timed;
+use super::trimesh::{parry_trimesh, trimesh_bytes_by_part};
+use crate::build::BuildOptions;
+use crate::mesh::Mesh;
+
+/// Which collision shape a run uses for both meshes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShapeKind {
+    /// parry's own `TriMesh`, with parry's default dispatcher: the baseline.
+    Parry,
+    /// cbvh's plain codec, with cbvh's dispatcher.
+    Plain,
+}
+
+impl ShapeKind {
+    /// Every kind, baseline first.
+    pub const ALL: [ShapeKind; 2] = [ShapeKind::Parry, ShapeKind::Plain];
+
+    /// The name used in `--shapes` and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            ShapeKind::Parry => "parry",
+            ShapeKind::Plain => "plain",
+        }
+    }
+}
+
+impl FromStr for ShapeKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        ShapeKind::ALL
+            .into_iter()
+            .find(|k| k.name() == s.trim())
+            .ok_or_else(|| {
+                format!(
+                    "unknown shape {s:?}; use one of: {}",
+                    ShapeKind::ALL.map(|k| k.name()).join(", ")
+                )
+            })
+    }
+}
+
+/// Two meshes, placed, and how long to simulate.
+#[derive(Clone, Debug)]
+pub struct DropScene {
+    /// The dynamic mesh (the statue), already placed above the base.
+    pub dropped: Mesh,
+    /// The fixed mesh (the turbine).
+    pub base: Mesh,
+    /// Number of steps.
+    pub steps: usize,
+    /// Time step in seconds (1/60 by default).
+    pub dt: f32,
+    /// Let rapier reuse contacts of pairs that barely moved (off for
+    /// timing: it skips the narrow phase).
+    pub contact_recycling: bool,
+}
+
+/// How to place a dropped mesh over a base mesh.
+#[derive(Clone, Copy, Debug)]
+pub struct Placement {
+    /// Width of the dropped mesh as a fraction of the base's width (x/z).
+    pub width_fraction: f32,
+    /// Gap between the dropped mesh's bottom and the base's top, as a
+    /// fraction of the dropped mesh's height.
+    pub gap_fraction: f32,
+    /// Horizontal offset of the drop point from the base's centre, as a
+    /// fraction of the base's width (x, z).
+    pub offset_fraction: [f32; 2],
+}
+
+impl Default for Placement {
+    fn default() -> Self {
+        Self {
+            width_fraction: 0.5,
+            gap_fraction: 0.05,
+            offset_fraction: [0.0, 0.0],
+        }
+    }
+}
+
+/// Scales and moves `dropped` (any units, any offset) so that its width is
+/// `width_fraction` of the base's and it hangs just above the base's top,
+/// centred over it (plus the offset). Returns the scale applied.
+pub fn place(dropped: &mut Mesh, base: &Mesh, p: &Placement) -> f32 {
+    let (Some((dlo, dhi)), Some((blo, bhi))) = (dropped.bounds(), base.bounds()) else {
+        return 1.0;
+    };
+    let width = |lo: [f32; 3], hi: [f32; 3]| (hi[0] - lo[0]).max(hi[2] - lo[2]).max(1e-12);
+    let scale = p.width_fraction * width(blo, bhi) / width(dlo, dhi);
+    let height = (dhi[1] - dlo[1]) * scale;
+    let bw = width(blo, bhi);
+    let target = [
+        0.5 * (blo[0] + bhi[0]) + p.offset_fraction[0] * bw,
+        bhi[1] + p.gap_fraction * height,
+        0.5 * (blo[2] + bhi[2]) + p.offset_fraction[1] * bw,
+    ];
+    let from = [0.5 * (dlo[0] + dhi[0]), dlo[1], 0.5 * (dlo[2] + dhi[2])];
+    for v in &mut dropped.vertices {
+        for k in 0..3 {
+            v[k] = (v[k] - from[k]) * scale + target[k];
+        }
+    }
+    scale
+}
+
+/// Summary statistics of per-step times, in milliseconds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct TimeStats {
+    /// Median.
+    pub median: f64,
+    /// Mean.
+    pub mean: f64,
+    /// 95th percentile.
+    pub p95: f64,
+    /// Maximum.
+    pub max: f64,
+}
+
+impl TimeStats {
+    /// Statistics of `ms` (zeros if empty).
+    pub fn of(ms: &[f64]) -> Self {
+        if ms.is_empty() {
+            return Self::default();
+        }
+        let mut s = ms.to_vec();
+        s.sort_by(f64::total_cmp);
+        let q = |f: f64| s[((s.len() - 1) as f64 * f).round() as usize];
+        Self {
+            median: q(0.5),
+            mean: s.iter().sum::<f64>() / s.len() as f64,
+            p95: q(0.95),
+            max: s[s.len() - 1],
+        }
+    }
+}
+
+/// What one run measured.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct RunReport {
+    /// The shape kind's name.
+    pub shape: String,
+    /// Seconds to build both shapes.
+    pub build_seconds: f64,
+    /// Narrow-phase (contact manifold) time over the steps in contact.
+    pub narrow_phase_ms: TimeStats,
+    /// Whole step time over all steps.
+    pub step_ms: TimeStats,
+    /// Steps with at least one contact point.
+    pub steps_in_contact: usize,
+    /// Most contact pairs (manifolds with points) in one step.
+    pub max_contact_pairs: usize,
+    /// Most contact points in one step.
+    pub max_contact_points: usize,
+    /// Bytes per triangle of the two shapes together.
+    pub bytes_per_triangle: f64,
+    /// Bytes of the dropped shape and of the base shape.
+    pub bytes: [usize; 2],
+    /// Final translation of the dropped body.
+    pub final_translation: [f32; 3],
+    /// Final rotation of the dropped body (quaternion x, y, z, w).
+    pub final_rotation: [f32; 4],
+    /// Final linear speed of the dropped body.
+    pub final_speed: f32,
+    /// Whether parry's fallback `Bvh` was built for a cbvh shape.
+    pub fallback_bvh_built: bool,
+    /// Narrow-phase milliseconds of every step.
+    pub narrow_phase_ms_per_step: Vec<f64>,
+    /// Contact pairs of every step.
+    pub contact_pairs_per_step: Vec<usize>,
+    /// Contact points of every step.
+    pub contact_points_per_step: Vec<usize>,
+    /// Height (y translation) of the dropped body after every step.
+    pub height_per_step: Vec<f32>,
+}
+
+enum Shapes {
+    Parry(SharedShape, SharedShape, [usize; 2]),
+    Cbvh(CbvhShape, CbvhShape),
+}
+
+fn make_shapes(kind: ShapeKind, scene: &DropScene) -> Result<Shapes, String> {
+    Ok(match kind {
+        ShapeKind::Parry => {
+            let a = parry_trimesh(&scene.dropped).map_err(|e| format!("parry TriMesh: {e:?}"))?;
+            let b = parry_trimesh(&scene.base).map_err(|e| format!("parry TriMesh: {e:?}"))?;
+            let bytes = [
+                trimesh_bytes_by_part(&a).iter().map(|p| p.1).sum(),
+                trimesh_bytes_by_part(&b).iter().map(|p| p.1).sum(),
+            ];
+            Shapes::Parry(SharedShape::new(a), SharedShape::new(b), bytes)
+        }
+        ShapeKind::Plain => {
+            let opts = BuildOptions::default();
+            let a = CbvhShape::plain(&scene.dropped, &opts).map_err(|e| e.to_string())?;
+            let b = CbvhShape::plain(&scene.base, &opts).map_err(|e| e.to_string())?;
+            Shapes::Cbvh(a, b)
+        }
+    })
+}
+
+/// Runs the drop test with `kind` shapes. `progress(step, steps)` is called
+/// after every step.
+pub fn run(
+    scene: &DropScene,
+    kind: ShapeKind,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<RunReport, String> {
+    let t0 = Instant::now();
+    let shapes = make_shapes(kind, scene)?;
+    let build_seconds = t0.elapsed().as_secs_f64();
+    let (s_drop, s_base, bytes, cbvh) = match &shapes {
+        Shapes::Parry(a, b, bytes) => (a.clone(), b.clone(), *bytes, None),
+        Shapes::Cbvh(a, b) => (
+            SharedShape::new(a.clone()),
+            SharedShape::new(b.clone()),
+            [a.bytes_total(), b.bytes_total()],
+            Some((a.clone(), b.clone())),
+        ),
+    };
+    let timed = match kind {
+        ShapeKind::Parry => None,
+        _ => Some(Timed::new(Dispatcher.chain(DefaultQueryDispatcher))),
+    };
+    let parry_timed = Timed::new(DefaultQueryDispatcher);
+    let counter = match &timed {
+        Some(t) => t.counter(),
+        None => parry_timed.counter(),
+    };
+    let mut world = PhysicsWorld {
+        gravity: Vector::new(0.0, -9.81, 0.0),
+        ..Default::default()
+    };
+    world.integration_parameters.dt = scene.dt;
+    // Contact recycling skips the narrow phase while a pair's relative pose
+    // drifts less than a threshold, reusing old contacts: that would time
+    // nothing. The drop test measures collision detection, so every step
+    // recomputes contacts (as in the RACBVH paper's benchmark).
+    world.integration_parameters.contact_recycling = scene.contact_recycling;
+    world.narrow_phase = match timed {
+        Some(t) => NarrowPhase::with_query_dispatcher(t),
+        None => NarrowPhase::with_query_dispatcher(parry_timed),
+    };
+    let base_body = world.bodies.insert(RigidBodyBuilder::fixed());
+    let drop_body: RigidBodyHandle = world
+        .bodies
+        .insert(RigidBodyBuilder::dynamic().can_sleep(false));
+    let _base: ColliderHandle = world.colliders.insert_with_parent(
+        ColliderBuilder::new(s_base).friction(0.6),
+        base_body,
+        &mut world.bodies,
+    );
+    world.colliders.insert_with_parent(
+        ColliderBuilder::new(s_drop).density(1.0).friction(0.6),
+        drop_body,
+        &mut world.bodies,
+    );
+
+    let mut narrow = Vec::with_capacity(scene.steps);
+    let mut step_ms = Vec::with_capacity(scene.steps);
+    let mut pairs_per_step = Vec::with_capacity(scene.steps);
+    let mut points_per_step = Vec::with_capacity(scene.steps);
+    let mut heights = Vec::with_capacity(scene.steps);
+    for step in 0..scene.steps {
+        let before = counter.load(Ordering::Relaxed);
+        let t = Instant::now();
+        world.step();
+        step_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        narrow.push((counter.load(Ordering::Relaxed) - before) as f64 / 1e6);
+        let (mut pairs, mut points) = (0, 0);
+        for pair in world.narrow_phase.contact_pairs() {
+            for m in pair.manifolds() {
+                if !m.points.is_empty() {
+                    pairs += 1;
+                    points += m.points.len();
+                }
+            }
+        }
+        heights.push(world.bodies[drop_body].translation().y);
+        pairs_per_step.push(pairs);
+        points_per_step.push(points);
+        progress(step + 1, scene.steps);
+    }
+    let in_contact: Vec<f64> = narrow
+        .iter()
+        .zip(&points_per_step)
+        .filter(|(_, p)| **p > 0)
+        .map(|(t, _)| *t)
+        .collect();
+    let body = &world.bodies[drop_body];
+    let tr = body.translation();
+    let rot = body.rotation();
+    let tris = scene.dropped.triangles.len() + scene.base.triangles.len();
+    Ok(RunReport {
+        shape: kind.name().to_string(),
+        build_seconds,
+        narrow_phase_ms: TimeStats::of(&in_contact),
+        step_ms: TimeStats::of(&step_ms),
+        steps_in_contact: in_contact.len(),
+        max_contact_pairs: pairs_per_step.iter().copied().max().unwrap_or(0),
+        max_contact_points: points_per_step.iter().copied().max().unwrap_or(0),
+        bytes_per_triangle: (bytes[0] + bytes[1]) as f64 / tris.max(1) as f64,
+        bytes,
+        final_translation: [tr.x, tr.y, tr.z],
+        final_rotation: [rot.x, rot.y, rot.z, rot.w],
+        final_speed: body.linvel().length(),
+        fallback_bvh_built: cbvh
+            .is_some_and(|(a, b)| a.fallback_bvh_built() || b.fallback_bvh_built()),
+        narrow_phase_ms_per_step: narrow,
+        contact_pairs_per_step: pairs_per_step,
+        contact_points_per_step: points_per_step,
+        height_per_step: heights,
+    })
+}

@@ -1,0 +1,379 @@
+//! [`CbvhShape`]: one parry shape type over any cbvh codec.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, OnceLock};
+
+use glam::{Mat3A, Vec3A};
+use parry3d::bounding_volume::{Aabb as PAabb, BoundingSphere};
+use parry3d::mass_properties::MassProperties;
+use parry3d::math::{Pose as PPose, Real, Vector};
+use parry3d::partitioning::{Bvh, BvhBuildStrategy};
+use parry3d::query::details::NormalConstraints;
+use parry3d::query::{PointProjection, PointQuery, Ray as PRay, RayCast, RayIntersection};
+use parry3d::shape::{
+    CompositeShape, FeatureId, Shape, ShapeType, Triangle as PTriangle, TrianglePseudoNormals,
+    TypedCompositeShape, TypedShape,
+};
+
+use crate::build::{BuildError, BuildOptions, build};
+use crate::codec::ByteSize;
+use crate::codec::plain::PlainBvh;
+use crate::cursor::{NodeCursor, TraversalStats};
+use crate::geom::{Aabb, Pose, Ray, TriHit, Triangle};
+use crate::mesh::Mesh;
+use crate::query;
+
+/// The codecs a [`CbvhShape`] can hold.
+#[derive(Debug)]
+pub enum Codec {
+    /// Uncompressed 32-byte nodes.
+    Plain(PlainBvh),
+}
+
+impl Codec {
+    /// The codec's name, as used by the sims' `--shapes` and reports.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Codec::Plain(_) => "plain",
+        }
+    }
+
+    /// Memory by part.
+    pub fn bytes_by_part(&self) -> Vec<(&'static str, usize)> {
+        match self {
+            Codec::Plain(c) => c.bytes_by_part(),
+        }
+    }
+}
+
+/// Runs `$body` with `$c` bound to the codec's concrete cursor, so that
+/// every traversal is monomorphized per codec.
+macro_rules! with_cursor {
+    ($codec:expr, |$c:ident| $body:expr) => {
+        match $codec {
+            $crate::parry::shape::Codec::Plain($c) => $body,
+        }
+    };
+}
+pub(crate) use with_cursor;
+
+struct Inner {
+    codec: Codec,
+    aabb: Aabb,
+    /// Mass properties at density 1.
+    unit_mass: MassProperties,
+    triangles: usize,
+    fallback: OnceLock<Bvh>,
+    fallback_builds: AtomicUsize,
+}
+
+/// A triangle mesh stored as a cbvh BVH, usable as a parry / rapier shape.
+///
+/// Cloning is cheap: the data sits behind an `Arc`. Install
+/// [`Dispatcher`](super::Dispatcher) in rapier's narrow phase so that contacts
+/// run on the cbvh tree; without it, parry's composite-shape code still works
+/// through [`CompositeShape::bvh`], which builds a parry `Bvh` on first use
+/// (the compatibility fallback, see [`CbvhShape::fallback_bvh_built`]).
+#[derive(Clone)]
+pub struct CbvhShape {
+    inner: Arc<Inner>,
+}
+
+impl std::fmt::Debug for CbvhShape {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CbvhShape")
+            .field("codec", &self.inner.codec.name())
+            .field("triangles", &self.inner.triangles)
+            .field("fallback_bvh_built", &self.fallback_bvh_built())
+            .finish()
+    }
+}
+
+/// Converts a parry pose into cbvh's.
+#[inline]
+pub fn pose_from_parry(p: &PPose) -> Pose {
+    Pose {
+        rotation: Mat3A::from_quat(p.rotation),
+        translation: Vec3A::from(p.translation),
+    }
+}
+
+#[inline]
+pub(crate) fn to_parry_triangle(t: &Triangle) -> PTriangle {
+    PTriangle::new(t[0].into(), t[1].into(), t[2].into())
+}
+
+#[inline]
+pub(crate) fn to_parry_aabb(b: &Aabb) -> PAabb {
+    PAabb::new(b.min.into(), b.max.into())
+}
+
+#[inline]
+pub(crate) fn from_parry_aabb(b: &PAabb) -> Aabb {
+    Aabb::new(b.mins.into(), b.maxs.into())
+}
+
+impl CbvhShape {
+    /// Builds the plain codec over `mesh` with `options`.
+    pub fn plain(mesh: &Mesh, options: &BuildOptions) -> Result<Self, BuildError> {
+        let bvh = build(mesh, options, &|_, _| {})?;
+        Ok(Self::from_codec(
+            Codec::Plain(PlainBvh::new(&bvh, mesh)),
+            mesh,
+        ))
+    }
+
+    /// Wraps an already encoded codec built from `mesh`. The mesh is used
+    /// once, for the mass properties (signed-volume integration).
+    pub fn from_codec(codec: Codec, mesh: &Mesh) -> Self {
+        let vertices: Vec<Vector> = mesh
+            .vertices
+            .iter()
+            .map(|v| Vector::from_array(*v))
+            .collect();
+        let unit_mass = if mesh.triangles.is_empty() {
+            MassProperties::default()
+        } else {
+            MassProperties::from_trimesh(1.0, &vertices, &mesh.triangles)
+        };
+        let aabb = with_cursor!(&codec, |c| c.root().1);
+        Self {
+            inner: Arc::new(Inner {
+                triangles: mesh.triangles.len(),
+                codec,
+                aabb,
+                unit_mass,
+                fallback: OnceLock::new(),
+                fallback_builds: AtomicUsize::new(0),
+            }),
+        }
+    }
+
+    /// The codec inside.
+    pub fn codec(&self) -> &Codec {
+        &self.inner.codec
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.inner.triangles
+    }
+
+    /// Memory of the codec in bytes (all parts).
+    pub fn bytes_total(&self) -> usize {
+        self.inner.codec.bytes_by_part().iter().map(|p| p.1).sum()
+    }
+
+    /// The local box, as cbvh's type.
+    pub fn local_aabb(&self) -> Aabb {
+        self.inner.aabb
+    }
+
+    /// Whether the compatibility fallback (a parry `Bvh`) has been built.
+    /// The native path, through [`Dispatcher`](super::Dispatcher), never builds it.
+    pub fn fallback_bvh_built(&self) -> bool {
+        self.inner.fallback.get().is_some()
+    }
+
+    /// How many times a caller asked for the fallback `Bvh` (each call of
+    /// [`CompositeShape::bvh`]).
+    pub fn fallback_bvh_requests(&self) -> usize {
+        self.inner.fallback_builds.load(Ordering::Relaxed)
+    }
+
+    /// Triangle `id` as a parry triangle.
+    pub fn parry_triangle(&self, id: u32) -> PTriangle {
+        with_cursor!(&self.inner.codec, |c| to_parry_triangle(&c.triangle(id)))
+    }
+}
+
+impl RayCast for CbvhShape {
+    fn cast_local_ray_and_get_normal(
+        &self,
+        ray: &PRay,
+        max_time_of_impact: Real,
+        solid: bool,
+    ) -> Option<RayIntersection> {
+        let r = Ray::new(ray.origin.into(), ray.dir.into());
+        let mut stats = TraversalStats::default();
+        let mut best: Option<RayIntersection> = None;
+        // The primitive test is parry's own triangle ray cast, so hits,
+        // normals and features are exactly parry's TriMesh's.
+        with_cursor!(&self.inner.codec, |c| query::closest_hit_with(
+            c,
+            &r,
+            max_time_of_impact,
+            &mut stats,
+            |id, tri, t_max| {
+                let hit =
+                    to_parry_triangle(tri).cast_local_ray_and_get_normal(ray, t_max, solid)?;
+                if best.is_none_or(|b| hit.time_of_impact < b.time_of_impact) {
+                    best = Some(hit.with_subshape(id));
+                }
+                Some(TriHit {
+                    t: hit.time_of_impact,
+                    u: 0.0,
+                    v: 0.0,
+                })
+            }
+        ));
+        best
+    }
+}
+
+impl PointQuery for CbvhShape {
+    fn project_local_point(&self, pt: Vector, solid: bool) -> PointProjection {
+        self.project_local_point_and_get_feature(pt)
+            .0
+            .with_solid(solid)
+    }
+
+    fn project_local_point_and_get_feature(&self, pt: Vector) -> (PointProjection, FeatureId) {
+        let mut stats = TraversalStats::default();
+        let hit = with_cursor!(&self.inner.codec, |c| query::closest_point(
+            c,
+            pt.into(),
+            f32::INFINITY,
+            &mut stats
+        ));
+        match hit {
+            Some(h) => (
+                PointProjection::new(false, h.point.into()),
+                FeatureId::Face(h.triangle),
+            ),
+            None => (PointProjection::new(false, pt), FeatureId::Unknown),
+        }
+    }
+}
+
+trait WithSolid {
+    fn with_solid(self, solid: bool) -> Self;
+}
+impl WithSolid for PointProjection {
+    /// A triangle mesh is a surface: parry's TriMesh without pseudo-normals
+    /// reports every point as outside, solid or not. cbvh does the same.
+    fn with_solid(self, _solid: bool) -> Self {
+        self
+    }
+}
+
+impl Shape for CbvhShape {
+    fn compute_local_aabb(&self) -> PAabb {
+        to_parry_aabb(&self.inner.aabb)
+    }
+
+    fn compute_local_bounding_sphere(&self) -> BoundingSphere {
+        let b = self.inner.aabb;
+        BoundingSphere::new(b.center().into(), b.half_extents().length())
+    }
+
+    fn clone_dyn(&self) -> Box<dyn Shape> {
+        Box::new(self.clone())
+    }
+
+    /// Scaling would need re-encoding the compressed tree: not supported.
+    fn scale_dyn(&self, _scale: Vector, _num_subdivisions: u32) -> Option<Box<dyn Shape>> {
+        None
+    }
+
+    fn mass_properties(&self, density: Real) -> MassProperties {
+        let m = self.inner.unit_mass;
+        if m.inv_mass == 0.0 {
+            return m;
+        }
+        MassProperties {
+            inv_mass: m.inv_mass / density,
+            inv_principal_inertia: m.inv_principal_inertia / density,
+            ..m
+        }
+    }
+
+    fn shape_type(&self) -> ShapeType {
+        ShapeType::Custom
+    }
+
+    fn as_typed_shape(&self) -> TypedShape<'_> {
+        TypedShape::Custom(self)
+    }
+
+    /// rapier never CCD-sweeps a `TriMesh` (it checks the shape type), and a
+    /// cbvh shape stands in for one: an unbounded thickness tells rapier the
+    /// body never moves fast enough to tunnel, so it is not swept either and
+    /// simulations match parry's meshes. Explicit nonlinear casts still work
+    /// natively through the dispatcher.
+    fn ccd_thickness(&self) -> Real {
+        Real::MAX
+    }
+
+    fn ccd_angular_thickness(&self) -> Real {
+        std::f32::consts::FRAC_PI_4
+    }
+
+    fn as_composite_shape(&self) -> Option<&(dyn CompositeShape + Sync)> {
+        Some(self)
+    }
+}
+
+impl CompositeShape for CbvhShape {
+    fn map_part_at(
+        &self,
+        shape_id: u32,
+        f: &mut dyn FnMut(Option<&PPose>, &dyn Shape, Option<&dyn NormalConstraints>),
+    ) {
+        let tri = self.parry_triangle(shape_id);
+        f(None, &tri, None)
+    }
+
+    /// The compatibility fallback: builds a parry `Bvh` over the triangles on
+    /// first call (logged once). The cbvh dispatcher never calls this. Set
+    /// `CBVH_DEBUG_FALLBACK=1` to print a backtrace of the caller.
+    fn bvh(&self) -> &Bvh {
+        self.inner.fallback_builds.fetch_add(1, Ordering::Relaxed);
+        self.inner.fallback.get_or_init(|| {
+            if std::env::var_os("CBVH_DEBUG_FALLBACK").is_some() {
+                eprintln!("{}", std::backtrace::Backtrace::force_capture());
+            }
+            eprintln!(
+                "cbvh: building a parry Bvh over {} triangles for a {} shape: a query reached \
+                 parry's composite-shape code. Install cbvh::parry::Dispatcher \
+                 (NarrowPhase::with_query_dispatcher) to use the cbvh tree instead.",
+                self.inner.triangles,
+                self.inner.codec.name()
+            );
+            let leaves: Vec<PAabb> = with_cursor!(&self.inner.codec, |c| (0..c.triangle_count()
+                as u32)
+                .map(|id| to_parry_aabb(&Aabb::of_triangle(&c.triangle(id))))
+                .collect());
+            Bvh::from_leaves(BvhBuildStrategy::default(), &leaves)
+        })
+    }
+}
+
+impl TypedCompositeShape for CbvhShape {
+    type PartShape = PTriangle;
+    type PartNormalConstraints = TrianglePseudoNormals;
+
+    fn map_typed_part_at<T>(
+        &self,
+        shape_id: u32,
+        mut f: impl FnMut(Option<&PPose>, &Self::PartShape, Option<&Self::PartNormalConstraints>) -> T,
+    ) -> Option<T> {
+        if shape_id as usize >= self.inner.triangles {
+            return None;
+        }
+        let tri = self.parry_triangle(shape_id);
+        Some(f(None, &tri, None))
+    }
+
+    fn map_untyped_part_at<T>(
+        &self,
+        shape_id: u32,
+        mut f: impl FnMut(Option<&PPose>, &dyn Shape, Option<&dyn NormalConstraints>) -> T,
+    ) -> Option<T> {
+        if shape_id as usize >= self.inner.triangles {
+            return None;
+        }
+        let tri = self.parry_triangle(shape_id);
+        Some(f(None, &tri, None))
+    }
+}

@@ -1,0 +1,325 @@
+//! The parry / rapier integration: cbvh shapes give parry's contacts, rapier
+//! steps them without the fallback, ray casts and balls behave.
+
+use std::collections::BTreeMap;
+
+use cbvh::Mesh;
+use cbvh::build::BuildOptions;
+use cbvh::parry::droptest::{self, DropScene, Placement, ShapeKind};
+use cbvh::parry::{CbvhShape, Dispatcher, parry_trimesh};
+use cbvh::scene::{Kind, generate};
+use parry3d::math::{Pose, Vector};
+use parry3d::query::{
+    ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher, QueryDispatcher, Ray,
+    RayCast,
+};
+use parry3d::shape::SharedShape;
+use rapier3d::prelude::{ColliderBuilder, PhysicsWorld, QueryFilter, RigidBodyBuilder};
+
+fn mesh_of(kind: Kind, tris: usize, seed: u64) -> Mesh {
+    generate(kind, tris, seed, &mut |_, _| {}).expect("generate")
+}
+
+type Points = BTreeMap<(u32, u32), Vec<[f32; 6]>>;
+
+/// Contact points by triangle pair, for manifolds that have points.
+fn points_of(manifolds: &[ContactManifold<(), ()>]) -> Points {
+    let mut out = Points::new();
+    for m in manifolds.iter().filter(|m| !m.points.is_empty()) {
+        let mut pts: Vec<[f32; 6]> = m
+            .points
+            .iter()
+            .map(|p| {
+                [
+                    p.local_p1.x,
+                    p.local_p1.y,
+                    p.local_p1.z,
+                    p.local_p2.x,
+                    p.local_p2.y,
+                    p.local_p2.z,
+                ]
+            })
+            .collect();
+        pts.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        out.insert((m.subshape1, m.subshape2), pts);
+    }
+    out
+}
+
+#[test]
+fn cbvh_contacts_equal_parry_trimesh_contacts() {
+    let statue = mesh_of(Kind::Statue, 3000, 3);
+    let turbine = mesh_of(Kind::Turbine, 3000, 4);
+    let t1 = parry_trimesh(&statue).unwrap();
+    let t2 = parry_trimesh(&turbine).unwrap();
+    let c1 = CbvhShape::plain(&statue, &BuildOptions::default()).unwrap();
+    let c2 = CbvhShape::plain(&turbine, &BuildOptions::default()).unwrap();
+    let poses = [
+        Pose::from_translation(Vector::new(0.0, -1.2, 0.0)),
+        Pose::from_translation(Vector::new(0.7, -0.9, 0.3)),
+        Pose::new(Vector::new(-0.4, -1.0, 0.2), Vector::new(0.3, 0.8, -0.2)),
+        Pose::new(Vector::new(0.2, -0.5, -0.6), Vector::new(-1.0, 0.1, 0.5)),
+    ];
+    let mut total = 0;
+    for pos12 in poses {
+        for prediction in [0.0, 0.02] {
+            let mut want = Vec::new();
+            let mut ws = None;
+            PersistentQueryDispatcher::<(), ()>::contact_manifolds(
+                &DefaultQueryDispatcher,
+                &pos12,
+                &t1,
+                &t2,
+                prediction,
+                &mut want,
+                &mut ws,
+            )
+            .unwrap();
+            let mut got = Vec::new();
+            let mut ws = None;
+            PersistentQueryDispatcher::<(), ()>::contact_manifolds(
+                &Dispatcher,
+                &pos12,
+                &c1,
+                &c2,
+                prediction,
+                &mut got,
+                &mut ws,
+            )
+            .unwrap();
+            let (want, got) = (points_of(&want), points_of(&got));
+            assert_eq!(
+                want.keys().collect::<Vec<_>>(),
+                got.keys().collect::<Vec<_>>(),
+                "the same triangle pairs carry contact points at {pos12:?}"
+            );
+            for (k, w) in &want {
+                let g = &got[k];
+                assert_eq!(w.len(), g.len(), "pair {k:?}");
+                for (a, b) in w.iter().zip(g) {
+                    for i in 0..6 {
+                        assert!((a[i] - b[i]).abs() <= 1e-5, "pair {k:?}: {a:?} vs {b:?}");
+                    }
+                }
+            }
+            total += want.len();
+            // The native path never built the fallback.
+            assert!(!c1.fallback_bvh_built() && !c2.fallback_bvh_built());
+        }
+    }
+    assert!(
+        total > 50,
+        "the poses must produce contacts, got {total} pairs"
+    );
+}
+
+#[test]
+fn manifolds_persist_between_calls() {
+    let a = mesh_of(Kind::Statue, 2000, 1);
+    let c = CbvhShape::plain(&a, &BuildOptions::default()).unwrap();
+    let pos12 = Pose::from_translation(Vector::new(0.05, 0.02, 0.0));
+    let mut manifolds: Vec<ContactManifold<(), u32>> = Vec::new();
+    let mut ws = None;
+    Dispatcher
+        .contact_manifolds(&pos12, &c, &c, 0.01, &mut manifolds, &mut ws)
+        .unwrap();
+    assert!(!manifolds.is_empty());
+    // Mark each contact, then update at the same pose: the data survives.
+    for m in &mut manifolds {
+        for p in &mut m.points {
+            p.data = 7;
+        }
+    }
+    Dispatcher
+        .contact_manifolds(&pos12, &c, &c, 0.01, &mut manifolds, &mut ws)
+        .unwrap();
+    let marked = manifolds
+        .iter()
+        .flat_map(|m| &m.points)
+        .filter(|p| p.data == 7)
+        .count();
+    assert!(marked > 0, "warm-start data must be carried over");
+}
+
+#[test]
+fn intersection_and_contact_queries() {
+    let a = mesh_of(Kind::Robot, 2000, 1);
+    let c = CbvhShape::plain(&a, &BuildOptions::default()).unwrap();
+    let t = SharedShape::new(parry_trimesh(&a).unwrap());
+    let near = Pose::from_translation(Vector::new(0.01, 0.0, 0.0));
+    let far = Pose::from_translation(Vector::new(100.0, 0.0, 0.0));
+    let d = Dispatcher.chain(DefaultQueryDispatcher);
+    assert!(d.intersection_test(&near, &c, &c).unwrap().intersecting);
+    assert!(!d.intersection_test(&far, &c, &c).unwrap().intersecting);
+    assert!(d.contact(&far, &c, &c, 0.1).unwrap().is_none());
+    // Against a ball: same answer as parry's TriMesh.
+    let ball = parry3d::shape::Ball::new(0.05);
+    let (lo, hi) = a.bounds().unwrap();
+    for k in 0..20 {
+        let f = k as f32 / 19.0;
+        let p = Vector::new(
+            lo[0] + (hi[0] - lo[0]) * f,
+            lo[1] + (hi[1] - lo[1]) * 0.5,
+            0.5 * (lo[2] + hi[2]),
+        );
+        let pose = Pose::from_translation(p);
+        let got = d.intersection_test(&pose, &c, &ball).unwrap().intersecting;
+        let want = DefaultQueryDispatcher
+            .intersection_test(&pose, t.as_ref(), &ball)
+            .unwrap()
+            .intersecting;
+        assert_eq!(got, want, "ball at {p:?}");
+    }
+    assert!(!c.fallback_bvh_built());
+}
+
+#[test]
+fn ray_casts_match_trimesh_directly_and_through_rapier() {
+    let m = mesh_of(Kind::Statue, 2000, 9);
+    let c = CbvhShape::plain(&m, &BuildOptions::default()).unwrap();
+    let t = parry_trimesh(&m).unwrap();
+    let mut world_c = PhysicsWorld::default();
+    let mut world_t = PhysicsWorld::default();
+    world_c
+        .colliders
+        .insert(ColliderBuilder::new(SharedShape::new(c.clone())));
+    world_t
+        .colliders
+        .insert(ColliderBuilder::new(SharedShape::new(t.clone())));
+    world_c.step();
+    world_t.step();
+    let mut hits = 0;
+    for k in 0..64 {
+        let a = k as f32 * 0.37;
+        let origin = Vector::new(3.0 * a.cos(), 1.0 + 0.02 * k as f32, 3.0 * a.sin());
+        let dir = (Vector::new(0.0, 1.0, 0.0) - origin).normalize();
+        let ray = Ray::new(origin, dir);
+        let want = t.cast_local_ray_and_get_normal(&ray, 100.0, true);
+        let got = c.cast_local_ray_and_get_normal(&ray, 100.0, true);
+        match (want, got) {
+            (Some(w), Some(g)) => {
+                hits += 1;
+                assert!((w.time_of_impact - g.time_of_impact).abs() < 1e-5);
+                assert!((w.normal - g.normal).length() < 1e-4);
+                assert_eq!(w.feature, g.feature);
+            }
+            (None, None) => {}
+            (w, g) => panic!("TriMesh {w:?} vs cbvh {g:?}"),
+        }
+        let wr = world_t
+            .cast_ray(&ray, 100.0, true, QueryFilter::default())
+            .map(|h| h.1);
+        let gr = world_c
+            .cast_ray(&ray, 100.0, true, QueryFilter::default())
+            .map(|h| h.1);
+        assert_eq!(wr.is_some(), gr.is_some());
+        if let (Some(w), Some(g)) = (wr, gr) {
+            assert!((w - g).abs() < 1e-5);
+        }
+    }
+    assert!(hits > 10);
+    assert!(!c.fallback_bvh_built());
+}
+
+#[test]
+fn a_ball_comes_to_rest_on_a_cbvh_floor() {
+    // A 2 x 2 floor of 8 triangles (two layers so that it is closed below).
+    let floor = Mesh::new(
+        vec![
+            [-1.0, 0.0, -1.0],
+            [1.0, 0.0, -1.0],
+            [1.0, 0.0, 1.0],
+            [-1.0, 0.0, 1.0],
+            [-1.0, -0.1, -1.0],
+            [1.0, -0.1, -1.0],
+            [1.0, -0.1, 1.0],
+            [-1.0, -0.1, 1.0],
+        ],
+        vec![[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7]],
+    );
+    let shape = CbvhShape::plain(&floor, &BuildOptions::default()).unwrap();
+    let mut world = PhysicsWorld {
+        narrow_phase: rapier3d::prelude::NarrowPhase::with_query_dispatcher(Dispatcher::chained()),
+        ..Default::default()
+    };
+    world
+        .colliders
+        .insert(ColliderBuilder::new(SharedShape::new(shape.clone())));
+    let ball = world
+        .bodies
+        .insert(RigidBodyBuilder::dynamic().translation(Vector::new(0.1, 1.0, -0.2)));
+    world
+        .colliders
+        .insert_with_parent(ColliderBuilder::ball(0.1), ball, &mut world.bodies);
+    for _ in 0..240 {
+        world.step();
+    }
+    let b = &world.bodies[ball];
+    assert!(
+        (b.translation().y - 0.1).abs() < 0.02,
+        "ball at {:?}",
+        b.translation()
+    );
+    assert!(
+        b.linvel().length() < 0.05,
+        "ball still moving: {:?}",
+        b.linvel()
+    );
+    assert!(!shape.fallback_bvh_built());
+}
+
+#[test]
+fn drop_test_steps_without_the_fallback_and_agrees_with_parry() {
+    let mut statue = mesh_of(Kind::Statue, 2000, 1);
+    let turbine = mesh_of(Kind::Turbine, 2000, 1);
+    droptest::place(&mut statue, &turbine, &Placement::default());
+    let scene = DropScene {
+        dropped: statue,
+        base: turbine,
+        steps: 60,
+        dt: 1.0 / 60.0,
+        contact_recycling: false,
+    };
+    let parry = droptest::run(&scene, ShapeKind::Parry, &mut |_, _| {}).unwrap();
+    let plain = droptest::run(&scene, ShapeKind::Plain, &mut |_, _| {}).unwrap();
+    assert!(
+        !plain.fallback_bvh_built,
+        "the native path must not build parry's Bvh"
+    );
+    assert!(plain.steps_in_contact > 0 && parry.steps_in_contact > 0);
+    assert!(plain.bytes_per_triangle < parry.bytes_per_triangle);
+    // Both land: the body fell and stopped near the same height.
+    let size = 2.0;
+    let dy = (plain.final_translation[1] - parry.final_translation[1]).abs();
+    assert!(
+        dy < 0.1 * size,
+        "heights {} vs {}",
+        plain.final_translation[1],
+        parry.final_translation[1]
+    );
+    assert!(
+        plain.final_translation[1] < -0.01,
+        "the statue must fall onto the turbine"
+    );
+}
+
+#[test]
+fn shape_mass_and_bounds() {
+    let m = mesh_of(Kind::Statue, 2000, 2);
+    let c = CbvhShape::plain(&m, &BuildOptions::default()).unwrap();
+    let t = parry_trimesh(&m).unwrap();
+    use parry3d::shape::Shape;
+    let (mc, mt) = (c.mass_properties(2.0), t.mass_properties(2.0));
+    assert!(
+        (mc.mass() - mt.mass()).abs() <= 1e-4 * mt.mass(),
+        "{} vs {}",
+        mc.mass(),
+        mt.mass()
+    );
+    assert!((mc.local_com - mt.local_com).length() < 1e-4);
+    let (ac, at) = (c.compute_local_aabb(), t.local_aabb());
+    assert!((ac.mins - at.mins).length() < 1e-6 && (ac.maxs - at.maxs).length() < 1e-6);
+    let cl = c.clone_dyn();
+    assert!(cl.as_shape::<CbvhShape>().is_some());
+    assert_eq!(c.shape_type(), parry3d::shape::ShapeType::Custom);
+}
