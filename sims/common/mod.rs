@@ -36,6 +36,9 @@ pub struct SimArgs {
     /// Gap above the base's top, as a fraction of the dropped mesh's height.
     #[arg(long, default_value_t = 0.05)]
     pub gap: f32,
+    /// Ray-trace the final frame (of the last run) to this PNG.
+    #[arg(long)]
+    pub render: Option<PathBuf>,
     /// Let rapier reuse the contacts of pairs that barely moved (skips the
     /// narrow phase on those steps, so off by default when timing).
     #[arg(long)]
@@ -177,6 +180,33 @@ pub fn run_sim(
         )
         .map_err(|e| format!("{}: {e}", path.display()))?;
         eprintln!("wrote {}", path.display());
+    }
+    if let (Some(path), Some(last)) = (&args.render, runs.last()) {
+        let r = last.final_rotation;
+        let t = last.final_translation;
+        let pose = cbvh::geom::Pose::from_rotation_translation(
+            glam::Quat::from_xyzw(r[0], r[1], r[2], r[3]),
+            glam::Vec3::from(t),
+        );
+        let opts = cbvh::render::RenderOptions {
+            width: 960,
+            height: 720,
+            ..Default::default()
+        };
+        let image = cbvh::render::render_meshes(
+            &[
+                (&scene.base, cbvh::geom::Pose::IDENTITY),
+                (&scene.dropped, pose),
+            ],
+            &opts,
+        )
+        .map_err(|e| e.to_string())?;
+        image.save_png(path).map_err(|e| e.to_string())?;
+        eprintln!(
+            "wrote {} (final frame of the {} run)",
+            path.display(),
+            last.shape
+        );
     }
     if let Some(path) = &args.plot {
         let series: Vec<(String, Vec<f64>)> = runs

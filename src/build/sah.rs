@@ -230,31 +230,96 @@ fn median_split(refs: &mut [Ref], cbounds: &Aabb) -> usize {
     mid
 }
 
+/// Per-axis bin counts and boxes.
+#[derive(Clone)]
+struct Bins {
+    counts: [[u32; MAX_BINS]; 3],
+    boxes: [[Aabb; MAX_BINS]; 3],
+}
+
+const MAX_BINS: usize = 255;
+/// Nodes with more references than this bin in parallel chunks.
+const PARALLEL_BINNING: usize = 1 << 16;
+
+impl Bins {
+    fn new() -> Self {
+        Self {
+            counts: [[0; MAX_BINS]; 3],
+            boxes: [[Aabb::EMPTY; MAX_BINS]; 3],
+        }
+    }
+
+    /// Bins every reference on all three axes in one pass over memory.
+    fn fill(&mut self, refs: &[Ref], lo: Vec3A, scale: Vec3A, bins: usize) {
+        for r in refs {
+            let b = r.aabb();
+            let idx = bin_index(r.centroid(), lo, scale, bins);
+            for (axis, &i) in idx.iter().enumerate() {
+                self.counts[axis][i] += 1;
+                self.boxes[axis][i] = self.boxes[axis][i].union(&b);
+            }
+        }
+    }
+
+    fn merge(mut self, o: &Bins, bins: usize) -> Bins {
+        for axis in 0..3 {
+            let counts = self.counts[axis].iter_mut().zip(&o.counts[axis]);
+            for (a, b) in counts.take(bins) {
+                *a += b;
+            }
+            let boxes = self.boxes[axis].iter_mut().zip(&o.boxes[axis]);
+            for (a, b) in boxes.take(bins) {
+                *a = a.union(b);
+            }
+        }
+        self
+    }
+}
+
+/// Bin indices of a centroid on the three axes (0 on a flat axis).
+#[inline]
+fn bin_index(c: Vec3A, lo: Vec3A, scale: Vec3A, bins: usize) -> [usize; 3] {
+    let f = ((c - lo) * scale).to_array();
+    [
+        (f[0] as usize).min(bins - 1),
+        (f[1] as usize).min(bins - 1),
+        (f[2] as usize).min(bins - 1),
+    ]
+}
+
 /// The best binned-SAH split, partitioning `refs` in place; `None` if every
 /// centroid is the same point (no plane separates them).
 fn sah_split(refs: &mut [Ref], cbounds: &Aabb, bins: usize) -> Option<usize> {
-    const MAX_BINS: usize = 255;
     let ext = cbounds.extent();
+    let usable = |a: usize| ext[a] > 0.0 && ext[a].is_finite();
+    if !(0..3).any(usable) {
+        return None;
+    }
+    // Flat axes get scale 0: everything lands in bin 0 and no split is found.
+    let scale = Vec3A::from_array(std::array::from_fn(|a| {
+        if usable(a) { bins as f32 / ext[a] } else { 0.0 }
+    }));
+    let lo = cbounds.min;
+    let binned = if refs.len() > PARALLEL_BINNING {
+        use rayon::prelude::*;
+        refs.par_chunks(PARALLEL_BINNING / 4)
+            .fold(Bins::new, |mut acc, chunk| {
+                acc.fill(chunk, lo, scale, bins);
+                acc
+            })
+            .reduce(Bins::new, |a, b| a.merge(&b, bins))
+    } else {
+        let mut b = Bins::new();
+        b.fill(refs, lo, scale, bins);
+        b
+    };
     let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, split bin)
-    let mut counts = [0u32; MAX_BINS];
-    let mut boxes = [Aabb::EMPTY; MAX_BINS];
     let mut right_area = [0f32; MAX_BINS];
-    for axis in 0..3 {
-        if ext[axis] <= 0.0 || !ext[axis].is_finite() {
-            continue;
-        }
-        let scale = bins as f32 / ext[axis];
-        let lo = cbounds.min[axis];
-        counts[..bins].fill(0);
-        boxes[..bins].fill(Aabb::EMPTY);
-        for r in refs.iter() {
-            let b = bin_of(r.centroid()[axis], lo, scale, bins);
-            counts[b] += 1;
-            boxes[b] = boxes[b].union(&r.aabb());
-        }
+    let mut right_count = [0u32; MAX_BINS];
+    for axis in (0..3).filter(|&a| usable(a)) {
+        let (counts, boxes) = (&binned.counts[axis], &binned.boxes[axis]);
         // Sweep from the right: area and count of bins [i, bins).
         let mut acc = Aabb::EMPTY;
-        let mut right_count = [0u32; MAX_BINS];
         let mut cnt = 0;
         for i in (1..bins).rev() {
             acc = acc.union(&boxes[i]);
@@ -277,13 +342,12 @@ fn sah_split(refs: &mut [Ref], cbounds: &Aabb, bins: usize) -> Option<usize> {
         }
     }
     let (_, axis, split) = best?;
-    let scale = bins as f32 / ext[axis];
-    let lo = cbounds.min[axis];
-    // In-place partition: bins [0, split) to the left.
+    // In-place partition: bins [0, split) to the left, with the same bin
+    // arithmetic as the binning pass.
     let mut i = 0;
     let mut j = refs.len();
     while i < j {
-        if bin_of(refs[i].centroid()[axis], lo, scale, bins) < split {
+        if bin_index(refs[i].centroid(), lo, scale, bins)[axis] < split {
             i += 1;
         } else {
             j -= 1;
@@ -291,9 +355,4 @@ fn sah_split(refs: &mut [Ref], cbounds: &Aabb, bins: usize) -> Option<usize> {
         }
     }
     Some(i)
-}
-
-#[inline]
-fn bin_of(c: f32, lo: f32, scale: f32, bins: usize) -> usize {
-    (((c - lo) * scale) as usize).min(bins - 1)
 }

@@ -42,7 +42,14 @@ pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + S
 ) {
     let mut update = ManifoldUpdate::begin(workspace, manifolds);
     let mut stats = TraversalStats::default();
+    let pose = pose_from_parry(pos12);
     for_each_pair(s1, s2, pos12, prediction, &mut stats, |i, t1, j, t2| {
+        let moved = t2.map(|p| pose.transform_point(p));
+        if separated_by_a_face_plane(t1, &moved, prediction) {
+            // parry's manifold for this pair would have no point: skip the
+            // convex-convex call; the pair's old manifold, if any, is dropped.
+            return ControlFlow::Continue(());
+        }
         let manifold = update.manifold(i, j);
         let _ = DefaultQueryDispatcher.contact_manifold_convex_convex(
             pos12,
@@ -55,6 +62,32 @@ pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + S
         );
         ControlFlow::Continue(())
     });
+}
+
+/// Whether the plane of one triangle has the whole other triangle more than
+/// `margin` (plus a relative tolerance) on one side: then their distance
+/// exceeds `margin` and no contact point can be within the prediction.
+/// Degenerate triangles (no normal) never count as separated.
+pub fn separated_by_a_face_plane(a: &Triangle, b: &Triangle, margin: Real) -> bool {
+    fn one_side(p: &Triangle, q: &Triangle, margin: Real) -> bool {
+        let n = (p[1] - p[0]).cross(p[2] - p[0]);
+        let len = n.length();
+        if len.is_nan() || len <= 0.0 || !len.is_finite() {
+            return false;
+        }
+        let n = n / len;
+        let d = q.map(|v| n.dot(v - p[0]));
+        // Leave a relative slack so that rounding cannot skip a pair parry
+        // would report.
+        let scale = p
+            .iter()
+            .chain(q)
+            .map(|v| v.abs().max_element())
+            .fold(0.0, f32::max);
+        let m = margin + 1e-5 * scale.max(1.0);
+        d.iter().all(|&x| x > m) || d.iter().all(|&x| x < -m)
+    }
+    one_side(a, b, margin) || one_side(b, a, margin)
 }
 
 /// Whether any triangle of `s1` intersects one of `s2`.

@@ -24,3 +24,46 @@ pub use bvtt::{bvtt, bvtt_pairs};
 pub use overlap::{overlap, visit};
 pub use point::{PointHit, closest_point};
 pub use ray::{RayHit, any_hit, any_hit_with, closest_hit, closest_hit_with};
+
+/// A traversal stack that lives on the call stack for the usual depths and
+/// spills to the heap only for very deep trees: per-query allocations cost
+/// more than a ray's traversal on small trees.
+pub(crate) struct Stack<T: Copy> {
+    inline: [T; 96],
+    len: usize,
+    spill: Vec<T>,
+}
+
+impl<T: Copy> Stack<T> {
+    /// An empty stack; `fill` only initialises the inline slots.
+    #[inline]
+    pub(crate) fn new(fill: T) -> Self {
+        Self {
+            inline: [fill; 96],
+            len: 0,
+            spill: Vec::new(),
+        }
+    }
+
+    #[inline]
+    pub(crate) fn push(&mut self, v: T) {
+        if self.len < self.inline.len() {
+            self.inline[self.len] = v;
+            self.len += 1;
+        } else {
+            self.spill.push(v);
+        }
+    }
+
+    #[inline]
+    pub(crate) fn pop(&mut self) -> Option<T> {
+        if let Some(v) = self.spill.pop() {
+            return Some(v);
+        }
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        Some(self.inline[self.len])
+    }
+}

@@ -19,7 +19,7 @@ pub fn visit<C: NodeCursor>(
     if !node_test(&root_box) {
         return false;
     }
-    let mut stack: Vec<C::Node> = Vec::with_capacity(64);
+    let mut stack = super::Stack::new(root);
     stack.push(root);
     while let Some(node) = stack.pop() {
         if c.is_leaf(&node) {

@@ -32,7 +32,7 @@ pub fn closest_point<C: NodeCursor>(
         return None;
     }
     let mut best: Option<(f32, u32, Vec3A)> = None;
-    let mut stack: Vec<(C::Node, f32)> = Vec::with_capacity(64);
+    let mut stack = super::Stack::new((root, d0));
     stack.push((root, d0));
     let mut kids: [(f32, Option<C::Node>); MAX_CHILDREN] = [(0.0, None); MAX_CHILDREN];
     while let Some((node, d2)) = stack.pop() {

@@ -1,5 +1,6 @@
 //! Ray queries: closest hit and any hit.
 
+use super::Stack;
 use crate::cursor::{MAX_CHILDREN, NodeCursor, TraversalStats};
 use crate::geom::{Ray, TriHit, Triangle, ray_triangle};
 
@@ -43,7 +44,7 @@ pub fn closest_hit_with<C: NodeCursor>(
     let t0 = ray.intersect_aabb(&root_box, t_max)?;
     let mut best: Option<RayHit> = None;
     let mut best_t = t_max;
-    let mut stack: Vec<(C::Node, f32)> = Vec::with_capacity(64);
+    let mut stack = Stack::new((root, t0));
     stack.push((root, t0));
     let mut kids: [(f32, Option<C::Node>); MAX_CHILDREN] = [(0.0, None); MAX_CHILDREN];
     while let Some((node, t_enter)) = stack.pop() {
@@ -114,7 +115,7 @@ pub fn any_hit_with<C: NodeCursor>(
     if ray.intersect_aabb(&root_box, t_max).is_none() {
         return false;
     }
-    let mut stack: Vec<C::Node> = Vec::with_capacity(64);
+    let mut stack = Stack::new(root);
     stack.push(root);
     while let Some(node) = stack.pop() {
         if c.is_leaf(&node) {

@@ -1,0 +1,338 @@
+//! `cbvh render (MESH | --gen KIND --tris N) --codec C [--width W --height H
+//! --lights L --reflect-depth D --threads T] -o out.png [--json]
+//! [--turntable N --turntable-out anim.png]`
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use cbvh::Mesh;
+use cbvh::build::{BuildOptions, Layout, build};
+use cbvh::codec::plain::PlainBvh;
+use cbvh::render::{
+    CursorTarget, Image, RayTarget, RenderOptions, RenderStats, Scene, VertexNormals, render,
+    render_turntable, save_animation,
+};
+
+use super::{CliResult, MeshSource, progress_bar};
+
+/// The structures `cbvh render` can trace.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RenderCodec {
+    /// cbvh's uncompressed BVH (32-byte nodes), traversed by `cbvh::query::ray`.
+    Plain,
+    /// parry3d's own TriMesh and its ray casting, for comparison.
+    Parry,
+}
+
+impl RenderCodec {
+    fn name(self) -> &'static str {
+        match self {
+            RenderCodec::Plain => "plain",
+            RenderCodec::Parry => "parry",
+        }
+    }
+}
+
+/// Arguments of `cbvh render`.
+#[derive(clap::Args, Debug)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub source: MeshSource,
+    /// The structure to trace rays through.
+    #[arg(long, value_enum, default_value_t = RenderCodec::Plain)]
+    pub codec: RenderCodec,
+    /// Node layout of cbvh codecs: depth-first, van-emde-boas or cache-efficient.
+    #[arg(long, default_value = "depth-first")]
+    pub layout: Layout,
+    /// Image width in pixels (1 to 16384).
+    #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub width: u32,
+    /// Image height in pixels (1 to 16384).
+    #[arg(long, default_value_t = 600, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub height: u32,
+    /// Number of point lights (0 to 32), each with shadow rays.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=32))]
+    pub lights: u32,
+    /// Mirror reflection bounces (0 to 16).
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=16))]
+    pub reflect_depth: u32,
+    /// Primary rays only: no shadow rays and no reflections.
+    #[arg(long)]
+    pub primary_only: bool,
+    /// Render threads (a local rayon pool); default: all cores.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub threads: Option<u32>,
+    /// Camera direction around the vertical axis, degrees (0: from +z).
+    #[arg(long, default_value_t = 25.0, allow_negative_numbers = true)]
+    pub azimuth: f32,
+    /// Camera elevation above the horizon, degrees (-89 to 89).
+    #[arg(long, default_value_t = 18.0, allow_negative_numbers = true)]
+    pub elevation: f32,
+    /// Output PNG file.
+    #[arg(short = 'o', long, value_name = "PNG")]
+    pub output: PathBuf,
+    /// Also render an animated turntable of N frames (camera and lights
+    /// circling the scene).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=3600))]
+    pub turntable: Option<u32>,
+    /// Where to write the turntable: `.png` (animated PNG, lossless) or
+    /// `.gif` (256 colours a frame); default: OUT with `-turntable` added
+    /// to its name.
+    #[arg(long, value_name = "PNG|GIF", requires = "turntable")]
+    pub turntable_out: Option<PathBuf>,
+    /// Turntable frames per second.
+    #[arg(long, default_value_t = 24, value_parser = clap::value_parser!(u16).range(1..=1000))]
+    pub fps: u16,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Builds the structure `codec` over `mesh`: one match arm per codec.
+fn make_target(
+    codec: RenderCodec,
+    mesh: &Mesh,
+    layout: Layout,
+) -> Result<Box<dyn RayTarget>, Box<dyn std::error::Error>> {
+    Ok(match codec {
+        RenderCodec::Plain => Box::new(CursorTarget::plain(PlainBvh::new(
+            &build_tree(mesh, layout)?,
+            mesh,
+        ))),
+        RenderCodec::Parry => Box::new(
+            cbvh::parry::parry_trimesh(mesh)
+                .map_err(|e| format!("parry could not build a TriMesh: {e:?}"))?,
+        ),
+    })
+}
+
+fn build_tree(mesh: &Mesh, layout: Layout) -> Result<cbvh::CanonicalBvh, cbvh::build::BuildError> {
+    let pb = progress_bar("building", mesh.triangle_count() as u64);
+    let opts = BuildOptions {
+        layout,
+        ..Default::default()
+    };
+    let bvh = build(mesh, &opts, &|done, total| {
+        pb.set_length(total);
+        pb.set_position(done);
+    });
+    pb.finish_and_clear();
+    bvh
+}
+
+/// Refuses, before rendering, an output path whose directory does not
+/// exist or whose extension is not one of `exts`.
+fn check_output(path: &Path, exts: &[&str]) -> CliResult {
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if !dir.is_dir() {
+        return Err(format!(
+            "cannot write {}: directory {} does not exist",
+            path.display(),
+            dir.display()
+        )
+        .into());
+    }
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    if !exts.contains(&ext.as_str()) {
+        let names: Vec<String> = exts.iter().map(|e| format!(".{e}")).collect();
+        return Err(format!(
+            "cannot write {}: name the file {} (images are PNG; turntables animated PNG or GIF)",
+            path.display(),
+            names.join(" or ")
+        )
+        .into());
+    }
+    Ok(())
+}
+
+fn turntable_path(a: &RenderArgs) -> PathBuf {
+    a.turntable_out.clone().unwrap_or_else(|| {
+        let stem = a
+            .output
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("render");
+        a.output.with_file_name(format!("{stem}-turntable.png"))
+    })
+}
+
+/// A still image, its stats, and the turntable's frames and stats if asked.
+type Rendered = (Image, RenderStats, Option<(Vec<Image>, RenderStats)>);
+
+/// Runs `cbvh render`.
+pub fn run(a: RenderArgs) -> CliResult {
+    check_output(&a.output, &["png"])?;
+    if a.turntable.is_some() {
+        check_output(&turntable_path(&a), &["png", "gif"])?;
+    }
+    let (mesh, name) = a.source.load()?;
+    let tris = mesh.triangle_count();
+    mesh.validate(&name)?;
+    let t0 = Instant::now();
+    let target = make_target(a.codec, &mesh, a.layout)?;
+    let build_seconds = t0.elapsed().as_secs_f64();
+    let normals = VertexNormals::from_mesh(&mesh);
+    drop(mesh);
+    let scene = Scene::single(target.as_ref(), Some(&normals));
+    let mut opts = RenderOptions {
+        width: a.width,
+        height: a.height,
+        lights: a.lights as usize,
+        reflect_depth: a.reflect_depth,
+        azimuth_deg: a.azimuth,
+        elevation_deg: a.elevation.clamp(-89.0, 89.0),
+        ..Default::default()
+    };
+    if a.primary_only {
+        opts = opts.primary_only();
+    }
+    let work = || -> Result<Rendered, cbvh::render::RenderError> {
+        let pb = progress_bar("rendering", 1);
+        let (image, stats) = render(&scene, &opts, &|d, t| {
+            pb.set_length(t);
+            pb.set_position(d);
+        })?;
+        pb.finish_and_clear();
+        let turntable = match a.turntable {
+            Some(n) => {
+                let pb = progress_bar("turntable", 1);
+                let r = render_turntable(&scene, &opts, n, &|d, t| {
+                    pb.set_length(t);
+                    pb.set_position(d);
+                })?;
+                pb.finish_and_clear();
+                Some(r)
+            }
+            None => None,
+        };
+        Ok((image, stats, turntable))
+    };
+    let (image, stats, turntable) = match a.threads {
+        Some(t) => rayon::ThreadPoolBuilder::new()
+            .num_threads(t as usize)
+            .build()?
+            .install(work)?,
+        None => work()?,
+    };
+    image.save_png(&a.output)?;
+    let turntable_out = turntable_path(&a);
+    if let Some((frames, _)) = &turntable {
+        save_animation(frames, &turntable_out, a.fps)?;
+    }
+    report(
+        &a,
+        &name,
+        tris,
+        target.as_ref(),
+        build_seconds,
+        &stats,
+        turntable
+            .as_ref()
+            .map(|t| (&t.1, t.0.len(), &turntable_out)),
+    )
+}
+
+fn per_ray(target: &dyn RayTarget, count: u64, rays: u64) -> Option<f64> {
+    target
+        .counts_traversal()
+        .then(|| count as f64 / rays.max(1) as f64)
+}
+
+fn report(
+    a: &RenderArgs,
+    name: &str,
+    tris: usize,
+    target: &dyn RayTarget,
+    build_seconds: f64,
+    s: &RenderStats,
+    turntable: Option<(&RenderStats, usize, &PathBuf)>,
+) -> CliResult {
+    let rays = s.rays.total();
+    let steps = per_ray(target, s.rays.traversal.nodes_visited, rays);
+    let prims = per_ray(target, s.rays.traversal.primitive_tests, rays);
+    if a.json {
+        let mut v = serde_json::json!({
+            "mesh": name,
+            "triangles": tris,
+            "codec": a.codec.name(),
+            "layout": (a.codec == RenderCodec::Plain).then(|| a.layout.name()),
+            "width": a.width,
+            "height": a.height,
+            "lights": a.lights,
+            "reflect_depth": if a.primary_only { 0 } else { a.reflect_depth },
+            "shadows": !a.primary_only,
+            "build_seconds": build_seconds,
+            "rays": rays,
+            "primary_rays": s.rays.primary,
+            "shadow_rays": s.rays.shadow,
+            "reflection_rays": s.rays.reflection,
+            "seconds": s.seconds,
+            "rays_per_second": s.rays_per_second(),
+            "threads": s.threads,
+            "traversal_steps_per_ray": steps,
+            "primitive_tests_per_ray": prims,
+            "bytes_per_triangle": target.bytes_per_triangle(),
+            "output": a.output.display().to_string(),
+        });
+        if let (Some((t, frames, path)), Some(o)) = (turntable, v.as_object_mut()) {
+            o.insert(
+                "turntable".into(),
+                serde_json::json!({
+                    "frames": frames,
+                    "rays": t.rays.total(),
+                    "seconds": t.seconds,
+                    "rays_per_second": t.rays_per_second(),
+                    "output": path.display().to_string(),
+                }),
+            );
+        }
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        let fmt = |x: Option<f64>| {
+            x.map_or("n/a (parry does not count)".to_string(), |x| {
+                format!("{x:.2}")
+            })
+        };
+        println!("mesh              {name}");
+        println!("triangles         {tris}");
+        println!(
+            "codec             {} ({:.2} B/triangle, built in {build_seconds:.3} s)",
+            a.codec.name(),
+            target.bytes_per_triangle()
+        );
+        println!(
+            "image             {} × {} → {}",
+            a.width,
+            a.height,
+            a.output.display()
+        );
+        println!(
+            "rays              {rays} ({} primary, {} shadow, {} reflection)",
+            s.rays.primary, s.rays.shadow, s.rays.reflection
+        );
+        println!(
+            "time              {:.3} s, {:.2} M rays/s on {} threads",
+            s.seconds,
+            s.rays_per_second() / 1e6,
+            s.threads
+        );
+        println!("traversal steps   {} per ray", fmt(steps));
+        println!("primitive tests   {} per ray", fmt(prims));
+        if let Some((t, frames, path)) = turntable {
+            println!(
+                "turntable         {frames} frames → {} ({:.3} s, {:.2} M rays/s)",
+                path.display(),
+                t.seconds,
+                t.rays_per_second() / 1e6
+            );
+        }
+    }
+    Ok(())
+}
