@@ -3,7 +3,9 @@
 //! ```text
 //! cargo run --release --example gen_bench -- bench statue 10000000
 //! cargo run --release --example gen_bench -- dump        # OFF files in /tmp
-//! cargo run --release --example gen_bench -- counts      # count-formula sweep
+//! cargo run --release --example gen_bench -- counts [seeds [iso_max iso_step]]
+//! cargo run --release --example gen_bench -- sweep isosurface 3 500000 2000000
+//! cargo run --release --example gen_bench -- check statue 10000000
 //! ```
 //! `bench` prints throughput and peak memory (VmHWM) against the mesh's own
 //! size; set `RAYON_NUM_THREADS=1` for single-core figures.
@@ -26,8 +28,18 @@ fn peak_rss_mb() -> f64 {
 /// User + system CPU seconds of this process so far.
 fn cpu_seconds() -> f64 {
     let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    let fields: Vec<&str> = stat.rsplit(')').next().unwrap_or("").split_whitespace().collect();
-    let ticks = |i: usize| fields.get(i).and_then(|s| s.parse::<f64>().ok()).unwrap_or(f64::NAN);
+    let fields: Vec<&str> = stat
+        .rsplit(')')
+        .next()
+        .unwrap_or("")
+        .split_whitespace()
+        .collect();
+    let ticks = |i: usize| {
+        fields
+            .get(i)
+            .and_then(|s| s.parse::<f64>().ok())
+            .unwrap_or(f64::NAN)
+    };
     (ticks(11) + ticks(12)) / 100.0
 }
 
@@ -62,8 +74,15 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     match args.first().map(String::as_str) {
         Some("bench") => {
-            let kind: Kind = args.get(1).map_or("statue", String::as_str).parse().expect("kind");
-            let tris: usize = args.get(2).map_or(Ok(10_000_000), |s| s.parse()).expect("tris");
+            let kind: Kind = args
+                .get(1)
+                .map_or("statue", String::as_str)
+                .parse()
+                .expect("kind");
+            let tris: usize = args
+                .get(2)
+                .map_or(Ok(10_000_000), |s| s.parse())
+                .expect("tris");
             let threads = rayon::current_num_threads();
             let c0 = cpu_seconds();
             let t0 = Instant::now();
@@ -86,7 +105,9 @@ fn main() {
         }
         Some("dump") => {
             for kind in Kind::ALL {
-                let tris = args.get(1).map_or(default_tris(kind), |s| s.parse().expect("tris"));
+                let tris = args
+                    .get(1)
+                    .map_or(default_tris(kind), |s| s.parse().expect("tris"));
                 let mesh = generate(kind, tris, 0, &mut |_, _| {}).expect("generate");
                 let (lo, hi) = mesh.bounds().expect("vertices");
                 let path = format!("/tmp/gen_{kind}.off");
@@ -102,23 +123,84 @@ fn main() {
             }
         }
         Some("counts") => {
+            // Worst planned-count error over a sweep of requests and seeds.
+            let seeds: u64 = args.get(1).map_or(1, |s| s.parse().expect("seeds"));
+            let iso_limit: f64 = args.get(2).map_or(400e3, |s| s.parse().expect("iso limit"));
+            let iso_step: f64 = args.get(3).map_or(1.05, |s| s.parse().expect("iso step"));
             for kind in Kind::ALL {
-                let mut worst = (0.0f64, 0usize);
-                let mut t = 1000.0f64;
-                while t <= 200e6 {
-                    let tris = t as usize;
-                    if kind != Kind::Isosurface || tris <= 2_000_000 {
-                        let got = planned_triangles(kind, tris, 0).expect("plan");
+                let mut worst = (0.0f64, 0usize, 0u64);
+                for seed in 0..seeds {
+                    let mut t = 1000.0f64;
+                    let (limit, step) = if kind == Kind::Isosurface {
+                        (iso_limit, iso_step)
+                    } else {
+                        (200e6, 1.003)
+                    };
+                    while t <= limit {
+                        let tris = t as usize;
+                        let got = planned_triangles(kind, tris, seed).expect("plan");
                         let err = (got as f64 / tris as f64 - 1.0).abs();
                         if err > worst.0 {
-                            worst = (err, tris);
+                            worst = (err, tris, seed);
                         }
+                        t *= step;
                     }
-                    t *= if kind == Kind::Isosurface { 1.37 } else { 1.013 };
                 }
-                println!("{kind:>10}: worst planned count error {:.3} % at {}", worst.0 * 100.0, worst.1);
+                println!(
+                    "{kind:>10}: worst planned count error {:.3} % at {} (seed {})",
+                    worst.0 * 100.0,
+                    worst.1,
+                    worst.2
+                );
             }
         }
-        _ => eprintln!("usage: gen_bench bench <kind> <tris> | dump [tris] | counts"),
+        Some("check") => {
+            // Closedness and degeneracy of one large mesh.
+            let kind: Kind = args
+                .get(1)
+                .map_or("statue", String::as_str)
+                .parse()
+                .expect("kind");
+            let tris: usize = args
+                .get(2)
+                .map_or(Ok(2_000_000), |s| s.parse())
+                .expect("tris");
+            let mesh = generate(kind, tris, 0, &mut |_, _| {}).expect("generate");
+            println!(
+                "{kind} {tris}: {} tris, boundary edges {}, degenerate {}, volume {:.4}",
+                mesh.triangles.len(),
+                boundary_edges(&mesh),
+                degenerate_triangles(&mesh),
+                signed_volume(&mesh)
+            );
+        }
+        Some("sweep") => {
+            // Actual counts produced for a kind over requests and seeds.
+            let kind: Kind = args
+                .get(1)
+                .map_or("isosurface", String::as_str)
+                .parse()
+                .expect("kind");
+            let seeds: u64 = args.get(2).map_or(3, |s| s.parse().expect("seeds"));
+            for tris in args
+                .iter()
+                .skip(3)
+                .map(|s| s.parse::<usize>().expect("tris"))
+            {
+                for seed in 0..seeds {
+                    let t0 = Instant::now();
+                    let m = generate(kind, tris, seed, &mut |_, _| {}).expect("generate");
+                    let n = m.triangles.len();
+                    println!(
+                        "{kind} {tris} seed {seed}: {n} ({:+.2} %) in {:.2} s",
+                        (n as f64 / tris as f64 - 1.0) * 100.0,
+                        t0.elapsed().as_secs_f64()
+                    );
+                }
+            }
+        }
+        _ => eprintln!(
+            "usage: gen_bench bench <kind> <tris> | dump [tris] | check <kind> <tris> | counts [seeds [iso_max iso_step]] | sweep <kind> <seeds> <tris>..."
+        ),
     }
 }

@@ -185,7 +185,9 @@ mod tests {
     use crate::mesh::{Mesh, boundary_edges, degenerate_triangles};
 
     pub(crate) fn box_mesh(g: BoxGrid) -> Mesh {
-        let vertices = (0..g.vertices()).map(|v| g.unit(g.vertex_ijk(v)).to_array()).collect();
+        let vertices = (0..g.vertices())
+            .map(|v| g.unit(g.vertex_ijk(v)).to_array())
+            .collect();
         let triangles = (0..g.triangles()).map(|t| g.triangle(t)).collect();
         Mesh::new(vertices, triangles)
     }
@@ -209,7 +211,11 @@ mod tests {
             m.validate("grid").unwrap();
             assert_eq!(boundary_edges(&m), 0, "{g:?}");
             assert_eq!(degenerate_triangles(&m), 0, "{g:?}");
-            assert!((signed_volume(&m) - 8.0).abs() < 1e-4, "{g:?}: {}", signed_volume(&m));
+            assert!(
+                (signed_volume(&m) - 8.0).abs() < 1e-4,
+                "{g:?}: {}",
+                signed_volume(&m)
+            );
             for v in 0..g.vertices() {
                 let [i, j, k] = g.vertex_ijk(v);
                 assert_eq!(g.vertex_id(i, j, k) as u64, v);

@@ -1,24 +1,33 @@
 //! `isosurface`: marching cubes of a seeded noise field, the stand-in for
 //! the RACBVH paper's iso-surface model.
 //!
-//! The field is a four-octave value noise minus a steep radial falloff (`∝ r⁸`), so the
-//! solid is a spongy blob inside a ball of radius 0.95 centred in the
-//! domain `[0, 2]³` (bottom near `y = 0`). Grid points on the domain's
-//! faces are forced outside, so the surface is always fully closed.
+//! The field is a four-octave value noise minus a steep radial falloff
+//! (`∝ r⁸`), so the solid is a spongy blob, with some loose bits, inside
+//! a ball of radius 0.95 centred in the domain `[0, 2]³` (it typically
+//! spans 0.2 to 1.8 on each axis). Grid points on the domain's faces are
+//! forced outside, so the surface is always fully closed.
 //! Vertices are indexed by grid edge (one per crossed edge, shared by the
 //! cells around it), and the case table ([`super::mc`]) is crack-free, so
-//! the output is a closed, outward-oriented surface.
+//! the output is a closed, outward-oriented surface. Vertices are kept at
+//! least 1/64 of an edge away from grid points, which avoids the zero-area
+//! triangles marching cubes makes when the surface passes through one.
 //!
 //! The triangle count is steered through the cell size `h`, which is
-//! continuous (the grid covers the domain with `⌈2/h⌉` cells and is centred
-//! on it). Counting passes classify cells without storing anything. Small
-//! grids iterate on exact counts; large grids fit `count ≈ A/h² + B/h` to
-//! counts at 128 and 256 cells and solve for `h`, and the generation pass
-//! is redone with a corrected `h` in the rare case it misses by more than
-//! 4 %.
+//! continuous: the grid covers the domain with `⌈2/h⌉` cells from its
+//! corner, so samples move continuously with `h`. Counting passes classify
+//! cells without storing anything. Small grids (up to 220 cells a side,
+//! about 400 k triangles) iterate on exact counts, Newton steps on
+//! `count ∝ 1/h²` followed by a scan; large grids fit `count ≈ A/h² + B/h`
+//! to counts at 128 and 256 cells and solve for `h` (observed error under
+//! 1 % up to 20 M), and the generation pass is redone with a corrected `h`
+//! in the rare case it misses by more than 4 %.
+//!
+//! Cells are classified with bit masks (64 cells per word), and a vertex's
+//! index is the rank of its crossed edge among the crossed edges of its
+//! plane or layer, so no per-edge index maps are stored.
 //!
 //! Work goes slab by slab: chunks of a few cell layers are processed in
-//! parallel, each keeping two planes of samples and edge maps, and their
+//! parallel, each keeping two planes of samples and crossing masks, and their
 //! outputs are appended in order. A chunk does not need the previous
 //! chunk's output: the vertices on its bottom plane are the previous
 //! chunk's last vertices, in an order it can recompute. So the output does
@@ -40,7 +49,7 @@ const RADIUS: f32 = 0.95;
 /// Strength of the radial falloff at `RADIUS` (beats the noise's maximum).
 const FALLOFF: f32 = 2.5;
 /// Constant added to the field: the solid's share of the ball.
-const BIAS: f32 = 0.1;
+const BIAS: f32 = 0.0;
 /// Cell layers per parallel chunk.
 const LAYERS: usize = 8;
 /// Grids up to this many cells per axis are planned from exact counts.
@@ -63,7 +72,7 @@ impl Field {
     /// The field for `seed`.
     pub(crate) fn new(seed: u64) -> Self {
         let mut rng = Rng::new(seed, 0x150);
-        let mut freq = 1.6;
+        let mut freq = 2.4;
         let mut amp = 1.0;
         let octaves = (0..4)
             .map(|_| {
@@ -71,7 +80,11 @@ impl Field {
                     seed: rng.next_u32(),
                     freq,
                     amp,
-                    shift: Vec3::new(rng.range(0.0, 64.0), rng.range(0.0, 64.0), rng.range(0.0, 64.0)),
+                    shift: Vec3::new(
+                        rng.range(0.0, 64.0),
+                        rng.range(0.0, 64.0),
+                        rng.range(0.0, 64.0),
+                    ),
                 };
                 freq *= 2.03;
                 amp *= 0.5;
@@ -96,10 +109,15 @@ struct AxisTab {
 
 impl AxisTab {
     fn new(origin: f32, h: f32, n: usize, freq: f32, shift: f32) -> Self {
-        let coords: Vec<f32> = (0..=n).map(|i| (origin + i as f32 * h) * freq + shift).collect();
+        let coords: Vec<f32> = (0..=n)
+            .map(|i| (origin + i as f32 * h) * freq + shift)
+            .collect();
         let lo = coords[0].floor() as i32;
         let hi = coords[n].floor() as i32;
-        let cell = coords.iter().map(|c| (c.floor() as i32 - lo) as u32).collect();
+        let cell = coords
+            .iter()
+            .map(|c| (c.floor() as i32 - lo) as u32)
+            .collect();
         let w = coords.iter().map(|c| fade(c - c.floor())).collect();
         Self {
             lo,
@@ -110,7 +128,7 @@ impl AxisTab {
     }
 }
 
-/// A sampling grid of `n` cells of side `h` per axis, centred on the domain.
+/// A sampling grid of `n` cells of side `h` per axis from the origin.
 struct Grid<'a> {
     field: &'a Field,
     n: usize,
@@ -164,6 +182,15 @@ fn lerp(a: f32, b: f32, t: f32) -> f32 {
     a + (b - a) * t
 }
 
+/// Where the field crosses zero between samples `a` and `b` of opposite
+/// sign, as a fraction of the edge, kept off the end points so that the
+/// vertices of neighbouring edges do not coincide (no zero-area triangles
+/// from vertices sitting on grid points).
+#[inline]
+fn cut(a: f32, b: f32) -> f32 {
+    (a / (a - b)).clamp(1.0 / 64.0, 63.0 / 64.0)
+}
+
 /// Cells per axis for cell size `h`.
 fn cells_for(h: f32) -> usize {
     ((SIZE / h).ceil() as usize).max(2)
@@ -203,7 +230,9 @@ fn for_bits(row: &[u64], mut f: impl FnMut(usize)) {
 impl<'a> Grid<'a> {
     fn new(field: &'a Field, h: f32) -> Self {
         let n = cells_for(h);
-        let origin = field.centre - Vec3::splat(0.5 * n as f32 * h);
+        // Anchored at the domain corner, so that samples move continuously
+        // with h (a new layer appears far outside the solid).
+        let origin = Vec3::ZERO;
         let tabs = field
             .octaves
             .iter()
@@ -243,11 +272,12 @@ impl<'a> Grid<'a> {
     /// that the falloff beats any noise, are set to −1 without sampling.
     fn sample(&self, k: usize, p: &mut Plane, vz: &mut Vec<f32>, vy: &mut Vec<f32>) {
         let (n, n1, w) = (self.n, self.n + 1, self.w());
-        p.f.clear();
+        // Every value and bit is rewritten below; no need to clear.
         p.f.resize(n1 * n1, -1.0);
-        p.sign.clear();
         p.sign.resize(n1 * w, 0);
         if k == 0 || k == n {
+            p.f.fill(-1.0);
+            p.sign.fill(0);
             return;
         }
         let amp: f32 = self.field.octaves.iter().map(|o| o.amp).sum();
@@ -255,62 +285,62 @@ impl<'a> Grid<'a> {
         let cut = ((amp + BIAS) / FALLOFF).powf(0.25);
         let centre_i = (self.field.centre.x - self.origin.x) / self.h;
         let dz = self.d2[2][k];
-        // Sampled x-range of each row (empty when i0 > i1).
-        let ranges: Vec<(usize, usize)> = (0..n1)
-            .map(|j| {
-                let rem = cut - dz - self.d2[1][j];
-                if j == 0 || j == n || rem <= 0.0 {
-                    return (1, 0);
+        // Each octave's lattice values interpolated to this plane's z.
+        vz.clear();
+        let mut offsets = Vec::with_capacity(self.tabs.len());
+        for (o, [tx, ty, tz]) in self.field.octaves.iter().zip(&self.tabs) {
+            offsets.push(vz.len());
+            let iz = tz.lo + tz.cell[k] as i32;
+            let wz = tz.w[k];
+            for iy in 0..ty.len as i32 {
+                for ix in 0..tx.len as i32 {
+                    let (x, y) = (tx.lo + ix, ty.lo + iy);
+                    let (a, b) = (lattice(o.seed, x, y, iz), lattice(o.seed, x, y, iz + 1));
+                    vz.push(o.amp * lerp(a, b, wz));
                 }
-                let half = rem.sqrt() * RADIUS / self.h;
-                let i0 = ((centre_i - half).floor() as isize - 1).max(1) as usize;
-                let i1 = ((centre_i + half).ceil() as isize + 1).min(n as isize - 1) as usize;
-                (i0, i1)
-            })
-            .collect();
-        for (j, &(i0, i1)) in ranges.iter().enumerate() {
-            if i0 > i1 {
+            }
+        }
+        // Row by row, so that a row stays in cache while every octave is
+        // added to it.
+        for j in 0..n1 {
+            let row = &mut p.f[j * n1..(j + 1) * n1];
+            let bits = &mut p.sign[j * w..(j + 1) * w];
+            bits.fill(0);
+            let rem = cut - dz - self.d2[1][j];
+            if j == 0 || j == n || rem <= 0.0 {
+                row.fill(-1.0);
                 continue;
             }
+            // The sampled x-range of the row; the rest is outside.
+            let half = rem.sqrt() * RADIUS / self.h;
+            let i0 = ((centre_i - half).floor() as isize - 1).max(1) as usize;
+            let i1 = ((centre_i + half).ceil() as isize + 1).min(n as isize - 1) as usize;
+            if i0 > i1 {
+                row.fill(-1.0);
+                continue;
+            }
+            row[..i0].fill(-1.0);
+            row[i1 + 1..].fill(-1.0);
+            let row = &mut row[i0..=i1];
             let dy = self.d2[1][j] + dz;
-            let row = &mut p.f[j * n1 + i0..=j * n1 + i1];
             for (v, dx) in row.iter_mut().zip(&self.d2[0][i0..=i1]) {
                 let r2 = dx + dy;
                 let r4 = r2 * r2;
                 *v = BIAS - FALLOFF * r4 * r4;
             }
-        }
-        for (o, [tx, ty, tz]) in self.field.octaves.iter().zip(&self.tabs) {
-            let iz = tz.lo + tz.cell[k] as i32;
-            let wz = tz.w[k];
-            vz.clear();
-            for iy in 0..ty.len as i32 {
-                for ix in 0..tx.len as i32 {
-                    let (x, y) = (tx.lo + ix, ty.lo + iy);
-                    vz.push(o.amp * lerp(lattice(o.seed, x, y, iz), lattice(o.seed, x, y, iz + 1), wz));
-                }
-            }
-            for (j, &(i0, i1)) in ranges.iter().enumerate() {
-                if i0 > i1 {
-                    continue;
-                }
+            for ([tx, ty, _], &off) in self.tabs.iter().zip(&offsets) {
                 let (cy, wy) = (ty.cell[j] as usize, ty.w[j]);
-                let r0 = &vz[cy * tx.len..(cy + 1) * tx.len];
-                let r1 = &vz[(cy + 1) * tx.len..(cy + 2) * tx.len];
+                let r0 = &vz[off + cy * tx.len..off + (cy + 1) * tx.len];
+                let r1 = &vz[off + (cy + 1) * tx.len..off + (cy + 2) * tx.len];
                 vy.clear();
                 vy.extend(r0.iter().zip(r1).map(|(a, b)| lerp(*a, *b, wy)));
-                let row = &mut p.f[j * n1 + i0..=j * n1 + i1];
                 for ((v, &cx), &wx) in row.iter_mut().zip(&tx.cell[i0..=i1]).zip(&tx.w[i0..=i1]) {
                     let cx = cx as usize;
                     *v += lerp(vy[cx], vy[cx + 1], wx);
                 }
             }
-        }
-        for (j, &(i0, i1)) in ranges.iter().enumerate() {
-            for i in i0..=i1 {
-                if p.f[j * n1 + i] > 0.0 {
-                    p.sign[j * w + i / 64] |= 1 << (i % 64);
-                }
+            for (i, v) in (i0..).zip(row.iter()) {
+                bits[i / 64] |= ((*v > 0.0) as u64) << (i % 64);
             }
         }
     }
@@ -346,20 +376,32 @@ impl<'a> Grid<'a> {
             let y = self.origin.y + j as f32 * h;
             for_bits(&p.xb[j * w..(j + 1) * w], |i| {
                 let (a, b) = (p.f[j * n1 + i], p.f[j * n1 + i + 1]);
-                out.push([self.origin.x + (i as f32 + a / (a - b)) * h, y, z]);
+                out.push([self.origin.x + (i as f32 + cut(a, b)) * h, y, z]);
             });
         }
         for j in 0..n {
             for_bits(&p.yb[j * w..(j + 1) * w], |i| {
                 let (a, b) = (p.f[j * n1 + i], p.f[(j + 1) * n1 + i]);
-                out.push([self.origin.x + i as f32 * h, self.origin.y + (j as f32 + a / (a - b)) * h, z]);
+                out.push([
+                    self.origin.x + i as f32 * h,
+                    self.origin.y + (j as f32 + cut(a, b)) * h,
+                    z,
+                ]);
             });
         }
     }
 
     /// Finds, numbers from `base` and appends the crossed z-edges between
     /// planes `a` (at `k`) and `b`.
-    fn layer(&self, a: &Plane, b: &Plane, k: usize, base: u32, l: &mut Layer, out: &mut Vec<[f32; 3]>) {
+    fn layer(
+        &self,
+        a: &Plane,
+        b: &Plane,
+        k: usize,
+        base: u32,
+        l: &mut Layer,
+        out: &mut Vec<[f32; 3]>,
+    ) {
         let (n, n1, w, h) = (self.n, self.n + 1, self.w(), self.h);
         l.zb.clear();
         l.zb.extend(a.sign.iter().zip(&b.sign).map(|(x, y)| x ^ y));
@@ -369,7 +411,7 @@ impl<'a> Grid<'a> {
             let y = self.origin.y + j as f32 * h;
             for_bits(&l.zb[j * w..(j + 1) * w], |i| {
                 let (fa, fb) = (a.f[j * n1 + i], b.f[j * n1 + i]);
-                out.push([self.origin.x + i as f32 * h, y, z + fa / (fa - fb) * h]);
+                out.push([self.origin.x + i as f32 * h, y, z + cut(fa, fb) * h]);
             });
         }
     }
@@ -383,7 +425,12 @@ impl<'a> Grid<'a> {
             if k >= w {
                 return (0, 0);
             }
-            let r = [a[j * w + k], a[(j + 1) * w + k], b[j * w + k], b[(j + 1) * w + k]];
+            let r = [
+                a[j * w + k],
+                a[(j + 1) * w + k],
+                b[j * w + k],
+                b[(j + 1) * w + k],
+            ];
             (r[0] | r[1] | r[2] | r[3], r[0] & r[1] & r[2] & r[3])
         };
         let mut cur = word(0);
@@ -479,7 +526,9 @@ impl<'a> Grid<'a> {
             self.sample(k + 1, &mut b, &mut vz, &mut vy);
             for j in 0..self.n {
                 self.active(&a.sign, &b.sign, j, &mut act);
-                for_bits(&act, |i| count += self.mc.count(Self::case(n1, &a.f, &b.f, j * n1 + i)) as u64);
+                for_bits(&act, |i| {
+                    count += self.mc.count(Self::case(n1, &a.f, &b.f, j * n1 + i)) as u64
+                });
             }
             std::mem::swap(&mut a, &mut b);
         }
@@ -489,12 +538,18 @@ impl<'a> Grid<'a> {
     /// Cell-layer ranges processed as units: a fixed size, so the output
     /// does not depend on the thread count.
     fn chunks(&self) -> Vec<(usize, usize)> {
-        (0..self.n).step_by(LAYERS).map(|k| (k, (k + LAYERS).min(self.n))).collect()
+        (0..self.n)
+            .step_by(LAYERS)
+            .map(|k| (k, (k + LAYERS).min(self.n)))
+            .collect()
     }
 
     /// Exact triangle count of this grid.
     fn count(&self) -> u64 {
-        self.chunks().par_iter().map(|&(k0, k1)| self.count_chunk(k0, k1)).sum()
+        self.chunks()
+            .par_iter()
+            .map(|&(k0, k1)| self.count_chunk(k0, k1))
+            .sum()
     }
 
     /// The mesh of this grid.
@@ -506,7 +561,10 @@ impl<'a> Grid<'a> {
         let mut triangles: Vec<[u32; 3]> = Vec::with_capacity(estimate as usize + 1024);
         let wave = (2 * rayon::current_num_threads()).max(1);
         for group in chunks.chunks(wave) {
-            let outs: Vec<ChunkOut> = group.par_iter().map(|&(k0, k1)| self.chunk(k0, k1)).collect();
+            let outs: Vec<ChunkOut> = group
+                .par_iter()
+                .map(|&(k0, k1)| self.chunk(k0, k1))
+                .collect();
             for out in outs {
                 let base = vertices.len() as u32 - out.prev;
                 vertices.extend_from_slice(&out.verts);
@@ -538,24 +596,37 @@ pub(crate) fn plan(field: &Field, target: usize) -> (f32, Option<u64>) {
     let c = count_at(field, 1.0 / pilot).max(1) as f64;
     let mut x = pilot * (target / c).sqrt() as f32;
     if x * SIZE <= EXACT_MAX_N {
-        let mut best: Option<(f64, f32, u64)> = None;
-        for it in 0..40 {
+        let mut best = (f64::INFINITY, x, 0u64);
+        let try_x = |x: f32, best: &mut (f64, f32, u64)| {
             let c = count_at(field, 1.0 / x);
             let err = (c as f64 / target - 1.0).abs();
-            if best.is_none_or(|b| err < b.0) {
-                best = Some((err, x, c));
+            if err < best.0 {
+                *best = (err, x, c);
             }
-            if err <= 0.01 {
+            c
+        };
+        // Newton steps on count ∝ x², damped in case the count is noisy.
+        for it in 0..10 {
+            let c = try_x(x, &mut best);
+            if best.0 <= 0.01 {
                 break;
             }
-            // Newton step on c ∝ x², damped later in case the noisy count
-            // makes it oscillate.
             let ratio = (target / c.max(1) as f64) as f32;
-            let damp = if it < 6 { 0.5 } else { 0.25 };
-            x *= ratio.powf(damp);
+            x *= ratio.powf(if it < 5 { 0.5 } else { 0.25 });
         }
-        let (_, x, c) = best.expect("at least one iteration");
-        return (1.0 / x, Some(c));
+        // Small grids count in steps that Newton can jump over: scan.
+        'scan: for step in [0.004f32, 0.001] {
+            let centre = best.1;
+            for k in 1..=40 {
+                for sign in [1.0, -1.0] {
+                    if best.0 <= 0.01 {
+                        break 'scan;
+                    }
+                    try_x(centre * (1.0 + sign * step * k as f32), &mut best);
+                }
+            }
+        }
+        return (1.0 / best.1, Some(best.2));
     }
     let (x1, x2) = (128.0 / SIZE as f64, 256.0 / SIZE as f64);
     let c1 = count_at(field, (1.0 / x1) as f32) as f64;
@@ -597,31 +668,5 @@ pub(crate) fn generate(tris: usize, seed: u64, progress: &mut dyn FnMut(u64, u64
         }
         h *= (got / tris as f64).sqrt() as f32;
         estimate = tris as u64 + tris as u64 / 32;
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    #[ignore]
-    fn profile() {
-        let field = Field::new(1);
-        for n in [64usize, 128, 256, 512] {
-            let g = Grid::new(&field, SIZE / n as f32);
-            let t = std::time::Instant::now();
-            let c = g.count();
-            let tc = t.elapsed();
-            let t = std::time::Instant::now();
-            let (mut p, mut vz, mut vy) = (Plane::default(), Vec::new(), Vec::new());
-            for k in 0..=n {
-                g.sample(k, &mut p, &mut vz, &mut vy);
-            }
-            let ts = t.elapsed();
-            let t = std::time::Instant::now();
-            let m = g.mesh(c, &mut |_, _| {});
-            eprintln!("n {n}: count {c} in {tc:?}; sampling {ts:?}; mesh {:?} ({} tris)", t.elapsed(), m.triangles.len());
-        }
     }
 }

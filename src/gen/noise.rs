@@ -66,7 +66,10 @@ impl Fbm {
         for o in 0..self.octaves {
             // A per-octave shift keeps the lattices of the octaves apart.
             let shift = Vec3::new(0.37, 0.71, 0.13) * o as f32;
-            sum += a * value_noise(self.seed.wrapping_add(o.wrapping_mul(0x9E37_79B9)), p * f + shift);
+            sum += a * value_noise(
+                self.seed.wrapping_add(o.wrapping_mul(0x9E37_79B9)),
+                p * f + shift,
+            );
             f *= self.lacunarity;
             a *= self.gain;
         }
@@ -92,6 +95,9 @@ mod tests {
         }
         assert!(differs);
         // Lattice points carry the lattice value exactly.
-        assert_eq!(value_noise(9, Vec3::new(2.0, -3.0, 5.0)), lattice(9, 2, -3, 5));
+        assert_eq!(
+            value_noise(9, Vec3::new(2.0, -3.0, 5.0)),
+            lattice(9, 2, -3, 5)
+        );
     }
 }

@@ -133,20 +133,23 @@ pub(crate) fn build(parts: &[Part], grids: &[BoxGrid], progress: &mut dyn FnMut(
     let mut done = 0;
     for (b, batch) in vertices.chunks_mut(step).enumerate() {
         let base = (b * step) as u64;
-        batch.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
-            let start = base + (c * CHUNK) as u64;
-            let mut p = voff.partition_point(|&o| o <= start) - 1;
-            for (e, slot) in out.iter_mut().enumerate() {
-                let g = start + e as u64;
-                while g >= voff[p + 1] {
-                    p += 1;
+        batch
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(c, out)| {
+                let start = base + (c * CHUNK) as u64;
+                let mut p = voff.partition_point(|&o| o <= start) - 1;
+                for (e, slot) in out.iter_mut().enumerate() {
+                    let g = start + e as u64;
+                    while g >= voff[p + 1] {
+                        p += 1;
+                    }
+                    let grid = &grids[p];
+                    let q = grid.unit(grid.vertex_ijk(g - voff[p]));
+                    let part = &parts[p];
+                    *slot = (part.rot * part.shape.map(q) + part.pos).to_array();
                 }
-                let grid = &grids[p];
-                let q = grid.unit(grid.vertex_ijk(g - voff[p]));
-                let part = &parts[p];
-                *slot = (part.rot * part.shape.map(q) + part.pos).to_array();
-            }
-        });
+            });
         done += batch.len() as u64;
         progress(done, total);
     }
@@ -154,18 +157,21 @@ pub(crate) fn build(parts: &[Part], grids: &[BoxGrid], progress: &mut dyn FnMut(
     let mut triangles = vec![[0u32; 3]; t as usize];
     for (b, batch) in triangles.chunks_mut(step).enumerate() {
         let base = (b * step) as u64;
-        batch.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
-            let start = base + (c * CHUNK) as u64;
-            let mut p = toff.partition_point(|&o| o <= start) - 1;
-            for (e, slot) in out.iter_mut().enumerate() {
-                let g = start + e as u64;
-                while g >= toff[p + 1] {
-                    p += 1;
+        batch
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(c, out)| {
+                let start = base + (c * CHUNK) as u64;
+                let mut p = toff.partition_point(|&o| o <= start) - 1;
+                for (e, slot) in out.iter_mut().enumerate() {
+                    let g = start + e as u64;
+                    while g >= toff[p + 1] {
+                        p += 1;
+                    }
+                    let o = voff[p] as u32;
+                    *slot = grids[p].triangle(g - toff[p]).map(|i| i + o);
                 }
-                let o = voff[p] as u32;
-                *slot = grids[p].triangle(g - toff[p]).map(|i| i + o);
-            }
-        });
+            });
         done += batch.len() as u64;
         progress(done, total);
     }

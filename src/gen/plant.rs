@@ -18,8 +18,8 @@ use std::f32::consts::{FRAC_PI_2, PI};
 use glam::{Mat3, Vec3};
 
 use super::grid::BoxGrid;
-use super::rng::Rng;
 use super::parts::{Part, plan as plan_parts};
+use super::rng::Rng;
 use super::shapes::Shape;
 
 /// Top of the floor slab.
@@ -39,21 +39,47 @@ fn bay(rng: &mut Rng, x: f32, z: f32, parts: &mut Vec<Part>) {
     match rng.below(6) {
         0 => {
             let (r, h) = (rng.range(0.35, 0.5), rng.range(0.35, 0.8));
-            parts.push(Part::at(Shape::Cylinder { radius: r, half_len: h }, Vec3::new(x, f + h, z)));
             parts.push(Part::at(
-                Shape::Ellipsoid { radii: Vec3::new(r, 0.4 * r, r) },
+                Shape::Cylinder {
+                    radius: r,
+                    half_len: h,
+                },
+                Vec3::new(x, f + h, z),
+            ));
+            parts.push(Part::at(
+                Shape::Ellipsoid {
+                    radii: Vec3::new(r, 0.4 * r, r),
+                },
                 Vec3::new(x, f + 2.0 * h, z),
             ));
         }
         1 => {
             let r = rng.range(0.4, 0.55);
-            parts.push(Part::at(Shape::Cylinder { radius: 0.6 * r, half_len: 0.25 }, Vec3::new(x, f + 0.25, z)));
-            parts.push(Part::at(Shape::Ellipsoid { radii: Vec3::splat(r) }, Vec3::new(x, f + 0.4 + r, z)));
+            parts.push(Part::at(
+                Shape::Cylinder {
+                    radius: 0.6 * r,
+                    half_len: 0.25,
+                },
+                Vec3::new(x, f + 0.25, z),
+            ));
+            parts.push(Part::at(
+                Shape::Ellipsoid {
+                    radii: Vec3::splat(r),
+                },
+                Vec3::new(x, f + 0.4 + r, z),
+            ));
         }
         2 => {
             let h = rng.range(0.3, 0.7);
             parts.push(cube([0.55, h, 0.5], [x, f + h, z]));
-            parts.push(cube([0.2, 0.08, 0.15], [x + rng.jitter(0.25), f + 2.0 * h + 0.08, z + rng.jitter(0.2)]));
+            parts.push(cube(
+                [0.2, 0.08, 0.15],
+                [
+                    x + rng.jitter(0.25),
+                    f + 2.0 * h + 0.08,
+                    z + rng.jitter(0.2),
+                ],
+            ));
         }
         3 => {
             let (r, l) = (rng.range(0.25, 0.35), rng.range(0.3, 0.45));
@@ -64,18 +90,35 @@ fn bay(rng: &mut Rng, x: f32, z: f32, parts: &mut Vec<Part>) {
                 Mat3::from_rotation_x(FRAC_PI_2)
             };
             let y = f + 0.12 + r;
-            parts.push(Part::new(Shape::Capsule { radius: r, half_len: l }, rot, Vec3::new(x, y, z)));
+            parts.push(Part::new(
+                Shape::Capsule {
+                    radius: r,
+                    half_len: l,
+                },
+                rot,
+                Vec3::new(x, y, z),
+            ));
             for s in [-1.0, 1.0] {
                 let o = s * 0.7 * l;
                 let (dx, dz) = if along_x { (o, 0.0) } else { (0.0, o) };
-                let half = if along_x { [0.06, 0.1, 0.8 * r] } else { [0.8 * r, 0.1, 0.06] };
+                let half = if along_x {
+                    [0.06, 0.1, 0.8 * r]
+                } else {
+                    [0.8 * r, 0.1, 0.06]
+                };
                 parts.push(cube(half, [x + dx, f + 0.1, z + dz]));
             }
         }
         4 => {
             let h = rng.range(0.8, 1.2);
             parts.push(cube([0.3, 0.1, 0.3], [x, f + 0.1, z]));
-            parts.push(Part::at(Shape::Cylinder { radius: 0.14, half_len: h }, Vec3::new(x, f + 0.2 + h, z)));
+            parts.push(Part::at(
+                Shape::Cylinder {
+                    radius: 0.14,
+                    half_len: h,
+                },
+                Vec3::new(x, f + 0.2 + h, z),
+            ));
         }
         _ => {
             parts.push(cube([0.25, 0.15, 0.2], [x, f + 0.15, z]));
@@ -87,7 +130,11 @@ fn bay(rng: &mut Rng, x: f32, z: f32, parts: &mut Vec<Part>) {
             let yaw = PI * 0.5 * rng.below(4) as f32;
             let rot = Mat3::from_rotation_y(yaw);
             parts.push(Part::new(
-                Shape::Elbow { radius: r, bend, angle: FRAC_PI_2 },
+                Shape::Elbow {
+                    radius: r,
+                    bend,
+                    angle: FRAC_PI_2,
+                },
                 rot,
                 Vec3::new(x0, top, z),
             ));
@@ -112,20 +159,34 @@ pub(crate) fn parts(seed: u64) -> Vec<Part> {
     for z in [-1.6, 1.6] {
         let y = 1.5 + rng.jitter(0.1);
         for x in [-3.9, 0.0, 3.9] {
-            parts.push(cube([0.05, 0.5 * (y - FLOOR), 0.05], [x, 0.5 * (y + FLOOR), z]));
+            parts.push(cube(
+                [0.05, 0.5 * (y - FLOOR), 0.05],
+                [x, 0.5 * (y + FLOOR), z],
+            ));
         }
         parts.push(cube([4.0, 0.04, 0.18], [0.0, y + 0.04, z]));
         for (dz, r) in [(-0.1, 0.05), (0.0, 0.04), (0.1, 0.06)] {
             let yy = y + 0.08 + r;
-            parts.push(pipe(Vec3::new(-4.1, yy, z + dz), Vec3::new(4.1, yy, z + dz), r));
+            parts.push(pipe(
+                Vec3::new(-4.1, yy, z + dz),
+                Vec3::new(4.1, yy, z + dz),
+                r,
+            ));
         }
     }
     // A pipe bridge along z over the middle.
     let y = 2.0;
     for z in [-3.0, 3.0] {
-        parts.push(cube([0.06, 0.5 * (y - FLOOR), 0.06], [0.8, 0.5 * (y + FLOOR), z]));
+        parts.push(cube(
+            [0.06, 0.5 * (y - FLOOR), 0.06],
+            [0.8, 0.5 * (y + FLOOR), z],
+        ));
     }
-    parts.push(pipe(Vec3::new(0.8, y + 0.1, -3.1), Vec3::new(0.8, y + 0.1, 3.1), 0.09));
+    parts.push(pipe(
+        Vec3::new(0.8, y + 0.1, -3.1),
+        Vec3::new(0.8, y + 0.1, 3.1),
+        0.09,
+    ));
     parts
 }
 

@@ -3,7 +3,7 @@
 //! Boxes (feet, pelvis, torso, backpack, hands), spheres (joints, head),
 //! capsules (limbs) and cylinders (waist, neck, eye cameras), posed by
 //! seeded joint angles: hip and knee pitch, shoulder swing and abduction,
-//! elbow bend, head yaw. About 1.3 units tall, facing +z, with the lower
+//! elbow bend, head yaw. About 1.4 units tall, facing +z, with the lower
 //! foot's sole at `y = 0`.
 //!
 //! Every part is a separate closed, outward-oriented component; parts
@@ -12,12 +12,17 @@
 use glam::{Mat3, Quat, Vec3};
 
 use super::grid::BoxGrid;
-use super::rng::Rng;
 use super::parts::{Part, plan as plan_parts};
+use super::rng::Rng;
 use super::shapes::Shape;
 
 fn ball(r: f32, pos: Vec3) -> Part {
-    Part::at(Shape::Ellipsoid { radii: Vec3::splat(r) }, pos)
+    Part::at(
+        Shape::Ellipsoid {
+            radii: Vec3::splat(r),
+        },
+        pos,
+    )
 }
 
 fn limb(a: Vec3, b: Vec3, radius: f32) -> Part {
@@ -54,14 +59,40 @@ pub(crate) fn parts(seed: u64) -> Vec<Part> {
         parts.push(limb(knee, ankle, 0.055));
         parts.push(ball(0.045, ankle));
         let foot = ankle + Vec3::new(0.0, -0.05, 0.04);
-        parts.push(Part::at(Shape::Box { half: Vec3::new(0.06, 0.03, 0.11) }, foot));
+        parts.push(Part::at(
+            Shape::Box {
+                half: Vec3::new(0.06, 0.03, 0.11),
+            },
+            foot,
+        ));
         lowest = lowest.min(foot.y - 0.03);
     }
     // Body.
-    parts.push(Part::at(Shape::Box { half: Vec3::new(0.16, 0.07, 0.1) }, Vec3::new(0.0, 0.72, 0.0)));
-    parts.push(Part::at(Shape::Cylinder { radius: 0.09, half_len: 0.07 }, Vec3::new(0.0, 0.83, 0.0)));
-    parts.push(Part::at(Shape::Box { half: Vec3::new(0.19, 0.17, 0.12) }, Vec3::new(0.0, 1.03, 0.0)));
-    parts.push(Part::at(Shape::Box { half: Vec3::new(0.14, 0.12, 0.05) }, Vec3::new(0.0, 1.02, -0.16)));
+    parts.push(Part::at(
+        Shape::Box {
+            half: Vec3::new(0.16, 0.07, 0.1),
+        },
+        Vec3::new(0.0, 0.72, 0.0),
+    ));
+    parts.push(Part::at(
+        Shape::Cylinder {
+            radius: 0.09,
+            half_len: 0.07,
+        },
+        Vec3::new(0.0, 0.83, 0.0),
+    ));
+    parts.push(Part::at(
+        Shape::Box {
+            half: Vec3::new(0.19, 0.17, 0.12),
+        },
+        Vec3::new(0.0, 1.03, 0.0),
+    ));
+    parts.push(Part::at(
+        Shape::Box {
+            half: Vec3::new(0.14, 0.12, 0.05),
+        },
+        Vec3::new(0.0, 1.02, -0.16),
+    ));
     // Arms.
     for side in [-1.0f32, 1.0] {
         let shoulder = Vec3::new(0.26 * side, 1.14, 0.0);
@@ -75,17 +106,36 @@ pub(crate) fn parts(seed: u64) -> Vec<Part> {
         parts.push(limb(shoulder, elbow, 0.05));
         parts.push(ball(0.055, elbow));
         parts.push(limb(elbow, wrist, 0.045));
-        parts.push(block(Vec3::new(0.03, 0.06, 0.045), -fore, wrist + 0.06 * fore));
+        parts.push(block(
+            Vec3::new(0.03, 0.06, 0.045),
+            -fore,
+            wrist + 0.06 * fore,
+        ));
     }
     // Neck and head, turned by a seeded yaw.
-    parts.push(Part::at(Shape::Cylinder { radius: 0.04, half_len: 0.05 }, Vec3::new(0.0, 1.23, 0.0)));
+    parts.push(Part::at(
+        Shape::Cylinder {
+            radius: 0.04,
+            half_len: 0.05,
+        },
+        Vec3::new(0.0, 1.23, 0.0),
+    ));
     let head = Vec3::new(0.0, 1.34, 0.0);
     let yaw = Mat3::from_rotation_y(rng.jitter(0.5));
-    parts.push(Part::new(Shape::Ellipsoid { radii: Vec3::new(0.11, 0.1, 0.1) }, yaw, head));
+    parts.push(Part::new(
+        Shape::Ellipsoid {
+            radii: Vec3::new(0.11, 0.1, 0.1),
+        },
+        yaw,
+        head,
+    ));
     for side in [-1.0f32, 1.0] {
         let a = head + yaw * Vec3::new(0.045 * side, 0.01, 0.07);
         let b = head + yaw * Vec3::new(0.045 * side, 0.01, 0.12);
-        parts.push(Part::between(a, b, |half_len| Shape::Cylinder { radius: 0.022, half_len }));
+        parts.push(Part::between(a, b, |half_len| Shape::Cylinder {
+            radius: 0.022,
+            half_len,
+        }));
     }
     for p in &mut parts {
         p.pos.y -= lowest;

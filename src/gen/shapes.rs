@@ -55,7 +55,11 @@ pub(crate) enum Shape {
 /// The equal-angle cube-sphere warp: spreads cube-sphere cells evenly.
 #[inline]
 pub(crate) fn warp(q: Vec3) -> Vec3 {
-    Vec3::new((q.x * FRAC_PI_4).tan(), (q.y * FRAC_PI_4).tan(), (q.z * FRAC_PI_4).tan())
+    Vec3::new(
+        (q.x * FRAC_PI_4).tan(),
+        (q.y * FRAC_PI_4).tan(),
+        (q.z * FRAC_PI_4).tan(),
+    )
 }
 
 /// Shirley–Chiu concentric map of the square `[-1, 1]²` onto the unit disc
@@ -93,7 +97,11 @@ impl Shape {
                 let k = if rho > 0.0 { radius * s / rho } else { 0.0 };
                 Vec3::new(k * x, half_len * q.y + q.y.signum() * radius * c, k * z)
             }
-            Shape::Elbow { radius, bend, angle } => {
+            Shape::Elbow {
+                radius,
+                bend,
+                angle,
+            } => {
                 let (x, z) = square_to_disc(q.x, q.z);
                 let (s, c) = ((q.y + 1.0) * 0.5 * angle).sin_cos();
                 let centre = Vec3::new(bend * (1.0 - c), bend * s, 0.0);
@@ -118,7 +126,11 @@ impl Shape {
                 let around = radius * FRAC_PI_2;
                 Vec3::new(around, 2.0 * half_len + 0.5 * radius, around)
             }
-            Shape::Elbow { radius, bend, angle } => {
+            Shape::Elbow {
+                radius,
+                bend,
+                angle,
+            } => {
                 let around = radius * FRAC_PI_2;
                 Vec3::new(around, bend * angle, around)
             }
@@ -166,12 +178,14 @@ pub(crate) fn area_half(l: Vec3) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
     use super::super::grid::BoxGrid;
+    use super::*;
     use crate::mesh::{Mesh, boundary_edges, degenerate_triangles};
 
     pub(crate) fn shape_mesh(s: &Shape, g: BoxGrid) -> Mesh {
-        let vertices = (0..g.vertices()).map(|v| s.map(g.unit(g.vertex_ijk(v))).to_array()).collect();
+        let vertices = (0..g.vertices())
+            .map(|v| s.map(g.unit(g.vertex_ijk(v))).to_array())
+            .collect();
         let triangles = (0..g.triangles()).map(|t| g.triangle(t)).collect();
         Mesh::new(vertices, triangles)
     }
@@ -198,11 +212,40 @@ mod tests {
             sweep: 0.1,
         };
         let shapes = [
-            (Shape::Box { half: Vec3::new(1.0, 2.0, 0.5) }, 8.0),
-            (Shape::Ellipsoid { radii: Vec3::new(1.0, 2.0, 0.5) }, 4.0 / 3.0 * std::f64::consts::PI),
-            (Shape::Cylinder { radius: 0.5, half_len: 1.0 }, std::f64::consts::PI * 0.5),
-            (Shape::Capsule { radius: 0.5, half_len: 1.0 }, std::f64::consts::PI * (0.5 + 0.5 / 3.0)),
-            (Shape::Elbow { radius: 0.2, bend: 1.0, angle: FRAC_PI_2 }, std::f64::consts::PI * 0.04 * FRAC_PI_2 as f64),
+            (
+                Shape::Box {
+                    half: Vec3::new(1.0, 2.0, 0.5),
+                },
+                8.0,
+            ),
+            (
+                Shape::Ellipsoid {
+                    radii: Vec3::new(1.0, 2.0, 0.5),
+                },
+                4.0 / 3.0 * std::f64::consts::PI,
+            ),
+            (
+                Shape::Cylinder {
+                    radius: 0.5,
+                    half_len: 1.0,
+                },
+                std::f64::consts::PI * 0.5,
+            ),
+            (
+                Shape::Capsule {
+                    radius: 0.5,
+                    half_len: 1.0,
+                },
+                std::f64::consts::PI * (0.5 + 0.5 / 3.0),
+            ),
+            (
+                Shape::Elbow {
+                    radius: 0.2,
+                    bend: 1.0,
+                    angle: FRAC_PI_2,
+                },
+                std::f64::consts::PI * 0.04 * FRAC_PI_2 as f64,
+            ),
             (Shape::Blade(blade), 0.0),
         ];
         for (s, volume) in &shapes {
@@ -214,7 +257,10 @@ mod tests {
             let v = signed_volume(&m);
             assert!(v > 0.0, "{s:?}: volume {v}");
             if *volume > 0.0 {
-                assert!((v / volume - 1.0).abs() < 0.03, "{s:?}: volume {v}, expected {volume}");
+                assert!(
+                    (v / volume - 1.0).abs() < 0.03,
+                    "{s:?}: volume {v}, expected {volume}"
+                );
             }
         }
     }

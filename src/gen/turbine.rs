@@ -15,8 +15,8 @@ use std::f32::consts::TAU;
 use glam::{Mat3, Vec3};
 
 use super::grid::BoxGrid;
-use super::rng::Rng;
 use super::parts::{Part, plan as plan_parts};
+use super::rng::Rng;
 use super::shapes::{Blade, Shape};
 
 /// The turbine's parts for `seed`.
@@ -25,11 +25,31 @@ pub(crate) fn parts(seed: u64) -> Vec<Part> {
     let blades = 16 + rng.below(5);
     let hub_y = 1.02;
     let mut parts = vec![
-        Part::at(Shape::Cylinder { radius: 0.16, half_len: 0.4 }, Vec3::new(0.0, 0.4, 0.0)),
-        Part::at(Shape::Cylinder { radius: 0.8, half_len: 0.05 }, Vec3::new(0.0, 0.78, 0.0)),
-        Part::at(Shape::Cylinder { radius: 0.55, half_len: 0.22 }, Vec3::new(0.0, hub_y, 0.0)),
         Part::at(
-            Shape::Ellipsoid { radii: Vec3::new(0.45, 0.32, 0.45) },
+            Shape::Cylinder {
+                radius: 0.16,
+                half_len: 0.4,
+            },
+            Vec3::new(0.0, 0.4, 0.0),
+        ),
+        Part::at(
+            Shape::Cylinder {
+                radius: 0.8,
+                half_len: 0.05,
+            },
+            Vec3::new(0.0, 0.78, 0.0),
+        ),
+        Part::at(
+            Shape::Cylinder {
+                radius: 0.55,
+                half_len: 0.22,
+            },
+            Vec3::new(0.0, hub_y, 0.0),
+        ),
+        Part::at(
+            Shape::Ellipsoid {
+                radii: Vec3::new(0.45, 0.32, 0.45),
+            },
             Vec3::new(0.0, hub_y + 0.22, 0.0),
         ),
     ];
