@@ -230,22 +230,23 @@ fn median_split(refs: &mut [Ref], cbounds: &Aabb) -> usize {
     mid
 }
 
-/// Per-axis bin counts and boxes.
+/// Per-axis bin counts and boxes, for at most `N` bins. Small nodes use a
+/// small `N`: initialising the bins is a per-node cost, and there are as
+/// many small nodes as triangles.
 #[derive(Clone)]
-struct Bins {
-    counts: [[u32; MAX_BINS]; 3],
-    boxes: [[Aabb; MAX_BINS]; 3],
+struct Bins<const N: usize> {
+    counts: [[u32; N]; 3],
+    boxes: [[Aabb; N]; 3],
 }
 
-const MAX_BINS: usize = 255;
 /// Nodes with more references than this bin in parallel chunks.
 const PARALLEL_BINNING: usize = 1 << 16;
 
-impl Bins {
+impl<const N: usize> Bins<N> {
     fn new() -> Self {
         Self {
-            counts: [[0; MAX_BINS]; 3],
-            boxes: [[Aabb::EMPTY; MAX_BINS]; 3],
+            counts: [[0; N]; 3],
+            boxes: [[Aabb::EMPTY; N]; 3],
         }
     }
 
@@ -261,7 +262,7 @@ impl Bins {
         }
     }
 
-    fn merge(mut self, o: &Bins, bins: usize) -> Bins {
+    fn merge(mut self, o: &Self, bins: usize) -> Self {
         for axis in 0..3 {
             let counts = self.counts[axis].iter_mut().zip(&o.counts[axis]);
             for (a, b) in counts.take(bins) {
@@ -288,8 +289,17 @@ fn bin_index(c: Vec3A, lo: Vec3A, scale: Vec3A, bins: usize) -> [usize; 3] {
 }
 
 /// The best binned-SAH split, partitioning `refs` in place; `None` if every
-/// centroid is the same point (no plane separates them).
+/// centroid is the same point (no plane separates them). Nodes of fewer
+/// than 64 references use at most 8 bins, of fewer than 1024 at most 32.
 fn sah_split(refs: &mut [Ref], cbounds: &Aabb, bins: usize) -> Option<usize> {
+    match refs.len() {
+        0..64 => sah_split_n::<8>(refs, cbounds, bins.min(8)),
+        64..1024 => sah_split_n::<32>(refs, cbounds, bins.min(32)),
+        _ => sah_split_n::<255>(refs, cbounds, bins),
+    }
+}
+
+fn sah_split_n<const N: usize>(refs: &mut [Ref], cbounds: &Aabb, bins: usize) -> Option<usize> {
     let ext = cbounds.extent();
     let usable = |a: usize| ext[a] > 0.0 && ext[a].is_finite();
     if !(0..3).any(usable) {
@@ -303,19 +313,25 @@ fn sah_split(refs: &mut [Ref], cbounds: &Aabb, bins: usize) -> Option<usize> {
     let binned = if refs.len() > PARALLEL_BINNING {
         use rayon::prelude::*;
         refs.par_chunks(PARALLEL_BINNING / 4)
-            .fold(Bins::new, |mut acc, chunk| {
-                acc.fill(chunk, lo, scale, bins);
-                acc
-            })
-            .reduce(Bins::new, |a, b| a.merge(&b, bins))
+            .fold(
+                || Box::new(Bins::<N>::new()),
+                |mut acc, chunk| {
+                    acc.fill(chunk, lo, scale, bins);
+                    acc
+                },
+            )
+            .reduce(
+                || Box::new(Bins::<N>::new()),
+                |a, b| Box::new(a.merge(&b, bins)),
+            )
     } else {
-        let mut b = Bins::new();
+        let mut b = Box::new(Bins::<N>::new());
         b.fill(refs, lo, scale, bins);
         b
     };
     let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, split bin)
-    let mut right_area = [0f32; MAX_BINS];
-    let mut right_count = [0u32; MAX_BINS];
+    let mut right_area = [0f32; N];
+    let mut right_count = [0u32; N];
     for axis in (0..3).filter(|&a| usable(a)) {
         let (counts, boxes) = (&binned.counts[axis], &binned.boxes[axis]);
         // Sweep from the right: area and count of bins [i, bins).
