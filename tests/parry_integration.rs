@@ -323,3 +323,136 @@ fn shape_mass_and_bounds() {
     assert!(cl.as_shape::<CbvhShape>().is_some());
     assert_eq!(c.shape_type(), parry3d::shape::ShapeType::Custom);
 }
+
+#[test]
+fn distance_closest_points_and_casts_match_trimesh() {
+    use parry3d::query::{ClosestPoints, ShapeCastOptions};
+    let a = mesh_of(Kind::Robot, 2000, 5);
+    let b = mesh_of(Kind::Statue, 2000, 6);
+    let (ca, cb) = (
+        CbvhShape::plain(&a, &BuildOptions::default()).unwrap(),
+        CbvhShape::plain(&b, &BuildOptions::default()).unwrap(),
+    );
+    let (ta, tb) = (parry_trimesh(&a).unwrap(), parry_trimesh(&b).unwrap());
+    let d = Dispatcher.chain(DefaultQueryDispatcher);
+    let ball = parry3d::shape::Ball::new(0.1);
+    for (k, x) in [1.5f32, 2.5, 0.9, 4.0].into_iter().enumerate() {
+        let pos12 = Pose::new(
+            Vector::new(x, 0.1 * k as f32, 0.2),
+            Vector::new(0.0, 0.3 * k as f32, 0.0),
+        );
+        // cbvh vs cbvh, cbvh vs TriMesh and cbvh vs ball against TriMesh vs the same.
+        let want = DefaultQueryDispatcher
+            .distance(&pos12, &ta, &tb)
+            .unwrap()
+            .distance;
+        let got = d.distance(&pos12, &ca, &cb).unwrap().distance;
+        assert!(
+            !ca.fallback_bvh_built() && !cb.fallback_bvh_built(),
+            "cbvh-cbvh distance used the fallback"
+        );
+        assert!(
+            (want - got).abs() <= 1e-5 * want.max(1.0),
+            "distance {got} vs {want}"
+        );
+        let got = d.distance(&pos12, &ca, &tb).unwrap().distance;
+        assert!(
+            !ca.fallback_bvh_built() && !cb.fallback_bvh_built(),
+            "cbvh-TriMesh distance used the fallback"
+        );
+        assert!(
+            (want - got).abs() <= 1e-5 * want.max(1.0),
+            "cbvh-trimesh distance {got} vs {want}"
+        );
+        let want_b = DefaultQueryDispatcher
+            .distance(&pos12, &ta, &ball)
+            .unwrap()
+            .distance;
+        let got_b = d.distance(&pos12, &ca, &ball).unwrap().distance;
+        assert!(
+            !ca.fallback_bvh_built() && !cb.fallback_bvh_built(),
+            "cbvh-ball distance used the fallback"
+        );
+        assert!((want_b - got_b).abs() <= 1e-5 * want_b.max(1.0));
+        for max_dist in [0.5f32, 3.0] {
+            let w = DefaultQueryDispatcher
+                .closest_points(&pos12, &ta, &tb, max_dist)
+                .unwrap();
+            let g = d.closest_points(&pos12, &ca, &cb, max_dist).unwrap();
+            match (w, g) {
+                (ClosestPoints::WithinMargin(w1, w2), ClosestPoints::WithinMargin(g1, g2)) => {
+                    let dw = (w1 - pos12.transform_point(w2)).length();
+                    let dg = (g1 - pos12.transform_point(g2)).length();
+                    assert!((dw - dg).abs() <= 1e-5 * dw.max(1.0), "{dw} vs {dg}");
+                }
+                (w, g) => assert_eq!(
+                    std::mem::discriminant(&w),
+                    std::mem::discriminant(&g),
+                    "closest points {w:?} vs {g:?}"
+                ),
+            }
+        }
+        // Linear cast of B towards A.
+        let vel = Vector::new(-1.0, 0.0, 0.0);
+        let opts = ShapeCastOptions::with_max_time_of_impact(10.0);
+        let w = DefaultQueryDispatcher
+            .cast_shapes(&pos12, vel, &ta, &tb, opts)
+            .unwrap();
+        let g = d.cast_shapes(&pos12, vel, &ca, &cb, opts).unwrap();
+        match (w, g) {
+            (Some(w), Some(g)) => assert!(
+                (w.time_of_impact - g.time_of_impact).abs() <= 1e-4,
+                "toi {} vs {}",
+                w.time_of_impact,
+                g.time_of_impact
+            ),
+            (None, None) => {}
+            (w, g) => panic!("cast {w:?} vs {g:?}"),
+        }
+    }
+    assert!(!ca.fallback_bvh_built() && !cb.fallback_bvh_built());
+}
+
+#[test]
+fn cbvh_vs_trimesh_contacts_equal_trimesh_vs_trimesh() {
+    let statue = mesh_of(Kind::Statue, 3000, 3);
+    let turbine = mesh_of(Kind::Turbine, 3000, 4);
+    let t1 = parry_trimesh(&statue).unwrap();
+    let t2 = parry_trimesh(&turbine).unwrap();
+    let c1 = CbvhShape::plain(&statue, &BuildOptions::default()).unwrap();
+    let c2 = CbvhShape::plain(&turbine, &BuildOptions::default()).unwrap();
+    let mut total = 0;
+    for pos12 in [
+        Pose::from_translation(Vector::new(0.0, -1.2, 0.0)),
+        Pose::new(Vector::new(-0.4, -1.0, 0.2), Vector::new(0.3, 0.8, -0.2)),
+    ] {
+        let run = |g1: &dyn parry3d::shape::Shape,
+                   g2: &dyn parry3d::shape::Shape,
+                   d: &dyn PersistentQueryDispatcher<(), ()>| {
+            let mut m = Vec::new();
+            let mut ws = None;
+            d.contact_manifolds(&pos12, g1, g2, 0.01, &mut m, &mut ws)
+                .unwrap();
+            points_of(&m)
+        };
+        let want = run(&t1, &t2, &DefaultQueryDispatcher);
+        let chain = Dispatcher.chain(DefaultQueryDispatcher);
+        for got in [run(&c1, &t2, &chain), run(&t1, &c2, &chain)] {
+            assert_eq!(
+                want.keys().collect::<Vec<_>>(),
+                got.keys().collect::<Vec<_>>()
+            );
+            for (k, w) in &want {
+                for (a, b) in w.iter().zip(&got[k]) {
+                    assert!(
+                        a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-5),
+                        "{k:?}: {a:?} vs {b:?}"
+                    );
+                }
+            }
+        }
+        total += want.len();
+    }
+    assert!(total > 20);
+    assert!(!c1.fallback_bvh_built() && !c2.fallback_bvh_built());
+}

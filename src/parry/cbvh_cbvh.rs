@@ -5,15 +5,15 @@ use std::ops::ControlFlow;
 
 use parry3d::math::{Pose as PPose, Real};
 use parry3d::query::{
-    Contact, ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher,
-    PersistentQueryDispatcher, QueryDispatcher, ShapeIntersection,
+    ClosestPoints, Contact, ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher,
+    PersistentQueryDispatcher, QueryDispatcher, ShapeDistance, ShapeIntersection,
 };
 
 use super::shape::{CbvhShape, pose_from_parry, to_parry_triangle, with_cursor};
 use super::workspace::ManifoldUpdate;
 use crate::cursor::TraversalStats;
 use crate::geom::Triangle;
-use crate::query::bvtt;
+use crate::query::{bvtt, bvtt_min};
 
 /// Calls `f` with every triangle pair of `s1` and `s2` (shape 2 placed by
 /// `pos12` in shape 1's frame) whose boxes come within `prediction`.
@@ -125,4 +125,58 @@ pub fn contact(pos12: &PPose, s1: &CbvhShape, s2: &CbvhShape, prediction: Real) 
         ControlFlow::Continue(())
     });
     best
+}
+
+/// Distance between the two meshes: branch and bound over both trees.
+pub fn distance(pos12: &PPose, s1: &CbvhShape, s2: &CbvhShape) -> ShapeDistance {
+    let pose = pose_from_parry(pos12);
+    let mut stats = TraversalStats::default();
+    let found = with_cursor!(s1.codec(), |a| with_cursor!(s2.codec(), |b| bvtt_min(
+        a,
+        b,
+        &pose,
+        f32::MAX,
+        &mut stats,
+        |_, t1, _, t2, _| {
+            let d = DefaultQueryDispatcher
+                .distance(pos12, &to_parry_triangle(t1), &to_parry_triangle(t2))
+                .ok()?;
+            Some((d.distance, ()))
+        }
+    )));
+    match found {
+        Some((i, j, d, ())) => ShapeDistance::new(d).with_subshapes(i, j),
+        None => ShapeDistance::new(Real::MAX),
+    }
+}
+
+/// Closest points within `max_dist`: branch and bound over both trees.
+pub fn closest_points(
+    pos12: &PPose,
+    s1: &CbvhShape,
+    s2: &CbvhShape,
+    max_dist: Real,
+) -> ClosestPoints {
+    let pose = pose_from_parry(pos12);
+    let mut stats = TraversalStats::default();
+    let bound = max_dist + max_dist.abs() * 1e-6 + 1e-7;
+    let found = with_cursor!(s1.codec(), |a| with_cursor!(s2.codec(), |b| bvtt_min(
+        a,
+        b,
+        &pose,
+        bound,
+        &mut stats,
+        |_, t1, _, t2, _| {
+            let cp = DefaultQueryDispatcher
+                .closest_points(
+                    pos12,
+                    &to_parry_triangle(t1),
+                    &to_parry_triangle(t2),
+                    max_dist,
+                )
+                .ok()?;
+            super::cbvh_any::closest_cost(&cp, pos12).map(|k| (k, cp))
+        }
+    )));
+    found.map(|f| f.3).unwrap_or(ClosestPoints::Disjoint)
 }

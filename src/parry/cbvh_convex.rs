@@ -1,6 +1,8 @@
 //! cbvh shape vs a convex shape (ball, cuboid, capsule, convex polyhedron,
 //! …): an overlap query on the cbvh tree with the convex shape's box, then
-//! parry's convex-convex code per triangle.
+//! parry's convex-convex code per triangle. The intersection test and
+//! contact here serve any non-cbvh shape (parry's default dispatcher takes
+//! each triangle against a composite shape with that shape's own tree).
 
 use std::ops::ControlFlow;
 

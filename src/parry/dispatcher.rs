@@ -7,10 +7,10 @@ use parry3d::query::{
     NonlinearRigidMotion, PersistentQueryDispatcher, QueryDispatcher, QueryDispatcherChain,
     ShapeCastHit, ShapeCastOptions, ShapeDistance, ShapeIntersection, Unsupported,
 };
-use parry3d::shape::Shape;
+use parry3d::shape::{Shape, TriMesh};
 
 use super::shape::CbvhShape;
-use super::{cast, cbvh_cbvh, cbvh_convex};
+use super::{cast, cbvh_any, cbvh_cbvh, cbvh_convex, cbvh_trimesh};
 
 /// Handles every query in which one side is a [`CbvhShape`] natively, on the
 /// cbvh trees:
@@ -19,15 +19,19 @@ use super::{cast, cbvh_cbvh, cbvh_convex};
 /// |---|---|
 /// | cbvh vs cbvh | simultaneous traversal of both trees (BVTT) |
 /// | cbvh vs convex (ball, cuboid, capsule, convex polyhedron, …) | overlap query with the convex shape's box |
+/// | cbvh vs parry `TriMesh` | overlap query on the cbvh tree, then the `TriMesh`'s own `Bvh` per triangle ([`cbvh_trimesh`](super::cbvh_trimesh)) |
 ///
 /// Triangle pairs go through parry's own convex-convex code, so contacts are
 /// parry's, and manifolds persist per triangle pair so that rapier
-/// warm-starts. Every other query or pair answers `Unsupported`, so that the
-/// next dispatcher of the chain (parry's default, whose composite-shape code
-/// uses [`CbvhShape`]'s compatibility `Bvh`) handles it: no pair is dropped.
-/// Nonlinear shape casts (rapier's CCD) run natively on the cbvh tree
-/// ([`cast`](super::cast)); distance, closest points and linear shape casts
-/// take the fallback path for now.
+/// warm-starts. Contact manifolds with other composite shapes (compounds,
+/// heightfields, voxels) answer `Unsupported`, so that the next dispatcher
+/// of the chain (parry's default, whose composite-shape code uses
+/// [`CbvhShape`]'s compatibility `Bvh`) handles them: no pair is dropped.
+/// Distance and closest points run natively too: branch and bound over both
+/// trees for two cbvh shapes ([`cbvh_cbvh`](super::cbvh_cbvh)), or a
+/// best-first search of the cbvh tree against any other shape
+/// ([`cbvh_any`](super::cbvh_any)), as do linear and nonlinear shape casts
+/// ([`cbvh_any`](super::cbvh_any), [`cast`](super::cast)).
 ///
 /// Install it in rapier with
 /// `NarrowPhase::with_query_dispatcher(cbvh::parry::Dispatcher.chain(DefaultQueryDispatcher))`,
@@ -44,8 +48,9 @@ impl Dispatcher {
 
 enum Pair<'a> {
     Both(&'a CbvhShape, &'a CbvhShape),
-    /// The cbvh shape, the convex shape, and whether the cbvh shape is second.
-    Convex(&'a CbvhShape, &'a dyn Shape, bool),
+    /// The cbvh shape, the other shape (any non-cbvh shape), and whether the
+    /// cbvh shape is second.
+    One(&'a CbvhShape, &'a dyn Shape, bool),
     Other,
 }
 
@@ -58,8 +63,8 @@ fn classify<'a>(g1: &'a dyn Shape, g2: &'a dyn Shape) -> Pair<'a> {
     let c2 = g2.as_shape::<CbvhShape>();
     match (c1, c2) {
         (Some(a), Some(b)) => Pair::Both(a, b),
-        (Some(a), None) if is_convex(g2) => Pair::Convex(a, g2, false),
-        (None, Some(b)) if is_convex(g1) => Pair::Convex(b, g1, true),
+        (Some(a), None) => Pair::One(a, g2, false),
+        (None, Some(b)) => Pair::One(b, g1, true),
         _ => Pair::Other,
     }
 }
@@ -73,18 +78,24 @@ impl QueryDispatcher for Dispatcher {
     ) -> Result<ShapeIntersection, Unsupported> {
         match classify(g1, g2) {
             Pair::Both(a, b) => Ok(cbvh_cbvh::intersection_test(pos12, a, b)),
-            Pair::Convex(m, c, flipped) => Ok(cbvh_convex::intersection_test(pos12, m, c, flipped)),
+            Pair::One(m, c, flipped) => Ok(cbvh_convex::intersection_test(pos12, m, c, flipped)),
             Pair::Other => Err(Unsupported),
         }
     }
 
     fn distance(
         &self,
-        _: &PPose,
-        _: &dyn Shape,
-        _: &dyn Shape,
+        pos12: &PPose,
+        g1: &dyn Shape,
+        g2: &dyn Shape,
     ) -> Result<ShapeDistance, Unsupported> {
-        Err(Unsupported)
+        let chain = Dispatcher.chain(DefaultQueryDispatcher);
+        match (g1.as_shape::<CbvhShape>(), g2.as_shape::<CbvhShape>()) {
+            (Some(a), Some(b)) => Ok(cbvh_cbvh::distance(pos12, a, b)),
+            (Some(a), None) => Ok(cbvh_any::distance(&chain, pos12, a, g2, true)),
+            (None, Some(b)) => Ok(cbvh_any::distance(&chain, pos12, b, g1, false)),
+            (None, None) => Err(Unsupported),
+        }
     }
 
     fn contact(
@@ -96,32 +107,65 @@ impl QueryDispatcher for Dispatcher {
     ) -> Result<Option<Contact>, Unsupported> {
         match classify(g1, g2) {
             Pair::Both(a, b) => Ok(cbvh_cbvh::contact(pos12, a, b, prediction)),
-            Pair::Convex(m, c, flipped) => {
-                Ok(cbvh_convex::contact(pos12, m, c, flipped, prediction))
-            }
+            Pair::One(m, c, flipped) => Ok(cbvh_convex::contact(pos12, m, c, flipped, prediction)),
             Pair::Other => Err(Unsupported),
         }
     }
 
     fn closest_points(
         &self,
-        _: &PPose,
-        _: &dyn Shape,
-        _: &dyn Shape,
-        _: Real,
+        pos12: &PPose,
+        g1: &dyn Shape,
+        g2: &dyn Shape,
+        max_dist: Real,
     ) -> Result<ClosestPoints, Unsupported> {
-        Err(Unsupported)
+        let chain = Dispatcher.chain(DefaultQueryDispatcher);
+        match (g1.as_shape::<CbvhShape>(), g2.as_shape::<CbvhShape>()) {
+            (Some(a), Some(b)) => Ok(cbvh_cbvh::closest_points(pos12, a, b, max_dist)),
+            (Some(a), None) => Ok(cbvh_any::closest_points(
+                &chain, pos12, a, g2, true, max_dist,
+            )),
+            (None, Some(b)) => Ok(cbvh_any::closest_points(
+                &chain, pos12, b, g1, false, max_dist,
+            )),
+            (None, None) => Err(Unsupported),
+        }
     }
 
     fn cast_shapes(
         &self,
-        _: &PPose,
-        _: Vector,
-        _: &dyn Shape,
-        _: &dyn Shape,
-        _: ShapeCastOptions,
+        pos12: &PPose,
+        local_vel12: Vector,
+        g1: &dyn Shape,
+        g2: &dyn Shape,
+        options: ShapeCastOptions,
     ) -> Result<Option<ShapeCastHit>, Unsupported> {
-        Err(Unsupported)
+        // With two cbvh shapes, each triangle of the first is cast against
+        // the second through the chain, which searches the second's tree.
+        let chain = Dispatcher.chain(DefaultQueryDispatcher);
+        if let Some(a) = g1.as_shape::<CbvhShape>() {
+            Ok(cbvh_any::cast_shapes(
+                &chain,
+                pos12,
+                local_vel12,
+                a,
+                g2,
+                true,
+                options,
+            ))
+        } else if let Some(b) = g2.as_shape::<CbvhShape>() {
+            Ok(cbvh_any::cast_shapes(
+                &chain,
+                pos12,
+                local_vel12,
+                b,
+                g1,
+                false,
+                options,
+            ))
+        } else {
+            Err(Unsupported)
+        }
     }
 
     fn cast_shapes_nonlinear(
@@ -184,12 +228,23 @@ impl<M: Default + Clone + Send + Sync, C: Default + Copy + Send + Sync>
                 cbvh_cbvh::contact_manifolds(pos12, a, b, prediction, manifolds, workspace);
                 Ok(())
             }
-            Pair::Convex(m, c, flipped) => {
+            Pair::One(m, c, flipped) if is_convex(c) => {
                 cbvh_convex::contact_manifolds(
                     pos12, m, c, flipped, prediction, manifolds, workspace,
                 );
                 Ok(())
             }
+            Pair::One(m, other, flipped) => match other.as_shape::<TriMesh>() {
+                Some(tm) => {
+                    cbvh_trimesh::contact_manifolds(
+                        pos12, m, tm, flipped, prediction, manifolds, workspace,
+                    );
+                    Ok(())
+                }
+                // Other composite shapes (compounds, heightfields, voxels):
+                // parry's composite-shape code, through the fallback `Bvh`.
+                None => Err(Unsupported),
+            },
             Pair::Other => Err(Unsupported),
         }
     }

@@ -15,8 +15,10 @@
 //!   by part the same way cbvh's codecs count theirs.
 
 pub mod cast;
+pub mod cbvh_any;
 pub mod cbvh_cbvh;
 pub mod cbvh_convex;
+pub mod cbvh_trimesh;
 mod dispatcher;
 pub mod droptest;
 pub mod raycast_target;

@@ -106,3 +106,80 @@ pub fn bvtt_pairs<A: NodeCursor, B: NodeCursor>(
     pairs.sort_unstable();
     pairs
 }
+
+/// A node pair with its lower bound and boxes (B's in A's frame).
+type PairEntry<NA, NB> = (f32, NA, Aabb, NB, Aabb);
+
+/// Branch-and-bound over two hierarchies: the triangle pair with the
+/// smallest cost below `max_cost`. A node pair's lower bound is the distance
+/// between `A`'s box and the box bounding `B`'s box after `b_to_a`, so the
+/// cost must be at least the distance between the two triangles (a distance,
+/// or anything it bounds from below). `leaf(i, tri_i, j, tri_j_local, best)`
+/// returns the pair's cost and a payload when it beats `best`.
+pub fn bvtt_min<A: NodeCursor, B: NodeCursor, T>(
+    a: &A,
+    b: &B,
+    b_to_a: &Pose,
+    max_cost: f32,
+    stats: &mut TraversalStats,
+    mut leaf: impl FnMut(u32, &Triangle, u32, &Triangle, f32) -> Option<(f32, T)>,
+) -> Option<(u32, u32, f32, T)> {
+    let box_dist = |x: &Aabb, y: &Aabb| {
+        let d = (x.min - y.max).max(y.min - x.max).max(glam::Vec3A::ZERO);
+        d.length()
+    };
+    let (ra, ba) = a.root();
+    let (rb, bb) = b.root();
+    if ba.is_empty() || bb.is_empty() {
+        return None;
+    }
+    let bb = bb.transformed(b_to_a);
+    stats.nodes_visited += 1;
+    let mut best_cost = max_cost;
+    let mut best: Option<(u32, u32, f32, T)> = None;
+    let d0 = box_dist(&ba, &bb);
+    if d0 >= best_cost {
+        return None;
+    }
+    let mut stack: Vec<PairEntry<A::Node, B::Node>> = vec![(d0, ra, ba, rb, bb)];
+    let mut kids: Vec<PairEntry<A::Node, B::Node>> = Vec::with_capacity(8);
+    while let Some((d, na, box_a, nb, box_b)) = stack.pop() {
+        if d >= best_cost {
+            continue;
+        }
+        let leaf_a = a.is_leaf(&na);
+        let leaf_b = b.is_leaf(&nb);
+        if leaf_a && leaf_b {
+            let mut b_tris: Vec<(u32, Triangle)> = Vec::new();
+            b.for_each_triangle(&nb, |j, tj| b_tris.push((j, *tj)));
+            a.for_each_triangle(&na, |i, ti| {
+                for (j, tj) in &b_tris {
+                    stats.primitive_tests += 1;
+                    if let Some((k, payload)) = leaf(i, ti, *j, tj, best_cost)
+                        && k < best_cost
+                    {
+                        best_cost = k;
+                        best = Some((i, *j, k, payload));
+                    }
+                }
+            });
+            continue;
+        }
+        kids.clear();
+        if leaf_b || (!leaf_a && box_a.half_area() >= box_b.half_area()) {
+            a.for_each_child(&na, |ca, cb| {
+                stats.nodes_visited += 1;
+                kids.push((box_dist(&cb, &box_b), ca, cb, nb, box_b));
+            });
+        } else {
+            b.for_each_child(&nb, |cn, cb| {
+                stats.nodes_visited += 1;
+                let moved = cb.transformed(b_to_a);
+                kids.push((box_dist(&box_a, &moved), na, box_a, cn, moved));
+            });
+        }
+        kids.sort_unstable_by(|x, y| y.0.total_cmp(&x.0));
+        stack.extend(kids.drain(..).filter(|k| k.0 < best_cost));
+    }
+    best
+}

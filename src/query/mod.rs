@@ -20,7 +20,7 @@ pub mod point;
 pub mod ray;
 
 pub use best::find_best;
-pub use bvtt::{bvtt, bvtt_pairs};
+pub use bvtt::{bvtt, bvtt_min, bvtt_pairs};
 pub use overlap::{overlap, visit};
 pub use point::{PointHit, closest_point};
 pub use ray::{RayHit, any_hit, any_hit_with, closest_hit, closest_hit_with};
