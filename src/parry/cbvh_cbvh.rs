@@ -31,7 +31,16 @@ pub fn for_each_pair(
     }));
 }
 
+/// Triangle pairs from which contact generation runs on rayon's threads.
+const PARALLEL_PAIRS: usize = 512;
+
 /// Contact manifolds, one per triangle pair, persistent across steps.
+///
+/// The traversal collects the candidate pairs (and their manifolds from the
+/// last step, for warm starting) in a fixed order; parry's convex-convex
+/// code then runs on each pair, in parallel over rayon's threads when there
+/// are many. Each pair only touches its own manifold, so the result does
+/// not depend on the thread count.
 pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + Send + Sync>(
     pos12: &PPose,
     s1: &CbvhShape,
@@ -43,6 +52,7 @@ pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + S
     let mut update = ManifoldUpdate::begin(workspace, manifolds);
     let mut stats = TraversalStats::default();
     let pose = pose_from_parry(pos12);
+    let mut pairs: Vec<(Triangle, Triangle)> = Vec::new();
     for_each_pair(s1, s2, pos12, prediction, &mut stats, |i, t1, j, t2| {
         let moved = t2.map(|p| pose.transform_point(p));
         if separated_by_a_face_plane(t1, &moved, prediction) {
@@ -50,7 +60,11 @@ pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + S
             // convex-convex call; the pair's old manifold, if any, is dropped.
             return ControlFlow::Continue(());
         }
-        let manifold = update.manifold(i, j);
+        update.manifold(i, j);
+        pairs.push((*t1, *t2));
+        ControlFlow::Continue(())
+    });
+    let generate = |m: &mut ContactManifold<M, C>, (t1, t2): &(Triangle, Triangle)| {
         let _ = DefaultQueryDispatcher.contact_manifold_convex_convex(
             pos12,
             &to_parry_triangle(t1),
@@ -58,10 +72,20 @@ pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + S
             None,
             None,
             prediction,
-            manifold,
+            m,
         );
-        ControlFlow::Continue(())
-    });
+    };
+    let ms = update.manifolds_mut();
+    debug_assert_eq!(ms.len(), pairs.len());
+    if pairs.len() >= PARALLEL_PAIRS {
+        use rayon::prelude::*;
+        ms.par_iter_mut()
+            .zip(pairs.par_iter())
+            .with_min_len(64)
+            .for_each(|(m, p)| generate(m, p));
+    } else {
+        ms.iter_mut().zip(&pairs).for_each(|(m, p)| generate(m, p));
+    }
 }
 
 /// Whether the plane of one triangle has the whole other triangle more than

@@ -97,6 +97,13 @@ impl<'a, M: Default + Clone, C: Default + Copy> ManifoldUpdate<'a, M, C> {
     }
 }
 
+impl<M, C> ManifoldUpdate<'_, M, C> {
+    /// The manifolds handed out this step, in the order they were asked for.
+    pub fn manifolds_mut(&mut self) -> &mut [ContactManifold<M, C>] {
+        self.manifolds
+    }
+}
+
 impl<M, C> Drop for ManifoldUpdate<'_, M, C> {
     fn drop(&mut self) {
         let stamp = self.stamp;
