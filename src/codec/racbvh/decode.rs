@@ -1,0 +1,632 @@
+//! Decompression (§5): clusters into in-core nodes, BV completion, the
+//! random-access API (§5.1) and [`NodeCursor`].
+
+use std::sync::{Arc, Mutex};
+
+use super::cache::{self, Live};
+use super::coder::{BitReader, DictDecoder, SymbolDecoder, unzigzag};
+use super::node::{CoreNode, INCOMPLETE, LEAF_FLAG, QBox, apply, qbox_of};
+use super::{
+    CTX_CHILD, CTX_COUNT, CTX_PCLUSTER, CTX_STRUCT, CTX_TRI, CTX_TRI_FAR, Header, NCTX, RacBvh,
+    RacError, mask_context, raw_bits, value_context,
+};
+use crate::cursor::NodeCursor;
+use crate::geom::{Aabb, Triangle};
+
+/// In-core bytes per node of a decoded cluster (node + local-root ordinal).
+pub const CLUSTER_BYTES_PER_NODE: usize = 34;
+
+/// A local root: a node whose parent is in an earlier cluster.
+#[derive(Clone, Copy, Debug)]
+struct LocalRoot {
+    local: u32,
+    parent: u32,
+    right: bool,
+}
+
+/// A decompressed cluster.
+pub struct Cluster {
+    first: u32,
+    nodes: Box<[CoreNode]>,
+    /// Triangle ids of leaves holding several.
+    tris: Box<[u32]>,
+    roots: Box<[LocalRoot]>,
+    /// Per node, the ordinal of its local root in `roots` (`u16::MAX` for
+    /// the subtree of the global root).
+    root_of: Box<[u16]>,
+    lock: Mutex<()>,
+    live: Arc<Live>,
+    bytes: usize,
+}
+
+impl Cluster {
+    /// In-core bytes.
+    pub fn bytes(&self) -> usize {
+        self.bytes
+    }
+}
+
+impl Drop for Cluster {
+    fn drop(&mut self) {
+        self.live.sub(self.bytes);
+    }
+}
+
+/// Decodes cluster `c` of `h` from `bytes` (the cluster's own bytes).
+fn decode_cluster(
+    h: &Header,
+    c: u32,
+    first: u32,
+    n: u32,
+    bytes: &[u8],
+    live: &Arc<Live>,
+) -> Result<Cluster, RacError> {
+    let bad = |what| RacError::CorruptCluster { cluster: c, what };
+    let len = |at: usize| {
+        bytes
+            .get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+    };
+    let (l0, l1) = (
+        len(0).ok_or_else(|| bad("its stream table is truncated"))?,
+        len(4).unwrap_or(0),
+    );
+    let s1 = 8usize
+        .checked_add(l0)
+        .filter(|&x| x <= bytes.len())
+        .ok_or_else(|| bad("its tree stream overruns"))?;
+    let s2 = s1
+        .checked_add(l1)
+        .filter(|&x| x <= bytes.len())
+        .ok_or_else(|| bad("its box stream overruns"))?;
+    let mut r = BitReader::with_limit(&bytes[8..], l0);
+    let mut rb0 = BitReader::with_limit(&bytes[s1..], l1);
+    let mut rb1 = BitReader::new(&bytes[s2..]);
+    let from_oldest = r.get(1) == 1;
+    let mut dec: [DictDecoder; NCTX] =
+        std::array::from_fn(|ctx| DictDecoder::new(r.get(2) as u32, raw_bits(ctx, h)));
+    let npc = r.get_golomb(0)?;
+    if npc > n {
+        return Err(bad("too many parent clusters"));
+    }
+    let mut pclusters = Vec::with_capacity(npc as usize);
+    for _ in 0..npc {
+        let d = r.get_golomb(0)?;
+        if d >= c {
+            return Err(bad("a parent cluster does not come before the cluster"));
+        }
+        pclusters.push(c - d - 1);
+    }
+    let n_us = n as usize;
+    let mut words: Vec<[u32; 8]> = vec![[0; 8]; n_us];
+    let mut got = vec![0u8; n_us];
+    let mut res = vec![[0u32; 6]; n_us];
+    let mut root_of = vec![u16::MAX; n_us];
+    let mut roots: Vec<LocalRoot> = Vec::new();
+    let mut front: Vec<u32> = Vec::new();
+    let mut tris: Vec<u32> = Vec::new();
+    let mut last_tri: i64 = 0;
+    let end = first + n;
+    for l in 0..n_us {
+        let g = first + l as u32;
+        let s = dec[CTX_STRUCT].decode(&mut r)?;
+        let leaf = s & 1 == 1;
+        let mut right = s & 2 != 0;
+        let pos = s >> 2;
+        let mut complete_parent: Option<QBox> = None;
+        let mut sibling: Option<usize> = None;
+        if g == 0 {
+            if s > 1 {
+                return Err(bad("the root has a parent"));
+            }
+            let q = Header::root_qbox(&h.grid);
+            words[0][..3].copy_from_slice(&q.min.to_array());
+            words[0][3..6].copy_from_slice(&q.max.to_array());
+        } else if pos == 0 {
+            let pci = dec[CTX_PCLUSTER].decode(&mut r)?;
+            let pc = *pclusters
+                .get(pci as usize)
+                .ok_or_else(|| bad("a parent-cluster index is out of range"))?;
+            let parent = (pc << h.cluster_bits) | r.get(h.cluster_bits) as u32;
+            if roots.len() >= usize::from(u16::MAX) {
+                return Err(bad("too many local roots"));
+            }
+            root_of[l] = roots.len() as u16;
+            roots.push(LocalRoot {
+                local: l as u32,
+                parent,
+                right,
+            });
+        } else {
+            let pos = pos as usize;
+            let at = if from_oldest {
+                Some(pos - 1)
+            } else {
+                front.len().checked_sub(pos)
+            }
+            .filter(|&at| at < front.len())
+            .ok_or_else(|| bad("a front position is out of range"))?;
+            let p = front[at] as usize;
+            if got[p] != 0 {
+                // The second child: its side is implied (and sent as 0).
+                if right {
+                    return Err(bad("a second child's side is not implied"));
+                }
+                right = got[p] == 1;
+            }
+            let bit = 1u8 << u8::from(right);
+            if got[p] & bit != 0 {
+                return Err(bad("a node gets the same child twice"));
+            }
+            got[p] |= bit;
+            if got[p] == 3 {
+                sibling = Some((words[p][6 + usize::from(!right)] - first) as usize);
+            }
+            words[p][6 + usize::from(right)] = g;
+            if got[p] == 3 {
+                front.remove(at);
+            }
+            root_of[l] = root_of[p];
+            if words[p][0] & INCOMPLETE == 0 {
+                complete_parent = Some(qbox_of(&words[p]));
+            }
+        }
+        if g != 0 {
+            let mut rs = [0u32; 6];
+            let sib = sibling.map(|x| res[x]);
+            let has_sib = sib.is_some();
+            let mut zero = dec[mask_context(leaf, right, has_sib)].decode(&mut rb0)?;
+            if zero >= 64 {
+                return Err(bad("a zero mask is out of range"));
+            }
+            if let Some(s) = sib {
+                for (k, v) in s.iter().enumerate() {
+                    zero ^= u32::from(*v != 0) << k;
+                }
+            }
+            // The min and max halves come from two streams: two independent
+            // dependency chains for the processor to overlap.
+            let maxb = h.bits + 2;
+            for k in 0..3 {
+                if zero & (1 << k) == 0 {
+                    rs[k] = dec[value_context(leaf, right, k, has_sib)]
+                        .decode_bucketed(&mut rb0, maxb)?;
+                }
+                if zero & (8 << k) == 0 {
+                    rs[k + 3] = dec[value_context(leaf, right, k + 3, has_sib)]
+                        .decode_bucketed(&mut rb1, maxb)?;
+                }
+            }
+            if rs
+                .iter()
+                .enumerate()
+                .any(|(k, &v)| (v == 0) != (zero & (1 << k) != 0))
+            {
+                return Err(bad("a residual marked non-zero is zero"));
+            }
+            res[l] = rs;
+            let res = rs;
+            match complete_parent {
+                Some(pq) => {
+                    let q = apply(&pq, right, &res, h.grid.max_q)
+                        .ok_or_else(|| bad("a decoded box leaves the grid"))?;
+                    words[l][..3].copy_from_slice(&q.min.to_array());
+                    words[l][3..6].copy_from_slice(&q.max.to_array());
+                }
+                None => {
+                    words[l][..6].copy_from_slice(&res);
+                    words[l][0] |= INCOMPLETE;
+                }
+            }
+        }
+        if leaf {
+            let count = if h.empty {
+                0
+            } else if h.max_leaf > 1 {
+                dec[CTX_COUNT].decode(&mut r)?
+            } else {
+                1
+            };
+            if count > h.max_leaf || (count == 0 && !h.empty) {
+                return Err(bad("a leaf has a bad triangle count"));
+            }
+            if let Some(x) = sibling.filter(|&x| words[x][7] == LEAF_FLAG | 1) {
+                last_tri = i64::from(words[x][6]);
+            }
+            let slot = tris.len() as u32;
+            for _ in 0..count {
+                let s = dec[CTX_TRI].decode(&mut r)?;
+                let id = if s == 0 {
+                    let b = dec[CTX_TRI_FAR].decode(&mut r)?;
+                    if b > 33 {
+                        return Err(bad("a triangle-id delta is too long"));
+                    }
+                    let z = if b <= 1 {
+                        u64::from(b)
+                    } else {
+                        (1u64 << (b - 1)) | r.get(b - 1)
+                    };
+                    last_tri + unzigzag(z)
+                } else {
+                    last_tri + unzigzag(u64::from(s - 1))
+                };
+                if id < 0 || id >= i64::from(h.triangle_count) {
+                    return Err(bad("a triangle id is out of range"));
+                }
+                last_tri = id;
+                if count > 1 {
+                    tris.push(id as u32);
+                } else {
+                    words[l][6] = id as u32;
+                }
+            }
+            if count != 1 {
+                words[l][6] = slot;
+            }
+            words[l][7] = LEAF_FLAG | count;
+        } else {
+            front.push(l as u32);
+        }
+    }
+    let mut last_child = i64::from(end);
+    for &f in &front {
+        for side in 0..2 {
+            if got[f as usize] & (1 << side) == 0 {
+                let child = last_child + unzigzag(u64::from(dec[CTX_CHILD].decode(&mut r)?));
+                if child < i64::from(end) || child >= i64::from(h.node_count) {
+                    return Err(bad("a local leaf's child is out of range"));
+                }
+                words[f as usize][6 + side] = child as u32;
+                last_child = child;
+            }
+        }
+    }
+    if r.overran() || rb0.overran() || rb1.overran() {
+        return Err(bad("the cluster's bits run past its end"));
+    }
+    let bytes = n_us * 32 + n_us * 2 + tris.len() * 4 + roots.len() * 12 + 128;
+    live.add(bytes);
+    Ok(Cluster {
+        first,
+        nodes: words.into_iter().map(CoreNode::new).collect(),
+        tris: tris.into_boxed_slice(),
+        roots: roots.into_boxed_slice(),
+        root_of: root_of.into_boxed_slice(),
+        lock: Mutex::new(()),
+        live: live.clone(),
+        bytes,
+    })
+}
+
+impl RacBvh {
+    /// Decompresses cluster `c` without touching the cache (for throughput
+    /// measurements and [`verify`](Self::verify)). Returns its node count.
+    pub fn decode_cluster_uncached(&self, c: u32) -> Result<usize, RacError> {
+        Ok(self.decode(c)?.nodes.len())
+    }
+
+    fn decode(&self, c: u32) -> Result<Cluster, RacError> {
+        let m = self.meta.get(c as usize).ok_or(RacError::CorruptCluster {
+            cluster: c,
+            what: "no such cluster",
+        })?;
+        let end = self
+            .meta
+            .get(c as usize + 1)
+            .map_or(self.data.len() as u64, |n| n.offset);
+        let bytes =
+            self.data
+                .get(m.offset as usize..end as usize)
+                .ok_or(RacError::CorruptCluster {
+                    cluster: c,
+                    what: "its byte range is out of bounds",
+                })?;
+        if xxhash_rust::xxh3::xxh3_64(bytes) != m.hash {
+            return Err(RacError::CorruptCluster {
+                cluster: c,
+                what: "its checksum does not match",
+            });
+        }
+        decode_cluster(
+            &self.header,
+            c,
+            c << self.header.cluster_bits,
+            m.nodes,
+            bytes,
+            &self.cache.live,
+        )
+    }
+
+    /// Cluster `c`, from the cache or decompressed into it.
+    fn cluster(&self, c: u32) -> Result<Arc<Cluster>, RacError> {
+        if let Some(cl) = self.cache.get(c) {
+            return Ok(cl);
+        }
+        cache::unpin();
+        let cl = Arc::new(self.decode(c)?);
+        Ok(self.cache.insert(c, cl))
+    }
+
+    /// The complete words of node `g`, completing it if needed (§5.2).
+    fn try_words(&self, g: u32) -> Result<[u32; 8], RacError> {
+        if g >= self.header.node_count {
+            return Err(RacError::NoSuchNode {
+                node: g,
+                count: self.header.node_count,
+            });
+        }
+        let c = g >> self.header.cluster_bits;
+        let l = (g - (c << self.header.cluster_bits)) as usize;
+        let fast = cache::with_pinned(self.id, c, |cl| {
+            let w = cl.nodes[l].words();
+            (w[0] & INCOMPLETE == 0).then_some(w)
+        });
+        if let Some(w) = fast {
+            return Ok(w);
+        }
+        let mut cl = self.cluster(c)?;
+        if !cl.nodes[l].is_complete() {
+            let root = cl.roots[usize::from(cl.root_of[l])];
+            // Hold nothing while the parent's cluster loads.
+            drop(cl);
+            let pw = self.try_words(root.parent)?;
+            let pq = qbox_of(&pw);
+            if pw[7] & LEAF_FLAG != 0
+                || pw[6 + usize::from(root.right)] != c << self.header.cluster_bits | root.local
+            {
+                return Err(RacError::CorruptCluster {
+                    cluster: c,
+                    what: "a local root's parent does not name it as child",
+                });
+            }
+            cl = self.cluster(c)?;
+            complete(&cl, root, &pq, self.header.grid.max_q)
+                .map_err(|what| RacError::CorruptCluster { cluster: c, what })?;
+        }
+        let w = cl.nodes[l].words();
+        cache::pin(self.id, c, &cl);
+        Ok(w)
+    }
+
+    #[inline]
+    fn words(&self, g: u32) -> [u32; 8] {
+        self.try_words(g)
+            .unwrap_or_else(|e| panic!("racbvh: {e} (run verify() to check the data)"))
+    }
+
+    /// The decoded box of complete words.
+    #[inline]
+    fn box_of(&self, w: &[u32; 8]) -> Aabb {
+        if self.header.empty {
+            return Aabb::EMPTY;
+        }
+        self.header.grid.dequantize(&qbox_of(w))
+    }
+
+    /// `GetRootIndex`: the root's index (always 0).
+    pub fn root_index(&self) -> u32 {
+        0
+    }
+
+    /// `GetBV`: the conservative box of node `i`.
+    ///
+    /// # Panics
+    /// If `i` does not exist or its data is corrupted (see [`try_bv`](Self::try_bv)).
+    pub fn bv(&self, i: u32) -> Aabb {
+        self.box_of(&self.words(i))
+    }
+
+    /// [`bv`](Self::bv) returning errors.
+    pub fn try_bv(&self, i: u32) -> Result<Aabb, RacError> {
+        Ok(self.box_of(&self.try_words(i)?))
+    }
+
+    /// `IsLeaf`: whether node `i` is a leaf. Panics like [`bv`](Self::bv).
+    pub fn is_leaf(&self, i: u32) -> bool {
+        self.words(i)[7] & LEAF_FLAG != 0
+    }
+
+    /// `GetLeftChildIdx`: the left child of inner node `i`. Panics like
+    /// [`bv`](Self::bv), or if `i` is a leaf.
+    pub fn left(&self, i: u32) -> u32 {
+        let w = self.words(i);
+        assert!(w[7] & LEAF_FLAG == 0, "racbvh: left({i}) of a leaf");
+        w[6]
+    }
+
+    /// `GetRightChildIdx`: the right child of inner node `i`. Panics like
+    /// [`left`](Self::left).
+    pub fn right(&self, i: u32) -> u32 {
+        let w = self.words(i);
+        assert!(w[7] & LEAF_FLAG == 0, "racbvh: right({i}) of a leaf");
+        w[7]
+    }
+
+    /// `GetTriangleIdx`: the (first) original triangle id of leaf `i`, or
+    /// `None` for the empty tree's root. Panics like [`left`](Self::left)
+    /// if `i` is not a leaf.
+    pub fn triangle_index(&self, i: u32) -> Option<u32> {
+        self.leaf_triangles(i).first().copied()
+    }
+
+    /// The original triangle ids of leaf `i`.
+    pub fn leaf_triangles(&self, i: u32) -> Vec<u32> {
+        let mut out = Vec::new();
+        self.try_leaf_ids(i, &mut |id| out.push(id))
+            .unwrap_or_else(|e| panic!("racbvh: {e}"));
+        out
+    }
+
+    fn try_leaf_ids(&self, i: u32, f: &mut dyn FnMut(u32)) -> Result<(), RacError> {
+        let w = self.try_words(i)?;
+        assert!(w[7] & LEAF_FLAG != 0, "racbvh: triangles of inner node {i}");
+        let count = w[7] & !LEAF_FLAG;
+        if count == 1 {
+            f(w[6]);
+        } else if count > 1 {
+            let cl = self.cluster(i >> self.header.cluster_bits)?;
+            let ids =
+                cl.tris
+                    .get(w[6] as usize..(w[6] + count) as usize)
+                    .ok_or(RacError::Corrupt(
+                        "a leaf's triangle slots are out of range",
+                    ))?;
+            ids.iter().for_each(|&id| f(id));
+        }
+        Ok(())
+    }
+
+    /// Decodes and completes every cluster, checks that every triangle id
+    /// appears exactly once, and checks the stored mesh. Uses (and fills)
+    /// the cache.
+    pub fn verify(&self) -> Result<(), RacError> {
+        if self.mesh_hash != super::file::mesh_hash(&self.mesh) {
+            return Err(RacError::Corrupt(
+                "the mesh sections' checksum does not match",
+            ));
+        }
+        self.mesh.check()?;
+        let mut seen = vec![false; self.header.triangle_count as usize];
+        for g in 0..self.header.node_count {
+            let w = self.try_words(g)?;
+            if w[7] & LEAF_FLAG != 0 {
+                let mut dup = false;
+                self.try_leaf_ids(g, &mut |id| {
+                    dup |= std::mem::replace(&mut seen[id as usize], true)
+                })?;
+                if dup {
+                    return Err(RacError::Corrupt("a triangle id appears in two leaves"));
+                }
+            } else if w[6] <= g
+                || w[7] <= g
+                || w[6] >= self.header.node_count
+                || w[7] >= self.header.node_count
+            {
+                return Err(RacError::Corrupt(
+                    "an inner node's child does not come after it",
+                ));
+            }
+        }
+        if seen.iter().any(|s| !s) {
+            return Err(RacError::Corrupt("a triangle id appears in no leaf"));
+        }
+        Ok(())
+    }
+}
+
+/// Completes the subtree of local root `root` in `cl`, given the parent's
+/// quantized box.
+fn complete(cl: &Cluster, root: LocalRoot, parent: &QBox, max_q: u32) -> Result<(), &'static str> {
+    let _guard = cl.lock.lock().unwrap_or_else(|e| e.into_inner());
+    if cl.nodes[root.local as usize].is_complete() {
+        return Ok(());
+    }
+    let n = cl.nodes.len() as u32;
+    let mut stack = vec![(root.local, *parent, root.right)];
+    while let Some((l, pq, right)) = stack.pop() {
+        let node = &cl.nodes[l as usize];
+        let mut w = node.words();
+        if w[0] & INCOMPLETE == 0 {
+            return Err("a node below a local root is already complete");
+        }
+        w[0] &= !INCOMPLETE;
+        let res = [w[0], w[1], w[2], w[3], w[4], w[5]];
+        let q = apply(&pq, right, &res, max_q).ok_or("a completed box leaves the grid")?;
+        node.set_box(&q);
+        if w[7] & LEAF_FLAG == 0 {
+            for (side, child) in [(false, w[6]), (true, w[7])] {
+                if let Some(cl_local) = child.checked_sub(cl.first).filter(|&x| x < n) {
+                    stack.push((cl_local, q, side));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The cursor's node handle: the global node index with the node's words
+/// 6 and 7 (children, or a leaf's triangle id / slot and count), so that
+/// `is_leaf`, `for_each_child` and a one-triangle leaf's
+/// `for_each_triangle` do not read the node again.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RacNode {
+    index: u32,
+    a: u32,
+    b: u32,
+}
+
+impl RacNode {
+    /// The global node index (for the random-access API).
+    pub fn index(&self) -> u32 {
+        self.index
+    }
+
+    #[inline]
+    fn new(index: u32, w: &[u32; 8]) -> Self {
+        Self {
+            index,
+            a: w[6],
+            b: w[7],
+        }
+    }
+}
+
+impl NodeCursor for RacBvh {
+    type Node = RacNode;
+
+    fn root(&self) -> (RacNode, Aabb) {
+        let w = self.words(0);
+        (RacNode::new(0, &w), self.box_of(&w))
+    }
+
+    #[inline]
+    fn is_leaf(&self, node: &RacNode) -> bool {
+        node.b & LEAF_FLAG != 0
+    }
+
+    #[inline]
+    fn for_each_child(&self, node: &RacNode, mut f: impl FnMut(RacNode, Aabb)) {
+        // Fast path: both children complete in the thread's pinned cluster
+        // (one thread-local look-up for the two).
+        let cb = self.header.cluster_bits;
+        let c = node.a >> cb;
+        let fast = cache::with_pinned(self.id, c, |cl| {
+            let mut out = [[0u32; 8]; 2];
+            for (slot, child) in out.iter_mut().zip([node.a, node.b]) {
+                if child >> cb != c {
+                    return None;
+                }
+                let cw = cl.nodes[(child - cl.first) as usize].words();
+                if cw[0] & INCOMPLETE != 0 {
+                    return None;
+                }
+                *slot = cw;
+            }
+            Some(out)
+        });
+        let out = fast.unwrap_or_else(|| [self.words(node.a), self.words(node.b)]);
+        for (child, cw) in [node.a, node.b].into_iter().zip(out) {
+            f(RacNode::new(child, &cw), self.box_of(&cw));
+        }
+    }
+
+    #[inline]
+    fn for_each_triangle(&self, node: &RacNode, mut f: impl FnMut(u32, &Triangle)) {
+        let count = node.b & !LEAF_FLAG;
+        if count == 1 {
+            f(node.a, &self.mesh.triangle(node.a));
+        } else if count > 1 {
+            self.try_leaf_ids(node.index, &mut |id| f(id, &self.mesh.triangle(id)))
+                .unwrap_or_else(|e| panic!("racbvh: {e}"));
+        }
+    }
+
+    #[inline]
+    fn triangle(&self, id: u32) -> Triangle {
+        self.mesh.triangle(id)
+    }
+
+    fn triangle_count(&self) -> usize {
+        self.header.triangle_count as usize
+    }
+}

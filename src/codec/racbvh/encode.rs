@@ -1,0 +1,496 @@
+//! Compression (§4): clusters, front-based structure coding, quantized and
+//! predicted boxes, delta-coded triangle and child indices.
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use super::coder::{BitWriter, DictEncoder, MAX_K, SymbolEncoder, golomb_len, zigzag};
+use super::mesh::PackedMesh;
+use super::node::{Grid, QBox, residuals};
+use super::{
+    CTX_CHILD, CTX_COUNT, CTX_PCLUSTER, CTX_STRUCT, CTX_TRI, CTX_TRI_FAR, ClusterMeta, Header,
+    NCTX, RacBvh, RacError, bucket, mask_context, raw_bits, value_context, zero_mask,
+};
+use crate::build::CanonicalBvh;
+use crate::geom::Aabb;
+use crate::mesh::Mesh;
+
+/// Compression settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RacOptions {
+    /// Nodes per cluster: a power of two in 256..=16384 (4096 by default).
+    pub cluster_nodes: u32,
+    /// Bits per quantized box coordinate, 8..=24 (16 by default).
+    pub bits: u32,
+    /// Bits per vertex coordinate, 8..=24, or `None` to keep `f32` vertices
+    /// (16 by default).
+    pub vertex_bits: Option<u32>,
+    /// Byte budget of the decompressed-cluster cache (64 MiB by default).
+    pub cache_budget_bytes: usize,
+    /// Triangle-index deltas with `|delta| < threshold` are dictionary
+    /// coded, others stored raw (§4.3.2; 10 by default, 1..=4096).
+    pub tri_delta_threshold: u32,
+}
+
+impl Default for RacOptions {
+    fn default() -> Self {
+        Self {
+            cluster_nodes: 4096,
+            bits: 16,
+            vertex_bits: Some(16),
+            cache_budget_bytes: 64 << 20,
+            tri_delta_threshold: 10,
+        }
+    }
+}
+
+impl RacOptions {
+    /// Checks every field.
+    pub fn validate(&self) -> Result<(), RacError> {
+        let c = self.cluster_nodes;
+        if !(256..=16384).contains(&c) || !c.is_power_of_two() {
+            return Err(RacError::Option {
+                what: "cluster_nodes",
+                value: u64::from(c),
+                expected: "a power of two in 256..=16384",
+            });
+        }
+        if !(8..=24).contains(&self.bits) {
+            return Err(RacError::Option {
+                what: "bits",
+                value: u64::from(self.bits),
+                expected: "8..=24",
+            });
+        }
+        if let Some(b) = self.vertex_bits
+            && !(8..=24).contains(&b)
+        {
+            return Err(RacError::Option {
+                what: "vertex_bits",
+                value: u64::from(b),
+                expected: "8..=24, or None for lossless f32 vertices",
+            });
+        }
+        if !(1..=4096).contains(&self.tri_delta_threshold) {
+            return Err(RacError::Option {
+                what: "tri_delta_threshold",
+                value: u64::from(self.tri_delta_threshold),
+                expected: "1..=4096",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Figures of a compressed tree.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct RacStats {
+    /// Nodes in the tree.
+    pub nodes: u64,
+    /// Clusters.
+    pub cluster_count: u64,
+    /// Bits per node spent on the tree structure (parents, sides, leaf
+    /// flags, local-root pair indices, local-leaf children, triangle ids,
+    /// cluster headers).
+    pub bits_per_node_tree: f64,
+    /// Bits per node spent on the boxes.
+    pub bits_per_node_bv: f64,
+    /// 32 bytes × nodes over the compressed tree (clusters + meta table).
+    pub compression_ratio_vs_plain: f64,
+    /// Stored mesh bytes per triangle.
+    pub mesh_bytes_per_triangle: f64,
+    /// Wall time of [`RacBvh::encode`] (0 for a tree read from bytes).
+    pub compression_seconds: f64,
+}
+
+/// One coded item of a cluster, before the rank codes' parameters are known.
+enum Item {
+    Sym {
+        ctx: usize,
+        rank: u32,
+        raw: Option<u32>,
+        stream: usize,
+    },
+    Raw {
+        v: u64,
+        bits: u32,
+        stream: usize,
+    },
+}
+
+/// Node boxes recomputed from the stored mesh, bottom-up, so that the boxes
+/// contain the triangles the cursor reports (quantized vertices move).
+fn node_boxes(bvh: &CanonicalBvh, mesh: &PackedMesh) -> Vec<Aabb> {
+    let mut boxes = vec![Aabb::EMPTY; bvh.nodes.len()];
+    for i in (0..bvh.nodes.len()).rev() {
+        let n = &bvh.nodes[i];
+        boxes[i] = if n.is_leaf() {
+            bvh.leaf_triangles[n.leaf_range()]
+                .iter()
+                .fold(Aabb::EMPTY, |b, &t| {
+                    b.union(&Aabb::of_triangle(&mesh.triangle(t)))
+                })
+        } else {
+            boxes[n.a as usize].union(&boxes[n.b as usize])
+        };
+    }
+    boxes
+}
+
+/// Checks what the codec relies on: parents before children, consistent
+/// parent links, leaf ranges in bounds.
+fn check_tree(bvh: &CanonicalBvh, tri_count: usize) -> Result<(), RacError> {
+    let n = bvh.nodes.len();
+    if n == 0 || bvh.parents.len() != n {
+        return Err(RacError::InvalidTree(
+            "the tree has no nodes or its parent array has the wrong length".into(),
+        ));
+    }
+    if n >= (1usize << 31) {
+        return Err(RacError::InvalidTree(format!(
+            "{n} nodes is more than 2^31 - 1"
+        )));
+    }
+    for (i, node) in bvh.nodes.iter().enumerate() {
+        if node.is_leaf() {
+            let r = node.leaf_range();
+            if r.end > bvh.leaf_triangles.len() || r.len() > bvh.max_leaf_triangles.max(1) {
+                return Err(RacError::InvalidTree(format!(
+                    "leaf {i} has a bad triangle range {r:?}"
+                )));
+            }
+            if r.is_empty() && n > 1 {
+                return Err(RacError::InvalidTree(format!("leaf {i} has no triangles")));
+            }
+        } else {
+            for c in node.children() {
+                if c as usize >= n || c as usize <= i || bvh.parents[c as usize] != i as u32 {
+                    return Err(RacError::InvalidTree(format!(
+                        "node {i}'s child {c} does not come after it or does not name it as parent \
+                         (RACBVH needs parents before children in the layout)"
+                    )));
+                }
+            }
+        }
+    }
+    if bvh.leaf_triangles.iter().any(|&t| t as usize >= tri_count) {
+        return Err(RacError::InvalidTree(
+            "a leaf refers to a triangle the mesh does not have".into(),
+        ));
+    }
+    Ok(())
+}
+
+impl RacBvh {
+    /// Compresses `bvh`, built over `mesh`.
+    pub fn encode(
+        bvh: &CanonicalBvh,
+        mesh: &Mesh,
+        options: &RacOptions,
+    ) -> Result<RacBvh, RacError> {
+        let start = Instant::now();
+        options.validate()?;
+        check_tree(bvh, mesh.triangles.len())?;
+        let pmesh = PackedMesh::encode(mesh, options.vertex_bits)?;
+        let boxes = node_boxes(bvh, &pmesh);
+        let empty = bvh.leaf_triangles.is_empty();
+        let root_box = boxes[0];
+        let finite =
+            root_box.min.is_finite() && root_box.max.is_finite() && root_box.extent().is_finite();
+        if !empty && !finite {
+            return Err(RacError::InvalidMesh(
+                "the mesh's bounding box is not finite in f32".into(),
+            ));
+        }
+        let grid = if empty {
+            Grid::new(&Aabb::from_arrays([0.0; 3], [0.0; 3]), options.bits)
+        } else {
+            Grid::new(&root_box, options.bits)
+        };
+        let mut q: Vec<QBox> = boxes
+            .iter()
+            .map(|b| {
+                if empty {
+                    QBox::default()
+                } else {
+                    grid.quantize(b)
+                }
+            })
+            .collect();
+        q[0] = Header::root_qbox(&grid);
+        let cluster_bits = options.cluster_nodes.trailing_zeros();
+        let header = Header {
+            cluster_bits,
+            bits: options.bits,
+            node_count: bvh.nodes.len() as u32,
+            triangle_count: mesh.triangles.len() as u32,
+            max_leaf: bvh.max_leaf_triangles.max(1) as u32,
+            tri_threshold: options.tri_delta_threshold,
+            grid,
+            empty,
+            tree_bits: 0,
+            bv_bits: 0,
+            compression_seconds: 0.0,
+        };
+        let mut data = Vec::new();
+        let mut meta = Vec::new();
+        let (mut tree_bits, mut bv_bits) = (0u64, 0u64);
+        let csize = options.cluster_nodes as usize;
+        for (c, s) in (0..bvh.nodes.len()).step_by(csize).enumerate() {
+            let e = (s + csize).min(bvh.nodes.len());
+            // Front positions counted from the newest node suit depth-first
+            // orders, from the oldest breadth-first ones: try both.
+            let newest = encode_cluster(bvh, &q, &header, c as u32, s, e, false)?;
+            let oldest = encode_cluster(bvh, &q, &header, c as u32, s, e, true)?;
+            let (bytes, tb, bb) = if oldest.0.len() < newest.0.len() {
+                oldest
+            } else {
+                newest
+            };
+            meta.push(ClusterMeta {
+                offset: data.len() as u64,
+                nodes: (e - s) as u32,
+                hash: xxhash_rust::xxh3::xxh3_64(&bytes),
+            });
+            data.extend_from_slice(&bytes);
+            tree_bits += tb;
+            bv_bits += bb;
+        }
+        let mut header = header;
+        header.tree_bits = tree_bits;
+        header.bv_bits = bv_bits;
+        header.compression_seconds = start.elapsed().as_secs_f64();
+        let mesh_hash = super::file::mesh_hash(&pmesh);
+        Ok(RacBvh::assemble(
+            header,
+            super::file::Store::Owned(data),
+            meta,
+            pmesh,
+            mesh_hash,
+            options.cache_budget_bytes,
+        ))
+    }
+}
+
+/// Codes nodes `s..e` (cluster `c`). Returns the bytes and the bits spent
+/// on the tree and on the boxes.
+fn encode_cluster(
+    bvh: &CanonicalBvh,
+    q: &[QBox],
+    h: &Header,
+    c: u32,
+    s: usize,
+    e: usize,
+    from_oldest: bool,
+) -> Result<(Vec<u8>, u64, u64), RacError> {
+    let mut items = Vec::with_capacity((e - s) * 9);
+    let mut dicts: Vec<DictEncoder> = (0..NCTX).map(|_| DictEncoder::new()).collect();
+    let mut sym = |items: &mut Vec<Item>, ctx: usize, v: u32, stream: usize| {
+        let st = dicts[ctx].encode(v);
+        items.push(Item::Sym {
+            ctx,
+            rank: st.rank,
+            raw: st.raw,
+            stream,
+        });
+    };
+    // The parent clusters, in order of first use.
+    let mut pclusters: Vec<u32> = Vec::new();
+    let mut pindex: HashMap<u32, u32> = HashMap::new();
+    for g in s.max(1)..e {
+        let p = bvh.parents[g] as usize;
+        if p < s {
+            let pc = (p >> h.cluster_bits) as u32;
+            pindex.entry(pc).or_insert_with(|| {
+                pclusters.push(pc);
+                pclusters.len() as u32 - 1
+            });
+        }
+    }
+    let mut front: Vec<u32> = Vec::new();
+    let mut got = vec![0u8; e - s];
+    let mut res = vec![[0u32; 6]; e - s];
+    let mut last_tri: i64 = 0;
+    let threshold = i64::from(h.tri_threshold);
+    for g in s..e {
+        let n = &bvh.nodes[g];
+        let leaf = u32::from(n.is_leaf());
+        let mut sib_tri: Option<i64> = None;
+        if g == 0 {
+            sym(&mut items, CTX_STRUCT, leaf, 0);
+        } else {
+            let p = bvh.parents[g] as usize;
+            let right = bvh.nodes[p].b as usize == g;
+            let side = u32::from(right);
+            if p >= s {
+                let at = front
+                    .iter()
+                    .rposition(|&f| f as usize == p)
+                    .ok_or_else(|| {
+                        RacError::InvalidTree(format!("parent {p} of node {g} is not open"))
+                    })?;
+                let pos = if from_oldest {
+                    at
+                } else {
+                    front.len() - 1 - at
+                } as u32;
+                // The second child's side is implied: sent as 0.
+                let coded_side = if got[p - s] != 0 { 0 } else { side };
+                sym(
+                    &mut items,
+                    CTX_STRUCT,
+                    ((pos + 1) << 2) | (coded_side << 1) | leaf,
+                    0,
+                );
+                got[p - s] |= 1 << side;
+                if got[p - s] == 3 {
+                    front.remove(at);
+                }
+            } else {
+                sym(&mut items, CTX_STRUCT, (side << 1) | leaf, 0);
+                let pc = (p >> h.cluster_bits) as u32;
+                sym(&mut items, CTX_PCLUSTER, pindex[&pc], 0);
+                items.push(Item::Raw {
+                    v: (p & ((1 << h.cluster_bits) - 1)) as u64,
+                    bits: h.cluster_bits,
+                    stream: 0,
+                });
+            }
+            let (pq, cq) = (&q[p], &q[g]);
+            let inside = (0..3).all(|a| pq.min[a] <= cq.min[a] && cq.max[a] <= pq.max[a]);
+            if !inside {
+                return Err(RacError::InvalidTree(format!(
+                    "node {g}'s box is not inside its parent's"
+                )));
+            }
+            let r = residuals(pq, right, cq).map(|v| v as u32);
+            let sibg = bvh.nodes[p].children()[usize::from(!right)] as usize;
+            let known = p >= s && (s..g).contains(&sibg);
+            let sn = &bvh.nodes[sibg];
+            if known && sn.is_leaf() && sn.leaf_range().len() == 1 {
+                sib_tri = Some(i64::from(bvh.leaf_triangles[sn.a as usize]));
+            }
+            let sib = known.then(|| &res[sibg - s]);
+            let has_sib = sib.is_some();
+            sym(
+                &mut items,
+                mask_context(leaf == 1, right, has_sib),
+                zero_mask(&r, sib),
+                1,
+            );
+            for (k, &v) in r.iter().enumerate() {
+                if v == 0 {
+                    continue;
+                }
+                let b = bucket(u64::from(v));
+                sym(
+                    &mut items,
+                    value_context(leaf == 1, right, k, has_sib),
+                    b,
+                    1 + k / 3,
+                );
+                if b > 1 {
+                    items.push(Item::Raw {
+                        v: u64::from(v),
+                        bits: b - 1,
+                        stream: 1 + k / 3,
+                    });
+                }
+            }
+            res[g - s] = r;
+        }
+        if n.is_leaf() {
+            let ids = &bvh.leaf_triangles[n.leaf_range()];
+            // A sibling leaf's triangle is a better reference than the
+            // previous leaf's when the layout is not depth-first.
+            last_tri = sib_tri.unwrap_or(last_tri);
+            if h.max_leaf > 1 {
+                sym(&mut items, CTX_COUNT, ids.len() as u32, 0);
+            }
+            for &id in ids {
+                let d = i64::from(id) - last_tri;
+                if d.abs() < threshold {
+                    sym(&mut items, CTX_TRI, zigzag(d) as u32 + 1, 0);
+                } else {
+                    sym(&mut items, CTX_TRI, 0, 0);
+                    let z = zigzag(d);
+                    let b = bucket(z);
+                    sym(&mut items, CTX_TRI_FAR, b, 0);
+                    if b > 1 {
+                        items.push(Item::Raw {
+                            v: z,
+                            bits: b - 1,
+                            stream: 0,
+                        });
+                    }
+                }
+                last_tri = i64::from(id);
+            }
+        } else {
+            front.push(g as u32);
+        }
+    }
+    // Local leaves: the children outside this cluster, delta coded.
+    let mut last_child = e as i64;
+    for &f in &front {
+        let n = &bvh.nodes[f as usize];
+        for (side, child) in n.children().into_iter().enumerate() {
+            if got[f as usize - s] & (1 << side) == 0 {
+                let d = i64::from(child) - last_child;
+                sym(&mut items, CTX_CHILD, zigzag(d) as u32, 0);
+                last_child = i64::from(child);
+            }
+        }
+    }
+    // Choose each context's Exp-Golomb parameter, then write.
+    let mut cost = [[0u64; MAX_K as usize + 1]; NCTX];
+    for it in &items {
+        if let Item::Sym { ctx, rank, .. } = *it {
+            for (k, c) in cost[ctx].iter_mut().enumerate() {
+                *c += golomb_len(rank, k as u32);
+            }
+        }
+    }
+    let ks: [u32; NCTX] = std::array::from_fn(|ctx| {
+        (0..=MAX_K)
+            .min_by_key(|&k| cost[ctx][k as usize])
+            .unwrap_or(0)
+    });
+    // Three streams decoded side by side: the tree, the boxes' min halves,
+    // the boxes' max halves.
+    let mut w: [BitWriter; 3] = Default::default();
+    w[0].put(u64::from(from_oldest), 1);
+    for &k in &ks {
+        w[0].put(u64::from(k), 2);
+    }
+    w[0].put_golomb(pclusters.len() as u32, 0);
+    for &pc in &pclusters {
+        w[0].put_golomb(c - pc - 1, 0);
+    }
+    for it in &items {
+        match *it {
+            Item::Sym {
+                ctx,
+                rank,
+                raw,
+                stream,
+            } => {
+                w[stream].put_golomb(rank, ks[ctx]);
+                if let Some(v) = raw {
+                    w[stream].put(u64::from(v), raw_bits(ctx, h));
+                }
+            }
+            Item::Raw { v, bits, stream } => w[stream].put(v, bits),
+        }
+    }
+    let [w0, w1, w2] = w.map(BitWriter::finish);
+    let mut out = Vec::with_capacity(8 + w0.len() + w1.len() + w2.len());
+    out.extend_from_slice(&(w0.len() as u32).to_le_bytes());
+    out.extend_from_slice(&(w1.len() as u32).to_le_bytes());
+    let tree_bits = (8 + w0.len() as u64) * 8;
+    let bv_bits = (w1.len() + w2.len()) as u64 * 8;
+    out.extend_from_slice(&w0);
+    out.extend_from_slice(&w1);
+    out.extend_from_slice(&w2);
+    Ok((out, tree_bits, bv_bits))
+}

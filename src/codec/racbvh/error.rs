@@ -1,0 +1,70 @@
+//! [`RacError`].
+
+use super::file;
+
+/// What can go wrong encoding, reading or decoding a RACBVH.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum RacError {
+    /// An option is out of range.
+    #[error("{what} = {value} is not allowed: use {expected}")]
+    Option {
+        /// The option.
+        what: &'static str,
+        /// Its value.
+        value: u64,
+        /// What is allowed.
+        expected: &'static str,
+    },
+    /// The mesh cannot be stored.
+    #[error("the mesh cannot be compressed: {0}")]
+    InvalidMesh(String),
+    /// The tree does not satisfy what the codec needs.
+    #[error("the tree cannot be compressed: {0}")]
+    InvalidTree(String),
+    /// The bytes do not start with the RACBVH magic.
+    #[error("not a cbvh RACBVH file (bad magic)")]
+    BadMagic,
+    /// A version this build cannot read.
+    #[error("RACBVH version {0} is not supported (this build reads version {ver})", ver = file::VERSION)]
+    Version(u32),
+    /// A section is shorter than it must be.
+    #[error("the {section} section is truncated: need {need} bytes, have {have}")]
+    Truncated {
+        /// Section name.
+        section: &'static str,
+        /// Bytes needed.
+        need: u64,
+        /// Bytes present.
+        have: u64,
+    },
+    /// A header field is inconsistent.
+    #[error("bad header field {field}: {why}")]
+    Header {
+        /// The field.
+        field: &'static str,
+        /// What is wrong.
+        why: String,
+    },
+    /// Corrupted data (outside a cluster).
+    #[error("corrupted RACBVH data: {0}")]
+    Corrupt(&'static str),
+    /// A cluster's data is corrupted.
+    #[error("cluster {cluster} is corrupted: {what}")]
+    CorruptCluster {
+        /// The cluster.
+        cluster: u32,
+        /// What was found.
+        what: &'static str,
+    },
+    /// Reading or writing a file failed.
+    #[error("I/O error: {0}")]
+    Io(String),
+    /// A node index out of range.
+    #[error("node {node} does not exist (the tree has {count} nodes)")]
+    NoSuchNode {
+        /// The index asked for.
+        node: u32,
+        /// Number of nodes.
+        count: u32,
+    },
+}

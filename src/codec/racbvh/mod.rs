@@ -1,0 +1,153 @@
+//! RACBVH: random-accessible compressed BVHs (Kim et al., TVCG 2010, §4–5).
+//!
+//! The tree's nodes, in layout order, are cut into clusters of `2^k`
+//! consecutive nodes ([`RacOptions::cluster_nodes`], 4096 by default), each
+//! compressed on its own with every coder context reset, so any cluster can
+//! be decompressed in any order. A meta table holds each cluster's start
+//! offset and node count. At runtime a cluster decompresses into 32-byte
+//! in-core nodes ([`CoreNode`]) held in a sharded LRU cache under a byte
+//! budget; [`RacBvh`] implements [`NodeCursor`](crate::cursor::NodeCursor)
+//! (node handle [`RacNode`]: the global node index with the node's child or
+//! triangle words) and the paper's atomic access API (§5.1): `root_index`,
+//! [`bv`](RacBvh::bv), [`is_leaf`](RacBvh::is_leaf), [`left`](RacBvh::left),
+//! [`right`](RacBvh::right), [`triangle_index`](RacBvh::triangle_index).
+//!
+//! Two modes: pre-loaded ([`RacBvh::encode`], [`RacBvh::from_bytes`]: the
+//! compressed bytes in memory) and out-of-core ([`RacBvh::open`]: the
+//! container file memory-mapped, clusters read on demand).
+//!
+//! ```no_run
+//! use cbvh::codec::racbvh::{RacBvh, RacOptions};
+//! # fn demo(bvh: &cbvh::CanonicalBvh, mesh: &cbvh::Mesh) -> Result<(), cbvh::codec::racbvh::RacError> {
+//! let rac = RacBvh::encode(bvh, mesh, &RacOptions::default())?;
+//! let stats = rac.stats(); // bits per node, ratio vs plain, seconds
+//! rac.save(std::path::Path::new("model.rac"))?;
+//! let disk = RacBvh::open(std::path::Path::new("model.rac"), 64 << 20)?;
+//! disk.verify()?;
+//! # Ok(()) }
+//! ```
+//!
+//! # What a cluster codes, per node in layout order (§4.3, Algorithm 1)
+//!
+//! - one *structure* symbol: `(front position + 1) << 2 | side << 1 | leaf`,
+//!   where the front is the list of this cluster's inner nodes not yet
+//!   connected to both children, the position counts from the most recently
+//!   added node (0 = newest) or from the oldest, whichever codes the cluster
+//!   shorter (one header bit: depth-first orders favour the first,
+//!   breadth-first ones the second), and position+1 = 0 marks a *local root* (its
+//!   parent is in an earlier cluster). The side bit says left or right child
+//!   (for a parent's second child it is implied, and sent as 0);
+//!   the leaf bit says whether the node is a leaf (the paper's Algorithm 1
+//!   leaves this implicit; it has to be coded somewhere);
+//! - for a local root: the parent's cluster as an index into this cluster's
+//!   list of parent clusters (stored in the cluster header as deltas), then
+//!   the parent's local index in `k` raw bits (the pair index of §4.1);
+//! - the box: six residuals of the node's quantized box against the
+//!   prediction from its parent's quantized box (§4.2): the parent split at
+//!   the middle of its longest axis. Outer faces are coded as inward
+//!   distances, the split face as a zig-zagged offset from the middle. Each
+//!   residual is sent as its bit length (a dictionary symbol) and its bits
+//!   below the leading one (raw): coding the values themselves through the
+//!   dictionary escapes too often once boxes span tens of quanta;
+//! - for a leaf: its triangle count (only if leaves may hold several) and its
+//!   triangle ids, each as `zigzag(delta) + 1` from the previous id (for a
+//!   leaf whose sibling is a one-triangle leaf earlier in the cluster, from
+//!   the sibling's id: the better reference when the layout is not
+//!   depth-first) when `|delta| < threshold` (10), else `0` (§4.3.2). The paper then stores
+//!   the id raw; here the far delta is sent as its bit length (a dictionary
+//!   symbol of its own context) and its remaining bits raw, which is never
+//!   longer than the raw id by more than the length symbol and is much
+//!   shorter when the mesh's order is only loosely coherent with the tree's.
+//!
+//! A cluster's bits are in three streams, decoded side by side so that the
+//! processor overlaps their dependency chains: the tree (structure, pair
+//! indices, triangle ids, local-leaf children), the boxes' min residuals
+//! with the zero masks, and the boxes' max residuals. The cluster starts
+//! with the first two streams' byte lengths (2 × u32).
+//!
+//! After the nodes, the cluster's *local leaves* (the nodes still in the
+//! front: inner nodes with a child in a later cluster) get their missing
+//! children's global indices, delta coded from the previous one. The paper
+//! codes them when the node is met; coding them at the end lets the decoder
+//! know which nodes they are (those left in the front) without a flag.
+//!
+//! # Choices where the paper leaves them open
+//!
+//! - **Quantization**: `2^bits − 1` steps over the root box per axis (the
+//!   step grown by ulps until the last grid point reaches the root's max);
+//!   `min` is the largest grid point ≤ the true min, `max` the smallest ≥ the
+//!   true max, both computed and checked in `f32` exactly as the decoder
+//!   evaluates them, so a decoded box always contains its subtree. The boxes
+//!   are recomputed from the *stored* mesh first, so they also contain the
+//!   quantized triangles the cursor reports.
+//! - **Dictionary coder** ([`coder`]): the paper's variant for residual and
+//!   delta contexts (empty dictionary, symbols added when met, no
+//!   combination entries) is used for every context, including the
+//!   structure context the paper initialises with all symbols and codes with
+//!   full LZW: with one symbol per node and symbols of many contexts
+//!   interleaved in a stream, LZW's strings would need per-context streams
+//!   and look-ahead for little gain. Ranks are Exp-Golomb coded with
+//!   a per-context parameter chosen by the encoder; entries move one place
+//!   to the front when used (transpose), so ranks follow frequencies.
+//! - **Box symbols and contexts**: per node, first a 6-bit mask of which
+//!   residuals are zero, XORed with the mask predicted from the sibling's
+//!   residuals when the sibling is earlier in the same cluster (a face one
+//!   sibling leaves is a face the other touches); then each non-zero
+//!   residual. Contexts are by (leaf, side, sibling known) for masks and
+//!   (leaf, side, min-or-max half, sibling known) for values: 24 in all.
+//!   They cannot depend on the parent's split axis, which an incomplete
+//!   node's decoder does not know.
+//! - **Completion** (§5.2): an incomplete node keeps its residuals in its box
+//!   words with [`INCOMPLETE`] set in word 0, and the cluster keeps, per
+//!   node, the ordinal of its local root; completing a node loads the local
+//!   root's parent (recursively completing it), then completes the local
+//!   root's whole subtree inside the cluster, under the cluster's lock.
+//! - **Cache**: `lru::LruCache` shards behind mutexes, each with a share of
+//!   the byte budget (a shard per 16 clusters of budget, at most 16); each
+//!   thread also pins the last four clusters it used and
+//!   reads them without locks (the paper updates the LRU list only when the
+//!   cluster changes). Eviction takes the least recently used cluster that
+//!   nobody holds, so a pinned cluster is never evicted, and a thread drops
+//!   its pins before it decodes a cluster. Memory bound: the cache holds at
+//!   most the budget, and one thread alone adds at most the one cluster it
+//!   is decoding. With many threads, a cluster that finds its shard full of
+//!   held clusters is used uncached by the thread that decoded it, so each
+//!   thread adds at most its pins. Pins outlive the `RacBvh` until the
+//!   thread decodes another cluster.
+//!   A cluster in core takes 34 bytes per node (the 32-byte node and its
+//!   local root's ordinal) plus its multi-triangle leaves' ids.
+//! - **Mesh** ([`mesh`]): vertices quantized over the mesh's box (16 bits
+//!   by default) or lossless `f32`; coordinates and vertex indices in
+//!   frame-of-reference blocks of 128 values, so any triangle is O(1) away
+//!   without a decoded-mesh cache. Not RACM (see [`mesh`] for why).
+//!
+//! Errors: every cluster carries an xxh3 checksum in the meta table, checked
+//! whenever the cluster is decoded; the header, the meta table and the mesh
+//! sections carry one too. [`RacBvh::from_bytes`] checks the container in
+//! O(header + meta table);
+//! [`RacBvh::verify`] decodes and completes every cluster and checks the
+//! mesh, returning the first error. The cursor path and the `bv`/`left`/…
+//! accessors panic with a message naming the cluster if they meet corrupted
+//! data; the `try_` accessors return the error instead.
+
+mod cache;
+pub mod coder;
+mod context;
+mod decode;
+mod encode;
+mod error;
+pub mod file;
+pub mod mesh;
+pub mod node;
+mod tree;
+
+pub use cache::CacheStats;
+pub use decode::RacNode;
+pub use encode::{RacOptions, RacStats};
+pub use error::RacError;
+pub use file::Store;
+pub use node::{CoreNode, INCOMPLETE};
+pub use tree::RacBvh;
+
+use context::*;
+use tree::{ClusterMeta, Header};

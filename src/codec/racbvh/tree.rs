@@ -1,0 +1,148 @@
+//! [`RacBvh`]: the compressed tree with its mesh and its cache, and the
+//! figures about it.
+
+use super::node::{Grid, QBox};
+use super::{CacheStats, RacStats, cache, decode, file, mesh};
+
+/// Everything global a cluster's decoder needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Header {
+    pub(super) cluster_bits: u32,
+    pub(super) bits: u32,
+    pub(super) node_count: u32,
+    pub(super) triangle_count: u32,
+    pub(super) max_leaf: u32,
+    pub(super) tri_threshold: u32,
+    pub(super) grid: Grid,
+    pub(super) empty: bool,
+    pub(super) tree_bits: u64,
+    pub(super) bv_bits: u64,
+    pub(super) compression_seconds: f64,
+}
+
+impl Header {
+    /// The root's quantized box: the whole grid (0 on flat axes).
+    pub(super) fn root_qbox(grid: &Grid) -> QBox {
+        let mut q = QBox::default();
+        for a in 0..3 {
+            q.max[a] = if grid.step[a] > 0.0 { grid.max_q } else { 0 };
+        }
+        q
+    }
+}
+
+/// One meta-table entry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct ClusterMeta {
+    pub(super) offset: u64,
+    pub(super) nodes: u32,
+    /// xxh3-64 of the cluster's bytes, checked on every decode.
+    pub(super) hash: u64,
+}
+
+/// A compressed BVH with its mesh and its decompressed-cluster cache.
+pub struct RacBvh {
+    pub(super) header: Header,
+    /// The clusters' bytes, concatenated.
+    pub(super) data: file::Store,
+    pub(super) meta: Vec<ClusterMeta>,
+    pub(super) mesh: mesh::PackedMesh,
+    /// Checksum of the mesh sections, as stored (checked by `verify`).
+    pub(super) mesh_hash: u64,
+    pub(super) cache: cache::ClusterCache,
+    /// Identifies this tree in the threads' pins.
+    pub(super) id: u64,
+}
+
+impl std::fmt::Debug for RacBvh {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RacBvh")
+            .field("nodes", &self.header.node_count)
+            .field("clusters", &self.meta.len())
+            .field("triangles", &self.header.triangle_count)
+            .finish_non_exhaustive()
+    }
+}
+
+impl RacBvh {
+    pub(super) fn assemble(
+        header: Header,
+        data: file::Store,
+        meta: Vec<ClusterMeta>,
+        mesh: mesh::PackedMesh,
+        mesh_hash: u64,
+        budget: usize,
+    ) -> Self {
+        let max_cluster = (1usize << header.cluster_bits) * decode::CLUSTER_BYTES_PER_NODE;
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+        Self {
+            header,
+            data,
+            meta,
+            mesh_hash,
+            mesh,
+            cache: cache::ClusterCache::new(budget, max_cluster),
+            id: NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+        }
+    }
+
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.header.node_count as usize
+    }
+
+    /// Number of clusters.
+    pub fn cluster_count(&self) -> usize {
+        self.meta.len()
+    }
+
+    /// Nodes per cluster.
+    pub fn cluster_nodes(&self) -> u32 {
+        1 << self.header.cluster_bits
+    }
+
+    /// The mesh as stored (with quantized vertices decoded): the triangles
+    /// the cursor reports.
+    pub fn decoded_mesh(&self) -> crate::mesh::Mesh {
+        self.mesh.decoded()
+    }
+
+    /// Compression figures.
+    pub fn stats(&self) -> RacStats {
+        let n = f64::from(self.header.node_count.max(1));
+        let tree = (self.data.len() + self.meta.len() * file::META_ENTRY) as f64;
+        RacStats {
+            nodes: u64::from(self.header.node_count),
+            cluster_count: self.meta.len() as u64,
+            bits_per_node_tree: self.header.tree_bits as f64 / n,
+            bits_per_node_bv: self.header.bv_bits as f64 / n,
+            compression_ratio_vs_plain: 32.0 * n / tree.max(1.0),
+            mesh_bytes_per_triangle: self.mesh.bytes() as f64
+                / f64::from(self.header.triangle_count.max(1)),
+            compression_seconds: self.header.compression_seconds,
+        }
+    }
+
+    /// The cache's counters.
+    pub fn cache_stats(&self) -> CacheStats {
+        self.cache.stats()
+    }
+
+    /// Empties the cache (pinned clusters stay alive until their threads
+    /// move on).
+    pub fn clear_cache(&self) {
+        self.cache.clear();
+    }
+}
+
+impl crate::codec::ByteSize for RacBvh {
+    fn bytes_by_part(&self) -> Vec<(&'static str, usize)> {
+        let bv = (self.header.bv_bits / 8) as usize;
+        vec![
+            ("bvh_tree", self.data.len() - bv.min(self.data.len())),
+            ("bvh_bv", bv.min(self.data.len())),
+            ("meta", self.meta.len() * file::META_ENTRY),
+            ("mesh", self.mesh.bytes()),
+        ]
+    }
+}

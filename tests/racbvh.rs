@@ -1,0 +1,394 @@
+//! The RACBVH codec, checked against the canonical tree, the plain codec
+//! and brute force (the shared suite in `common`).
+
+mod common;
+
+use cbvh::build::{BuildOptions, CanonicalBvh, Layout, build};
+use cbvh::codec::ByteSize;
+use cbvh::codec::racbvh::{RacBvh, RacError, RacOptions};
+use cbvh::cursor::NodeCursor;
+use cbvh::scene::{Kind, generate};
+use cbvh::{Mesh, TraversalStats, query};
+use common::*;
+
+fn tree(mesh: &Mesh, layout: Layout, leaf: usize) -> CanonicalBvh {
+    let opts = BuildOptions {
+        layout,
+        max_leaf_triangles: leaf,
+        ..Default::default()
+    };
+    build(mesh, &opts, &|_, _| {}).expect("build")
+}
+
+fn opts(cluster_nodes: u32, vertex_bits: Option<u32>) -> RacOptions {
+    RacOptions {
+        cluster_nodes,
+        vertex_bits,
+        ..Default::default()
+    }
+}
+
+fn statue(tris: usize) -> Mesh {
+    generate(Kind::Statue, tris, 1, &mut |_, _| {}).expect("generate")
+}
+
+/// Every node of `rac` agrees with `bvh`: structure, triangle ids, and a
+/// box that contains the canonical box and is within one quantum of it.
+fn check_against_canonical(rac: &RacBvh, bvh: &CanonicalBvh, order: &[u32]) {
+    let root = bvh.root_aabb();
+    let quantum = root.extent() / ((1u32 << RacOptions::default().bits) - 1) as f32;
+    let slack = quantum * 1.001
+        + glam::Vec3A::splat(root.min.abs().max(root.max.abs()).max_element() * 4.0 * f32::EPSILON);
+    for &i in order {
+        let n = &bvh.nodes[i as usize];
+        assert_eq!(rac.is_leaf(i), n.is_leaf(), "node {i}");
+        if n.is_leaf() {
+            assert_eq!(
+                rac.leaf_triangles(i),
+                bvh.leaf_triangles[n.leaf_range()].to_vec(),
+                "node {i}"
+            );
+        } else {
+            assert_eq!([rac.left(i), rac.right(i)], n.children(), "node {i}");
+        }
+        let b = rac.bv(i);
+        let c = n.aabb();
+        assert!(b.contains(&c), "node {i}: {b:?} does not contain {c:?}");
+        assert!(
+            (c.min - b.min).cmple(slack).all() && (b.max - c.max).cmple(slack).all(),
+            "node {i}: {b:?} is more than a quantum from {c:?}"
+        );
+    }
+}
+
+#[test]
+fn round_trip_matches_the_canonical_tree_in_every_layout() {
+    let mesh = statue(2000);
+    for layout in Layout::ALL {
+        let bvh = tree(&mesh, layout, 1);
+        let rac = RacBvh::encode(&bvh, &mesh, &opts(256, None)).unwrap();
+        assert!(rac.cluster_count() > 8, "{} clusters", rac.cluster_count());
+        let order: Vec<u32> = (0..bvh.nodes.len() as u32).collect();
+        check_against_canonical(&rac, &bvh, &order);
+        rac.verify().unwrap();
+        let s = rac.stats();
+        assert!(s.bits_per_node_tree > 0.0 && s.bits_per_node_bv > 0.0);
+        assert!(s.compression_ratio_vs_plain > 2.0, "{s:?}");
+        let parts = rac.bytes_by_part();
+        assert_eq!(
+            parts.iter().map(|p| p.0).collect::<Vec<_>>(),
+            ["bvh_tree", "bvh_bv", "meta", "mesh"]
+        );
+    }
+}
+
+#[test]
+fn any_access_order_gives_the_same_nodes_with_completion_across_clusters() {
+    let mesh = statue(3000);
+    let bvh = tree(&mesh, Layout::CacheEfficient, 1);
+    let crossing = (1..bvh.nodes.len())
+        .filter(|&i| bvh.parents[i] as usize >> 8 != i >> 8)
+        .count();
+    assert!(crossing > 20, "only {crossing} local roots");
+    // Reverse order: every first touch of a cluster meets incomplete nodes
+    // whose parents are in clusters not loaded yet.
+    let mut order: Vec<u32> = (0..bvh.nodes.len() as u32).rev().collect();
+    let rac = RacBvh::encode(&bvh, &mesh, &opts(256, Some(16))).unwrap();
+    let lossless = RacBvh::encode(&bvh, &mesh, &opts(256, None)).unwrap();
+    check_against_canonical(&lossless, &bvh, &order);
+    let want: Vec<_> = order.iter().map(|&i| (rac.bv(i), rac.is_leaf(i))).collect();
+    // A pseudo-random order on a cold tree with a cache of two clusters.
+    let mut rng = Rng(9);
+    for k in (1..order.len()).rev() {
+        order.swap(k, rng.below(k + 1));
+    }
+    let bytes = rac.to_bytes();
+    let cold = RacBvh::from_bytes(&bytes, 2 * 256 * 40).unwrap();
+    let rev: Vec<u32> = (0..bvh.nodes.len() as u32).rev().collect();
+    for &i in &order {
+        let pos = rev.iter().position(|&x| x == i).unwrap();
+        assert_eq!((cold.bv(i), cold.is_leaf(i)), want[pos], "node {i}");
+    }
+    // The deepest cluster first, on a cold tree: completion loads parents.
+    let cold = RacBvh::from_bytes(&bytes, 64 << 20).unwrap();
+    let last = bvh.nodes.len() as u32 - 1;
+    assert_eq!(cold.bv(last), rac.bv(last));
+    assert!(cold.cache_stats().decodes > 1, "{:?}", cold.cache_stats());
+}
+
+#[test]
+fn shared_suite_on_soups_and_statues() {
+    for (seed, n) in [(1u64, 1usize), (2, 7), (3, 150), (4, 600)] {
+        let mesh = soup(seed, n, 10.0);
+        for layout in Layout::ALL {
+            for leaf in [1, 3] {
+                let bvh = tree(&mesh, layout, leaf);
+                for vb in [None, Some(12)] {
+                    let rac = RacBvh::encode(&bvh, &mesh, &opts(256, vb)).unwrap();
+                    let dm = rac.decoded_mesh();
+                    if vb.is_none() {
+                        assert_eq!(dm, mesh);
+                    }
+                    check_structure(&rac, &dm);
+                    check_queries(&rac, &dm, seed);
+                }
+            }
+        }
+    }
+    let mesh = statue(2000);
+    let bvh = tree(&mesh, Layout::VanEmdeBoas, 1);
+    let rac = RacBvh::encode(&bvh, &mesh, &opts(256, Some(16))).unwrap();
+    let dm = rac.decoded_mesh();
+    check_structure(&rac, &dm);
+    check_queries(&rac, &dm, 3);
+}
+
+#[test]
+fn bvtt_matches_brute_force() {
+    let ma = soup(5, 60, 2.0);
+    let mb = soup(6, 50, 2.0);
+    let a = RacBvh::encode(&tree(&ma, Layout::DepthFirst, 1), &ma, &opts(256, Some(16))).unwrap();
+    let b = RacBvh::encode(&tree(&mb, Layout::CacheEfficient, 2), &mb, &opts(256, None)).unwrap();
+    check_bvtt(&a, &a.decoded_mesh(), &b, &b.decoded_mesh(), 5);
+}
+
+#[test]
+fn edge_cases() {
+    let one = Mesh::new(
+        vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        vec![[0, 1, 2]],
+    );
+    let same = Mesh::new(one.vertices.clone(), vec![[0, 1, 2]; 40]);
+    let flat = Mesh::new(vec![[1.0; 3]; 3], vec![[0, 1, 2]; 9]);
+    let huge = Mesh::new(
+        vec![
+            [1e9, 1e9, 1e9],
+            [-1e9, 1e9, 0.0],
+            [0.0, -1e9, 1e9],
+            [3e9, 0.0, 0.0],
+        ],
+        vec![[0, 1, 2], [1, 2, 3], [0, 2, 3]],
+    );
+    for mesh in [one, same, flat, huge] {
+        for layout in Layout::ALL {
+            for leaf in [1, 4] {
+                for vb in [None, Some(8)] {
+                    let rac =
+                        RacBvh::encode(&tree(&mesh, layout, leaf), &mesh, &opts(256, vb)).unwrap();
+                    let dm = rac.decoded_mesh();
+                    check_structure(&rac, &dm);
+                    check_queries(&rac, &dm, 5);
+                    check_bvtt(&rac, &dm, &rac, &dm, 9);
+                }
+            }
+        }
+    }
+    let empty = Mesh::default();
+    let rac = RacBvh::encode(
+        &tree(&empty, Layout::VanEmdeBoas, 1),
+        &empty,
+        &RacOptions::default(),
+    )
+    .unwrap();
+    rac.verify().unwrap();
+    assert!(NodeCursor::root(&rac).1.is_empty());
+    let ray = cbvh::geom::Ray::new(glam::Vec3A::ZERO, glam::Vec3A::X);
+    let mut stats = TraversalStats::default();
+    assert!(query::closest_hit(&rac, &ray, f32::INFINITY, &mut stats).is_none());
+    let back = RacBvh::from_bytes(&rac.to_bytes(), 1 << 20).unwrap();
+    back.verify().unwrap();
+    assert_eq!(back.triangle_index(0), None);
+}
+
+#[test]
+fn bad_options_are_errors() {
+    let mesh = soup(1, 10, 1.0);
+    let bvh = tree(&mesh, Layout::DepthFirst, 1);
+    for o in [
+        RacOptions {
+            cluster_nodes: 1000,
+            ..Default::default()
+        },
+        RacOptions {
+            cluster_nodes: 128,
+            ..Default::default()
+        },
+        RacOptions {
+            cluster_nodes: 32768,
+            ..Default::default()
+        },
+        RacOptions {
+            bits: 7,
+            ..Default::default()
+        },
+        RacOptions {
+            bits: 25,
+            ..Default::default()
+        },
+        RacOptions {
+            vertex_bits: Some(30),
+            ..Default::default()
+        },
+        RacOptions {
+            tri_delta_threshold: 0,
+            ..Default::default()
+        },
+    ] {
+        let e = RacBvh::encode(&bvh, &mesh, &o).unwrap_err();
+        assert!(matches!(e, RacError::Option { .. }), "{e}");
+    }
+    for c in [256, 512, 16384] {
+        RacBvh::encode(
+            &bvh,
+            &mesh,
+            &RacOptions {
+                cluster_nodes: c,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+    }
+}
+
+#[test]
+fn the_cache_stays_within_its_budget() {
+    let mesh = statue(3000);
+    let bvh = tree(&mesh, Layout::CacheEfficient, 1);
+    let full = RacBvh::encode(&bvh, &mesh, &opts(256, Some(16))).unwrap();
+    let cluster_bound = 256 * (32 + 2 + 12) + 128;
+    let budget = 3 * cluster_bound;
+    let rac = RacBvh::from_bytes(&full.to_bytes(), budget).unwrap();
+    let dm = rac.decoded_mesh();
+    let mut stats = TraversalStats::default();
+    for ray in test_rays(&dm, 4, 100) {
+        let got = query::closest_hit(&rac, &ray, f32::INFINITY, &mut stats);
+        assert_eq!(
+            got,
+            query::closest_hit(&full, &ray, f32::INFINITY, &mut stats)
+        );
+        let s = rac.cache_stats();
+        assert!(s.cached_bytes <= budget, "{s:?}");
+        assert!(s.live_bytes <= budget + cluster_bound, "{s:?}");
+    }
+    let s = rac.cache_stats();
+    assert!(s.peak_live_bytes <= budget + cluster_bound, "{s:?}");
+    assert!(
+        s.decodes > rac.cluster_count() as u64,
+        "the small cache must have evicted: {s:?}"
+    );
+    rac.clear_cache();
+    assert_eq!(rac.cache_stats().cached_bytes, 0);
+}
+
+#[test]
+fn eight_threads_with_a_tiny_cache_agree_with_one() {
+    let mesh = statue(3000);
+    let bvh = tree(&mesh, Layout::CacheEfficient, 1);
+    let one = RacBvh::encode(&bvh, &mesh, &opts(256, Some(16))).unwrap();
+    let dm = one.decoded_mesh();
+    let rays = test_rays(&dm, 11, 400);
+    let mut stats = TraversalStats::default();
+    let want: Vec<_> = rays
+        .iter()
+        .map(|r| query::closest_hit(&one, r, f32::INFINITY, &mut stats))
+        .collect();
+    let shared = RacBvh::from_bytes(&one.to_bytes(), 2 * 256 * 46).unwrap();
+    std::thread::scope(|s| {
+        for t in 0..8 {
+            let (shared, rays, want) = (&shared, &rays, &want);
+            s.spawn(move || {
+                let mut stats = TraversalStats::default();
+                for k in (0..rays.len()).map(|k| (k * 7 + t * 13) % rays.len()) {
+                    assert_eq!(
+                        query::closest_hit(shared, &rays[k], f32::INFINITY, &mut stats),
+                        want[k],
+                        "thread {t} ray {k}"
+                    );
+                }
+            });
+        }
+    });
+    let s = shared.cache_stats();
+    assert!(s.cached_bytes <= s.budget_bytes, "{s:?}");
+}
+
+#[test]
+fn container_round_trip_and_corruption() {
+    let mesh = statue(2000);
+    let bvh = tree(&mesh, Layout::CacheEfficient, 2);
+    let rac = RacBvh::encode(&bvh, &mesh, &opts(256, Some(16))).unwrap();
+    let bytes = rac.to_bytes();
+    let back = RacBvh::from_bytes(&bytes, 1 << 20).unwrap();
+    back.verify().unwrap();
+    assert_eq!(back.to_bytes(), bytes);
+    assert_eq!(back.bytes_by_part(), rac.bytes_by_part());
+    for i in (0..bvh.nodes.len() as u32).step_by(7) {
+        assert_eq!(back.bv(i), rac.bv(i));
+    }
+    // Truncation anywhere: an error from from_bytes, never a panic.
+    for len in (0..bytes.len())
+        .step_by(bytes.len() / 300 + 1)
+        .chain([bytes.len() - 1])
+    {
+        assert!(
+            RacBvh::from_bytes(&bytes[..len], 1 << 20).is_err(),
+            "truncated to {len}"
+        );
+    }
+    assert_eq!(
+        RacBvh::from_bytes(b"nonsense bytes", 1).unwrap_err(),
+        RacError::Truncated {
+            section: "header",
+            need: 232,
+            have: 14
+        }
+    );
+    let mut bad = bytes.clone();
+    bad[0] ^= 1;
+    assert_eq!(RacBvh::from_bytes(&bad, 1).unwrap_err(), RacError::BadMagic);
+    // Bit flips anywhere: from_bytes or verify reports an error, and the
+    // try_ accessors never panic.
+    let mut rng = Rng(77);
+    for _ in 0..300 {
+        let mut bad = bytes.clone();
+        let at = rng.below(bad.len());
+        bad[at] ^= 1 << rng.below(8);
+        if let Ok(t) = RacBvh::from_bytes(&bad, 1 << 16) {
+            assert!(t.verify().is_err(), "flip at byte {at} went unnoticed");
+            for i in (0..t.node_count() as u32).step_by(13) {
+                let _ = t.try_bv(i);
+            }
+        }
+    }
+}
+
+#[test]
+fn out_of_core_file_gives_the_same_answers() {
+    let mesh = statue(2000);
+    let bvh = tree(&mesh, Layout::CacheEfficient, 1);
+    let rac = RacBvh::encode(&bvh, &mesh, &opts(256, Some(16))).unwrap();
+    let path = std::env::temp_dir().join(format!("cbvh-racbvh-test-{}.rac", std::process::id()));
+    rac.save(&path).unwrap();
+    let disk = RacBvh::open(&path, 4 * 256 * 46).unwrap();
+    disk.verify().unwrap();
+    let dm = rac.decoded_mesh();
+    assert_eq!(disk.decoded_mesh(), dm);
+    let mut stats = TraversalStats::default();
+    for ray in test_rays(&dm, 21, 100) {
+        assert_eq!(
+            query::closest_hit(&disk, &ray, f32::INFINITY, &mut stats),
+            query::closest_hit(&rac, &ray, f32::INFINITY, &mut stats)
+        );
+    }
+    drop(disk);
+    std::fs::remove_file(&path).unwrap();
+    let missing = RacBvh::open(&path, 1 << 20).unwrap_err();
+    assert!(matches!(missing, RacError::Io(_)), "{missing}");
+}
+
+#[test]
+fn trees_and_handles_cross_threads() {
+    fn send_sync<T: Send + Sync>() {}
+    send_sync::<RacBvh>();
+    send_sync::<<RacBvh as NodeCursor>::Node>();
+}
