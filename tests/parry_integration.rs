@@ -282,6 +282,12 @@ fn drop_test_steps_without_the_fallback_and_agrees_with_parry() {
     };
     let parry = droptest::run(&scene, ShapeKind::Parry, &mut |_, _| {}).unwrap();
     let plain = droptest::run(&scene, ShapeKind::Plain, &mut |_, _| {}).unwrap();
+    // RACBVH with a cache of a tenth of its decompressed size lands the same
+    // way, on its own traversals.
+    let rac = droptest::run(&scene, ShapeKind::Racbvh10, &mut |_, _| {}).unwrap();
+    assert!(!rac.fallback_bvh_built);
+    assert!(rac.bytes_per_triangle < plain.bytes_per_triangle / 3.0);
+    assert!((rac.final_translation[1] - plain.final_translation[1]).abs() < 0.1 * 2.0);
     assert!(
         !plain.fallback_bvh_built,
         "the native path must not build parry's Bvh"

@@ -5,6 +5,7 @@ use std::time::Instant;
 use cbvh::build::{BuildOptions, Layout, build};
 use cbvh::codec::ByteSize;
 use cbvh::codec::plain::PlainBvh;
+use cbvh::codec::racbvh::{RacBvh, RacOptions};
 
 use super::{CliResult, MeshSource, progress_bar};
 
@@ -15,6 +16,8 @@ pub enum CodecName {
     Plain,
     /// parry3d's own TriMesh, for comparison.
     Parry,
+    /// RACBVH: clusters of consecutive nodes compressed independently.
+    Racbvh,
 }
 
 impl CodecName {
@@ -22,6 +25,7 @@ impl CodecName {
         match self {
             CodecName::Plain => "plain",
             CodecName::Parry => "parry",
+            CodecName::Racbvh => "racbvh",
         }
     }
 }
@@ -40,6 +44,19 @@ pub struct BuildArgs {
     /// Most triangles per leaf.
     #[arg(long, default_value_t = 1)]
     pub leaf_size: usize,
+    /// RACBVH: nodes per cluster (a power of two, 256 to 16384).
+    #[arg(long, default_value_t = 4096)]
+    pub cluster_nodes: u32,
+    /// RACBVH: bits per quantized box coordinate.
+    #[arg(long, default_value_t = 16)]
+    pub bits: u32,
+    /// RACBVH: bits per quantized vertex coordinate; 0 keeps vertices as f32.
+    #[arg(long, default_value_t = 16)]
+    pub vertex_bits: u32,
+    /// RACBVH: write the compressed container to this file (reopen it with
+    /// `cbvh::codec::racbvh::RacBvh::open`).
+    #[arg(short, long)]
+    pub output: Option<std::path::PathBuf>,
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
@@ -81,6 +98,48 @@ pub fn run(a: BuildArgs) -> CliResult {
                     plain.bytes_by_part(),
                     Some(a.layout),
                     serde_json::json!({ "nodes": nodes, "height": height }),
+                )
+            }
+            CodecName::Racbvh => {
+                let opts = BuildOptions {
+                    layout: a.layout,
+                    max_leaf_triangles: a.leaf_size,
+                    ..Default::default()
+                };
+                let pb = progress_bar("building", tris as u64);
+                let bvh = build(&mesh, &opts, &|done, total| {
+                    pb.set_length(total);
+                    pb.set_position(done);
+                })?;
+                pb.finish_and_clear();
+                let rac_opts = RacOptions {
+                    cluster_nodes: a.cluster_nodes,
+                    bits: a.bits,
+                    vertex_bits: (a.vertex_bits != 0).then_some(a.vertex_bits),
+                    ..Default::default()
+                };
+                let rac = RacBvh::encode(&bvh, &mesh, &rac_opts)?;
+                if let Some(path) = &a.output {
+                    rac.save(path)?;
+                    // Read it back so that a bad file is caught here.
+                    let back = RacBvh::open(path, rac_opts.cache_budget_bytes)?;
+                    back.verify()?;
+                }
+                let st = rac.stats();
+                (
+                    rac.bytes_by_part(),
+                    Some(a.layout),
+                    serde_json::json!({
+                        "nodes": st.nodes,
+                        "clusters": st.cluster_count,
+                        "cluster_nodes": a.cluster_nodes,
+                        "bits": a.bits,
+                        "bits_per_node_tree": st.bits_per_node_tree,
+                        "bits_per_node_bv": st.bits_per_node_bv,
+                        "compression_ratio_vs_plain": st.compression_ratio_vs_plain,
+                        "mesh_bytes_per_triangle": st.mesh_bytes_per_triangle,
+                        "compression_seconds": st.compression_seconds,
+                    }),
                 )
             }
             CodecName::Parry => {

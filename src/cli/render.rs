@@ -22,6 +22,10 @@ pub enum RenderCodec {
     Plain,
     /// parry3d's own TriMesh and its ray casting, for comparison.
     Parry,
+    /// RACBVH: compressed clusters decoded on demand into an LRU cache
+    /// (16-bit boxes and vertices, 4096-node clusters, a cache that holds
+    /// the whole tree).
+    Racbvh,
 }
 
 impl RenderCodec {
@@ -29,6 +33,7 @@ impl RenderCodec {
         match self {
             RenderCodec::Plain => "plain",
             RenderCodec::Parry => "parry",
+            RenderCodec::Racbvh => "racbvh",
         }
     }
 }
@@ -103,6 +108,14 @@ fn make_target(
             cbvh::parry::parry_trimesh(mesh)
                 .map_err(|e| format!("parry could not build a TriMesh: {e:?}"))?,
         ),
+        RenderCodec::Racbvh => {
+            let opts = cbvh::codec::racbvh::RacOptions {
+                cache_budget_bytes: usize::MAX,
+                ..Default::default()
+            };
+            let rac = cbvh::codec::racbvh::RacBvh::encode(&build_tree(mesh, layout)?, mesh, &opts)?;
+            Box::new(CursorTarget::new(rac, "racbvh"))
+        }
     })
 }
 
@@ -262,7 +275,7 @@ fn report(
             "mesh": name,
             "triangles": tris,
             "codec": a.codec.name(),
-            "layout": (a.codec == RenderCodec::Plain).then(|| a.layout.name()),
+            "layout": (a.codec != RenderCodec::Parry).then(|| a.layout.name()),
             "width": a.width,
             "height": a.height,
             "lights": a.lights,

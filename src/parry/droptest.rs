@@ -14,10 +14,11 @@ use rapier3d::prelude::{
 };
 
 use super::Dispatcher;
-use super::shape::CbvhShape;
+use super::shape::{CbvhShape, Codec};
 use super::timed::Timed;
 use super::trimesh::{parry_trimesh, trimesh_bytes_by_part};
 use crate::build::BuildOptions;
+use crate::codec::racbvh::{RacBvh, RacOptions};
 use crate::mesh::Mesh;
 
 /// Which collision shape a run uses for both meshes.
@@ -27,17 +28,28 @@ pub enum ShapeKind {
     Parry,
     /// cbvh's plain codec, with cbvh's dispatcher.
     Plain,
+    /// RACBVH with a cluster cache that holds the whole decompressed tree.
+    Racbvh,
+    /// RACBVH with a cache of 10 % of the decompressed tree.
+    Racbvh10,
 }
 
 impl ShapeKind {
     /// Every kind, baseline first.
-    pub const ALL: [ShapeKind; 2] = [ShapeKind::Parry, ShapeKind::Plain];
+    pub const ALL: [ShapeKind; 4] = [
+        ShapeKind::Parry,
+        ShapeKind::Plain,
+        ShapeKind::Racbvh,
+        ShapeKind::Racbvh10,
+    ];
 
     /// The name used in `--shapes` and in reports.
     pub fn name(self) -> &'static str {
         match self {
             ShapeKind::Parry => "parry",
             ShapeKind::Plain => "plain",
+            ShapeKind::Racbvh => "racbvh",
+            ShapeKind::Racbvh10 => "racbvh-10pct",
         }
     }
 }
@@ -212,6 +224,33 @@ fn make_shapes(kind: ShapeKind, scene: &DropScene) -> Result<Shapes, String> {
             let a = CbvhShape::plain(&scene.dropped, &opts).map_err(|e| e.to_string())?;
             let b = CbvhShape::plain(&scene.base, &opts).map_err(|e| e.to_string())?;
             Shapes::Cbvh(a, b)
+        }
+        ShapeKind::Racbvh | ShapeKind::Racbvh10 => {
+            let opts = BuildOptions::default();
+            let make = |m: &Mesh| -> Result<CbvhShape, String> {
+                let fits = RacOptions {
+                    cache_budget_bytes: usize::MAX,
+                    ..Default::default()
+                };
+                let shape = CbvhShape::racbvh(m, &opts, &fits)?;
+                if kind == ShapeKind::Racbvh {
+                    return Ok(shape);
+                }
+                // 10 % of the decompressed size: measure it by touching every
+                // node once with the unbounded cache, then re-open the same
+                // bytes with a tenth of it.
+                let Codec::Racbvh(rac) = shape.codec() else {
+                    unreachable!("racbvh builds a racbvh codec")
+                };
+                for i in 0..rac.node_count() as u32 {
+                    rac.try_bv(i).map_err(|e| e.to_string())?;
+                }
+                let decoded = rac.cache_stats().cached_bytes;
+                let small =
+                    RacBvh::from_bytes(&rac.to_bytes(), decoded / 10).map_err(|e| e.to_string())?;
+                Ok(CbvhShape::from_codec(Codec::Racbvh(Box::new(small)), m))
+            };
+            Shapes::Cbvh(make(&scene.dropped)?, make(&scene.base)?)
         }
     })
 }

@@ -18,16 +18,24 @@ use parry3d::shape::{
 use crate::build::{BuildError, BuildOptions, build};
 use crate::codec::ByteSize;
 use crate::codec::plain::PlainBvh;
+use crate::codec::racbvh::{RacBvh, RacOptions};
 use crate::cursor::{NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Pose, Ray, TriHit, Triangle};
 use crate::mesh::Mesh;
 use crate::query;
 
 /// The codecs a [`CbvhShape`] can hold.
-#[derive(Debug)]
 pub enum Codec {
     /// Uncompressed 32-byte nodes.
     Plain(PlainBvh),
+    /// RACBVH: compressed clusters decoded on demand into an LRU cache.
+    Racbvh(Box<RacBvh>),
+}
+
+impl std::fmt::Debug for Codec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
 impl Codec {
@@ -35,6 +43,7 @@ impl Codec {
     pub fn name(&self) -> &'static str {
         match self {
             Codec::Plain(_) => "plain",
+            Codec::Racbvh(_) => "racbvh",
         }
     }
 
@@ -42,6 +51,7 @@ impl Codec {
     pub fn bytes_by_part(&self) -> Vec<(&'static str, usize)> {
         match self {
             Codec::Plain(c) => c.bytes_by_part(),
+            Codec::Racbvh(c) => c.bytes_by_part(),
         }
     }
 }
@@ -52,6 +62,10 @@ macro_rules! with_cursor {
     ($codec:expr, |$c:ident| $body:expr) => {
         match $codec {
             $crate::parry::shape::Codec::Plain($c) => $body,
+            $crate::parry::shape::Codec::Racbvh($c) => {
+                let $c: &$crate::codec::racbvh::RacBvh = $c;
+                $body
+            }
         }
     };
 }
@@ -121,6 +135,14 @@ impl CbvhShape {
             Codec::Plain(PlainBvh::new(&bvh, mesh)),
             mesh,
         ))
+    }
+
+    /// Builds the RACBVH codec over `mesh`: the tree with `options`, then
+    /// compressed with `rac`.
+    pub fn racbvh(mesh: &Mesh, options: &BuildOptions, rac: &RacOptions) -> Result<Self, String> {
+        let bvh = build(mesh, options, &|_, _| {}).map_err(|e| e.to_string())?;
+        let codec = RacBvh::encode(&bvh, mesh, rac).map_err(|e| e.to_string())?;
+        Ok(Self::from_codec(Codec::Racbvh(Box::new(codec)), mesh))
     }
 
     /// Wraps an already encoded codec built from `mesh`. The mesh is used
