@@ -165,3 +165,24 @@ fn bad_options_are_errors() {
     let e = build(&bad, &BuildOptions::default(), &|_, _| {}).unwrap_err();
     assert!(e.to_string().contains("vertex index 5"), "{e}");
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(6))]
+
+    /// Small generated meshes (closed statues, multi-part turbines and
+    /// robots) against brute force, in every layout.
+    #[test]
+    fn generated_meshes_match_brute_force(seed in 0u64..1000, kind in 0usize..3) {
+        let kind = [cbvh::scene::Kind::Statue, cbvh::scene::Kind::Turbine, cbvh::scene::Kind::Robot][kind];
+        let mesh = cbvh::scene::generate(kind, 1000, seed, &mut |_, _| {}).unwrap();
+        let other = cbvh::scene::generate(cbvh::scene::Kind::Statue, 1000, seed + 1, &mut |_, _| {}).unwrap();
+        let b = plain(&other, Layout::DepthFirst, 1);
+        for layout in Layout::ALL {
+            let p = plain(&mesh, layout, 1);
+            check_structure(&p, &mesh);
+            check_queries(&p, &mesh, seed);
+        }
+        let a = plain(&mesh, Layout::VanEmdeBoas, 2);
+        check_bvtt(&a, &mesh, &b, &other, seed);
+    }
+}
