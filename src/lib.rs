@@ -27,7 +27,8 @@ pub mod parry;
 pub mod plot;
 pub mod query;
 pub mod render;
-/// Deterministic procedural scenes (`gen` is a reserved word in edition 2024).
+// The folder is src/gen; the module is `scene` because `gen` is a reserved
+// word in edition 2024.
 #[path = "gen/mod.rs"]
 pub mod scene;
 

@@ -1,9 +1,9 @@
 //! The one builder: a mesh in, a [`CanonicalBvh`] out.
 //!
 //! The builder knows no codec. It produces a binary tree with `f32` boxes
-//! (binned SAH, [`sah`]), one triangle per leaf by default (the setting all
+//! (binned SAH, module `sah`), one triangle per leaf by default (the setting all
 //! three papers assume) or up to [`BuildOptions::max_leaf_triangles`], and
-//! puts the nodes in the order the [`Layout`] asks for ([`layout`]). Every
+//! puts the nodes in the order the [`Layout`] asks for (module `layout`). Every
 //! codec consumes the result.
 
 mod layout;
@@ -27,7 +27,7 @@ pub enum Layout {
     /// each bottom subtree, recursively.
     VanEmdeBoas,
     /// Probability-driven clusters after Yoon & Manocha 2006 (see
-    /// [`layout`]'s docs for the exact variant).
+    /// the `build::layout` module docs for the exact variant).
     CacheEfficient,
 }
 

@@ -70,6 +70,26 @@ pub fn peak_rss_bytes() -> Option<u64> {
     Some(kb * 1024)
 }
 
+/// The canonical tree with the arguments' layout and leaf size, with a
+/// progress bar on a terminal.
+fn build_with_progress(
+    mesh: &cbvh::Mesh,
+    a: &BuildArgs,
+) -> Result<cbvh::CanonicalBvh, cbvh::build::BuildError> {
+    let opts = BuildOptions {
+        layout: a.layout,
+        max_leaf_triangles: a.leaf_size,
+        ..Default::default()
+    };
+    let pb = progress_bar("building", mesh.triangle_count() as u64);
+    let bvh = build(mesh, &opts, &|done, total| {
+        pb.set_length(total);
+        pb.set_position(done);
+    });
+    pb.finish_and_clear();
+    bvh
+}
+
 /// Runs `cbvh build`.
 pub fn run(a: BuildArgs) -> CliResult {
     let (mesh, name) = a.source.load()?;
@@ -79,17 +99,7 @@ pub fn run(a: BuildArgs) -> CliResult {
     let (parts, layout, extra): (Vec<(&str, usize)>, Option<Layout>, serde_json::Value) =
         match a.codec {
             CodecName::Plain => {
-                let opts = BuildOptions {
-                    layout: a.layout,
-                    max_leaf_triangles: a.leaf_size,
-                    ..Default::default()
-                };
-                let pb = progress_bar("building", tris as u64);
-                let bvh = build(&mesh, &opts, &|done, total| {
-                    pb.set_length(total);
-                    pb.set_position(done);
-                })?;
-                pb.finish_and_clear();
+                let bvh = build_with_progress(&mesh, &a)?;
                 let height = bvh.height();
                 let nodes = bvh.node_count();
                 let plain = PlainBvh::new(&bvh, &mesh);
@@ -101,17 +111,7 @@ pub fn run(a: BuildArgs) -> CliResult {
                 )
             }
             CodecName::Racbvh => {
-                let opts = BuildOptions {
-                    layout: a.layout,
-                    max_leaf_triangles: a.leaf_size,
-                    ..Default::default()
-                };
-                let pb = progress_bar("building", tris as u64);
-                let bvh = build(&mesh, &opts, &|done, total| {
-                    pb.set_length(total);
-                    pb.set_position(done);
-                })?;
-                pb.finish_and_clear();
+                let bvh = build_with_progress(&mesh, &a)?;
                 let rac_opts = RacOptions {
                     cluster_nodes: a.cluster_nodes,
                     bits: a.bits,

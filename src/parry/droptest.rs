@@ -1,6 +1,6 @@
 //! The drop test behind the sims: a dynamic mesh dropped onto a fixed mesh
 //! in rapier, once per shape kind, from the same initial conditions, with
-//! the narrow phase timed per step (see [`Timed`](super::timed::Timed)).
+//! the narrow phase timed per step (see [`super::timed::Timed`]).
 
 use std::str::FromStr;
 use std::sync::atomic::Ordering;

@@ -3,11 +3,11 @@
 //!
 //! - [`ray`]: closest hit (distance, triangle id, barycentrics) and any hit
 //!   within a distance (shadow rays);
-//! - [`overlap`]: triangles whose boxes overlap a box, and a generic
+//! - [`mod@overlap`]: triangles whose boxes overlap a box, and a generic
 //!   box-pruned visit;
 //! - [`point`]: the closest point of the mesh to a point;
 //! - [`best`]: best-first branch-and-bound search for the cheapest triangle;
-//! - [`bvtt`]: simultaneous traversal of two hierarchies under a relative
+//! - [`mod@bvtt`]: simultaneous traversal of two hierarchies under a relative
 //!   rigid pose (the bounding volume test tree), enumerating the triangle
 //!   pairs whose boxes come within a prediction distance.
 //!
