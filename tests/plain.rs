@@ -109,25 +109,7 @@ fn layouts_are_permutations_with_root_first() {
 
 #[test]
 fn edge_cases() {
-    // One triangle, all-degenerate, identical triangles, huge coordinates
-    // (1e9: ray and distance arithmetic multiplies coordinates, and must
-    // stay finite in f32).
-    let one = Mesh::new(
-        vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-        vec![[0, 1, 2]],
-    );
-    let same = Mesh::new(one.vertices.clone(), vec![[0, 1, 2]; 40]);
-    let flat = Mesh::new(vec![[1.0; 3]; 3], vec![[0, 1, 2]; 9]);
-    let huge = Mesh::new(
-        vec![
-            [1e9, 1e9, 1e9],
-            [-1e9, 1e9, 0.0],
-            [0.0, -1e9, 1e9],
-            [3e9, 0.0, 0.0],
-        ],
-        vec![[0, 1, 2], [1, 2, 3], [0, 2, 3]],
-    );
-    for mesh in [one, same, flat, huge] {
+    for mesh in edge_case_meshes() {
         for layout in Layout::ALL {
             for leaf in [1, 4] {
                 let p = plain(&mesh, layout, leaf);

@@ -154,22 +154,7 @@ fn bvtt_matches_brute_force() {
 
 #[test]
 fn edge_cases() {
-    let one = Mesh::new(
-        vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-        vec![[0, 1, 2]],
-    );
-    let same = Mesh::new(one.vertices.clone(), vec![[0, 1, 2]; 40]);
-    let flat = Mesh::new(vec![[1.0; 3]; 3], vec![[0, 1, 2]; 9]);
-    let huge = Mesh::new(
-        vec![
-            [1e9, 1e9, 1e9],
-            [-1e9, 1e9, 0.0],
-            [0.0, -1e9, 1e9],
-            [3e9, 0.0, 0.0],
-        ],
-        vec![[0, 1, 2], [1, 2, 3], [0, 2, 3]],
-    );
-    for mesh in [one, same, flat, huge] {
+    for mesh in edge_case_meshes() {
         for layout in Layout::ALL {
             for leaf in [1, 4] {
                 for vb in [None, Some(8)] {

@@ -62,6 +62,29 @@ pub fn soup(seed: u64, n: usize, extent: f32) -> Mesh {
     Mesh::new(vertices, triangles)
 }
 
+/// The edge-case meshes every codec is tested on: one triangle, 40
+/// identical triangles, an all-degenerate (single point) mesh, and huge
+/// coordinates (1e9: ray and distance arithmetic multiplies coordinates, and
+/// must stay finite in f32).
+pub fn edge_case_meshes() -> Vec<Mesh> {
+    let one = Mesh::new(
+        vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        vec![[0, 1, 2]],
+    );
+    let same = Mesh::new(one.vertices.clone(), vec![[0, 1, 2]; 40]);
+    let flat = Mesh::new(vec![[1.0; 3]; 3], vec![[0, 1, 2]; 9]);
+    let huge = Mesh::new(
+        vec![
+            [1e9, 1e9, 1e9],
+            [-1e9, 1e9, 0.0],
+            [0.0, -1e9, 1e9],
+            [3e9, 0.0, 0.0],
+        ],
+        vec![[0, 1, 2], [1, 2, 3], [0, 2, 3]],
+    );
+    vec![one, same, flat, huge]
+}
+
 fn tri(mesh: &Mesh, id: u32) -> Triangle {
     triangle_from_arrays(mesh.triangle_vertices(id as usize))
 }
