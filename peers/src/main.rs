@@ -1,0 +1,692 @@
+//! `peers`: cbvh's ray queries against other BVHs on the same rays.
+//!
+//! ```text
+//! cargo run --release --manifest-path peers/Cargo.toml -- --tris 100000,1000000 --threads 1,2
+//! cargo run --release --manifest-path peers/Cargo.toml --features embree -- --tris 100000
+//! ```
+//!
+//! For each triangle count it generates the statue scene, builds cbvh
+//! (`PlainBvh`), parry's `TriMesh`, obvhs's CWBVH and (feature `embree`)
+//! an Embree scene, casts the same rays through each, checks that they
+//! agree on which rays hit, and times the casts.
+
+use std::time::{Duration, Instant};
+
+use glam::Vec3A;
+use rayon::prelude::*;
+
+use cbvh::codec::ByteSize;
+use cbvh::codec::plain::PlainBvh;
+
+const RUNS: usize = 5;
+/// Relative tolerance when comparing hit distances between structures.
+const T_REL_TOL: f32 = 1e-3;
+
+struct Args {
+    tris: Vec<usize>,
+    threads: Vec<usize>,
+    width: usize,
+    random: usize,
+    json: bool,
+}
+
+fn parse_list(s: &str, what: &str) -> Vec<usize> {
+    s.split(',')
+        .map(|x| {
+            x.trim()
+                .replace('_', "")
+                .parse::<usize>()
+                .unwrap_or_else(|_| die(&format!("bad {what} value {x:?}")))
+        })
+        .collect()
+}
+
+fn die(msg: &str) -> ! {
+    eprintln!("peers: {msg}");
+    eprintln!(
+        "usage: peers [--tris N[,N..]] [--threads T[,T..]] [--width PX] [--random RAYS] [--json]"
+    );
+    std::process::exit(2)
+}
+
+fn parse_args() -> Args {
+    let mut a = Args {
+        tris: vec![100_000],
+        threads: vec![1],
+        width: 512,
+        random: 0,
+        json: false,
+    };
+    let mut it = std::env::args().skip(1);
+    while let Some(arg) = it.next() {
+        let mut val = |name: &str| it.next().unwrap_or_else(|| die(&format!("{name} needs a value")));
+        match arg.as_str() {
+            "--tris" => a.tris = parse_list(&val("--tris"), "--tris"),
+            "--threads" => a.threads = parse_list(&val("--threads"), "--threads"),
+            "--width" => a.width = parse_list(&val("--width"), "--width")[0],
+            "--random" => a.random = parse_list(&val("--random"), "--random")[0],
+            "--json" => a.json = true,
+            "-h" | "--help" => die("help"),
+            other => die(&format!("unknown argument {other:?}")),
+        }
+    }
+    if a.threads.contains(&0) || a.width == 0 {
+        die("--threads and --width must be positive");
+    }
+    a
+}
+
+/// A set of rays, cast in chunks (image rows) so that multi-threaded runs
+/// hand whole rows to rayon.
+struct RaySet {
+    name: &'static str,
+    origins: Vec<Vec3A>,
+    dirs: Vec<Vec3A>,
+    chunk: usize,
+}
+
+fn camera_rays(lo: Vec3A, hi: Vec3A, width: usize) -> RaySet {
+    // Pinhole camera in front of the statue (+Z side, Y up), at 2.2 times
+    // its largest extent from its centre, with a 30 degree field of view.
+    let centre = (lo + hi) * 0.5;
+    let size = (hi - lo).max_element();
+    let eye = centre + Vec3A::new(0.0, 0.0, 2.2 * size);
+    let half = (15f32).to_radians().tan();
+    let mut origins = Vec::with_capacity(width * width);
+    let mut dirs = Vec::with_capacity(width * width);
+    for y in 0..width {
+        for x in 0..width {
+            let u = ((x as f32 + 0.5) / width as f32 * 2.0 - 1.0) * half;
+            let v = (1.0 - (y as f32 + 0.5) / width as f32 * 2.0) * half;
+            origins.push(eye);
+            dirs.push(Vec3A::new(u, v, -1.0).normalize());
+        }
+    }
+    RaySet {
+        name: "camera",
+        origins,
+        dirs,
+        chunk: width,
+    }
+}
+
+/// Incoherent rays: from random points on a sphere around the statue
+/// (radius 1.5 × its largest extent) towards random points in its box.
+fn random_rays(lo: Vec3A, hi: Vec3A, n: usize, chunk: usize) -> RaySet {
+    let mut s: u64 = 0x9E37_79B9_7F4A_7C15;
+    let mut rnd = move || {
+        // splitmix64
+        s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = s;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let centre = (lo + hi) * 0.5;
+    let r = 1.5 * (hi - lo).max_element();
+    let mut origins = Vec::with_capacity(n);
+    let mut dirs = Vec::with_capacity(n);
+    while origins.len() < n {
+        let p = Vec3A::new(rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0);
+        let l = p.length();
+        if !(0.1..=1.0).contains(&l) {
+            continue;
+        }
+        let o = centre + p / l * r;
+        let target = lo + (hi - lo) * Vec3A::new(rnd(), rnd(), rnd());
+        origins.push(o);
+        dirs.push((target - o).normalize());
+    }
+    RaySet {
+        name: "random",
+        origins,
+        dirs,
+        chunk,
+    }
+}
+
+/// Casts every ray of `rays` with `cast` (returning the hit distance) on
+/// the current rayon pool, one chunk per task; returns the number of hits.
+fn cast_all<F>(rays: &RaySet, cast: &F) -> usize
+where
+    F: Fn(Vec3A, Vec3A) -> Option<f32> + Sync,
+{
+    rays.origins
+        .par_chunks(rays.chunk)
+        .zip(rays.dirs.par_chunks(rays.chunk))
+        .map(|(os, ds)| {
+            os.iter()
+                .zip(ds)
+                .filter(|(o, d)| cast(**o, **d).is_some())
+                .count()
+        })
+        .sum()
+}
+
+/// Single-threaded, per-ray results, for the agreement check.
+fn cast_each<F>(rays: &RaySet, cast: &F) -> Vec<Option<f32>>
+where
+    F: Fn(Vec3A, Vec3A) -> Option<f32> + Sync,
+{
+    rays.origins
+        .iter()
+        .zip(&rays.dirs)
+        .map(|(o, d)| cast(*o, *d))
+        .collect()
+}
+
+struct Row {
+    tris: usize,
+    rays: &'static str,
+    structure: &'static str,
+    threads: usize,
+    mrays: f64,
+    runs_ms: Vec<f64>,
+    hits: usize,
+    bytes: usize,
+    build_s: f64,
+}
+
+struct Agreement {
+    tris: usize,
+    rays: &'static str,
+    structure: &'static str,
+    hits: usize,
+    hit_miss_mismatches: usize,
+    t_mismatches: usize,
+    /// Of the distance mismatches, how many have this structure's hit
+    /// nearer than cbvh's.
+    t_nearer: usize,
+}
+
+/// Rays on which the structures disagreed, settled by brute force.
+struct Brute {
+    tris: usize,
+    rays: &'static str,
+    disputed: usize,
+    /// Disputed rays on which brute force with cbvh's triangle test and
+    /// brute force with obvhs's disagree.
+    tests_disagree: usize,
+    /// `(structure, rays it got wrong)`.
+    wrong: Vec<(&'static str, usize)>,
+}
+
+fn same_hit(a: Option<f32>, b: Option<f32>) -> bool {
+    match (a, b) {
+        (Some(a), Some(b)) => (a - b).abs() <= T_REL_TOL * a.abs().max(1e-6),
+        (None, None) => true,
+        _ => false,
+    }
+}
+
+/// The closest hit over every triangle of `mesh`.
+fn brute_force(mesh: &cbvh::Mesh, o: Vec3A, d: Vec3A) -> Option<f32> {
+    let ray = cbvh::geom::Ray::new(o, d);
+    let mut best = f32::INFINITY;
+    for t in 0..mesh.triangle_count() {
+        let tri = cbvh::geom::triangle_from_arrays(mesh.triangle_vertices(t));
+        if let Some(h) = cbvh::geom::ray_triangle(&ray, &tri, best) {
+            best = best.min(h.t);
+        }
+    }
+    best.is_finite().then_some(best)
+}
+
+/// The closest hit over every triangle of `mesh` with obvhs's
+/// (independent) Möller–Trumbore variant.
+fn brute_force_obvhs(mesh: &cbvh::Mesh, o: Vec3A, d: Vec3A) -> Option<f32> {
+    let ray = obvhs::ray::Ray::new_inf(o, d);
+    let mut best = f32::INFINITY;
+    for t in 0..mesh.triangle_count() {
+        let [a, b, c] = mesh.triangle_vertices(t);
+        let tri = obvhs::triangle::Triangle {
+            v0: Vec3A::from(a),
+            v1: Vec3A::from(b),
+            v2: Vec3A::from(c),
+        };
+        best = best.min(tri.intersect(&ray));
+    }
+    best.is_finite().then_some(best)
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// One structure: its name, size, build time and ray-cast function.
+struct Peer<'a> {
+    name: &'static str,
+    bytes: usize,
+    build: Duration,
+    cast: Box<dyn Fn(Vec3A, Vec3A) -> Option<f32> + Sync + 'a>,
+}
+
+fn main() {
+    let args = parse_args();
+    let mut rows: Vec<Row> = Vec::new();
+    let mut agreements: Vec<Agreement> = Vec::new();
+    let mut brute: Vec<Brute> = Vec::new();
+    let pools: Vec<(usize, rayon::ThreadPool)> = args
+        .threads
+        .iter()
+        .map(|&t| {
+            (
+                t,
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(t)
+                    .build()
+                    .expect("rayon pool"),
+            )
+        })
+        .collect();
+
+    for &n in &args.tris {
+        eprintln!("[{n} tris] generating statue");
+        let mesh = cbvh::scene::generate(cbvh::scene::Kind::Statue, n, 0, &mut |_, _| {})
+            .unwrap_or_else(|e| die(&format!("generate: {e}")));
+        let ntri = mesh.triangle_count();
+        let (lo, hi) = mesh.bounds().expect("non-empty mesh");
+        let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
+        eprintln!("[{n} tris] {ntri} triangles, bounds {lo:?}..{hi:?}");
+
+        // cbvh, plain codec.
+        let t0 = Instant::now();
+        let bvh = cbvh::build::build(&mesh, &cbvh::build::BuildOptions::default(), &|_, _| {})
+            .unwrap_or_else(|e| die(&format!("cbvh build: {e}")));
+        let plain = PlainBvh::new(&bvh, &mesh);
+        let build = t0.elapsed();
+        drop(bvh);
+        let plain_ref = &plain;
+        let p_cbvh = Peer {
+            name: "cbvh plain",
+            bytes: plain.bytes_total(),
+            build,
+            cast: Box::new(move |o, d| {
+                cbvh::query::closest_hit(
+                    plain_ref,
+                    &cbvh::geom::Ray::new(o, d),
+                    f32::INFINITY,
+                    &mut cbvh::TraversalStats::default(),
+                )
+                .map(|h| h.t)
+            }),
+        };
+
+        // parry TriMesh.
+        let t0 = Instant::now();
+        let trimesh = cbvh::parry::parry_trimesh(&mesh)
+            .unwrap_or_else(|e| die(&format!("parry TriMesh: {e:?}")));
+        let build = t0.elapsed();
+        let tm_ref = &trimesh;
+        let p_parry = Peer {
+            name: "parry TriMesh",
+            bytes: cbvh::parry::trimesh_bytes_by_part(&trimesh)
+                .iter()
+                .map(|p| p.1)
+                .sum(),
+            build,
+            cast: Box::new(move |o, d| {
+                use parry3d::math::Vector;
+                use parry3d::query::RayCast;
+                let ray = parry3d::query::Ray::new(
+                    Vector::new(o.x, o.y, o.z),
+                    Vector::new(d.x, d.y, d.z),
+                );
+                tm_ref.cast_local_ray(&ray, f32::MAX, true)
+            }),
+        };
+
+        // obvhs CWBVH (PLOC + reinsertion, medium preset), with the
+        // triangles reordered into BVH order as its examples do.
+        let tris: Vec<obvhs::triangle::Triangle> = (0..ntri)
+            .map(|t| {
+                let [a, b, c] = mesh.triangle_vertices(t);
+                obvhs::triangle::Triangle {
+                    v0: Vec3A::from(a),
+                    v1: Vec3A::from(b),
+                    v2: Vec3A::from(c),
+                }
+            })
+            .collect();
+        let t0 = Instant::now();
+        let cw = obvhs::cwbvh::builder::build_cwbvh_from_tris(
+            &tris,
+            obvhs::BvhBuildParams::medium_build(),
+            &mut Duration::default(),
+        );
+        let cw_tris: Vec<obvhs::triangle::Triangle> = cw
+            .primitive_indices
+            .iter()
+            .map(|&i| tris[i as usize])
+            .collect();
+        let build = t0.elapsed();
+        drop(tris);
+        let cw_bytes = size_of_val(cw.nodes.as_slice())
+            + size_of_val(cw.primitive_indices.as_slice())
+            + size_of_val(cw_tris.as_slice());
+        let (cw_ref, cwt_ref) = (&cw, &cw_tris);
+        let p_obvhs = Peer {
+            name: "obvhs CWBVH",
+            bytes: cw_bytes,
+            build,
+            cast: Box::new(move |o, d| {
+                let ray = obvhs::ray::Ray::new_inf(o, d);
+                let mut hit = obvhs::ray::RayHit::none();
+                cw_ref
+                    .ray_traverse(ray, &mut hit, |r, id| cwt_ref[id].intersect(r))
+                    .then_some(hit.t)
+            }),
+        };
+
+        #[cfg(feature = "embree")]
+        let embree = embree_peer::Embree::new(&mesh);
+        #[allow(unused_mut)]
+        let mut peers: Vec<Peer> = vec![p_cbvh, p_parry, p_obvhs];
+        #[cfg(feature = "embree")]
+        peers.push(embree.peer());
+
+        let mut ray_sets = vec![camera_rays(lo, hi, args.width)];
+        if args.random > 0 {
+            ray_sets.push(random_rays(lo, hi, args.random, args.width));
+        }
+
+        for rays in &ray_sets {
+            // Agreement: every structure against cbvh, ray by ray.
+            let results: Vec<Vec<Option<f32>>> =
+                peers.iter().map(|p| cast_each(rays, &p.cast)).collect();
+            let reference = &results[0];
+            for (p, mine) in peers.iter().zip(&results) {
+                let mut hm = 0;
+                let mut tm = 0;
+                let mut nearer = 0;
+                for (i, (a, b)) in reference.iter().zip(mine.iter()).enumerate() {
+                    match (a, b) {
+                        (Some(a), Some(b)) => {
+                            if (a - b).abs() > T_REL_TOL * a.abs().max(1e-6) {
+                                tm += 1;
+                                if b < a {
+                                    nearer += 1;
+                                }
+                                if tm <= 3 {
+                                    eprintln!(
+                                        "  {} ray {i}: cbvh t={a} {} t={b} (origin {:?}, dir {:?})",
+                                        rays.name, p.name, rays.origins[i], rays.dirs[i]
+                                    );
+                                }
+                            }
+                        }
+                        (None, None) => {}
+                        _ => hm += 1,
+                    }
+                }
+                let hits = mine.iter().filter(|h| h.is_some()).count();
+                eprintln!(
+                    "[{n} tris] {} rays, {}: {hits} hits of {}, {hm} hit/miss mismatches vs cbvh, {tm} distance mismatches ({nearer} nearer than cbvh)",
+                    rays.name,
+                    p.name,
+                    mine.len()
+                );
+                agreements.push(Agreement {
+                    tris: ntri,
+                    rays: rays.name,
+                    structure: p.name,
+                    hits,
+                    hit_miss_mismatches: hm,
+                    t_mismatches: tm,
+                    t_nearer: nearer,
+                });
+            }
+
+            // Rays on which the structures disagree: settle them by brute
+            // force over every triangle (cbvh's two-sided Möller–Trumbore).
+            let disputed: Vec<usize> = (0..rays.origins.len())
+                .filter(|&i| results.iter().any(|r| !same_hit(r[i], reference[i])))
+                .collect();
+            if !disputed.is_empty() {
+                let truth: Vec<Option<f32>> = disputed
+                    .par_iter()
+                    .map(|&i| brute_force(&mesh, rays.origins[i], rays.dirs[i]))
+                    .collect();
+                let truth_obvhs: Vec<Option<f32>> = disputed
+                    .par_iter()
+                    .map(|&i| brute_force_obvhs(&mesh, rays.origins[i], rays.dirs[i]))
+                    .collect();
+                let tests_disagree = truth
+                    .iter()
+                    .zip(&truth_obvhs)
+                    .filter(|(a, b)| !same_hit(**a, **b))
+                    .count();
+                eprintln!(
+                    "[{n} tris] {} rays: brute force with cbvh's and obvhs's triangle tests disagree on {tests_disagree} of {} disputed rays",
+                    rays.name,
+                    disputed.len()
+                );
+                let wrong: Vec<usize> = results
+                    .iter()
+                    .map(|r| {
+                        disputed
+                            .iter()
+                            .zip(&truth)
+                            .filter(|(i, t)| !same_hit(r[**i], **t))
+                            .count()
+                    })
+                    .collect();
+                for (p, w) in peers.iter().zip(&wrong) {
+                    eprintln!(
+                        "[{n} tris] {} rays, {}: wrong on {w} of {} disputed rays (brute force)",
+                        rays.name,
+                        p.name,
+                        disputed.len()
+                    );
+                }
+                brute.push(Brute {
+                    tris: ntri,
+                    rays: rays.name,
+                    disputed: disputed.len(),
+                    tests_disagree,
+                    wrong: peers.iter().map(|p| p.name).zip(wrong).collect(),
+                });
+            }
+
+            for (threads, pool) in &pools {
+                for p in &peers {
+                    let mut times = Vec::with_capacity(RUNS);
+                    let mut hits = 0;
+                    pool.install(|| {
+                        for _ in 0..RUNS {
+                            let t0 = Instant::now();
+                            hits = cast_all(rays, &p.cast);
+                            times.push(t0.elapsed().as_secs_f64());
+                        }
+                    });
+                    let runs_ms: Vec<f64> = times.iter().map(|t| t * 1e3).collect();
+                    let med = median(&mut times);
+                    let mrays = rays.origins.len() as f64 / med / 1e6;
+                    eprintln!(
+                        "[{n} tris] {} rays, {}, {threads} thread(s): {mrays:.2} M rays/s",
+                        rays.name, p.name
+                    );
+                    rows.push(Row {
+                        tris: ntri,
+                        rays: rays.name,
+                        structure: p.name,
+                        threads: *threads,
+                        mrays,
+                        runs_ms,
+                        hits,
+                        bytes: p.bytes,
+                        build_s: p.build.as_secs_f64(),
+                    });
+                }
+            }
+        }
+    }
+
+    if args.json {
+        let json = serde_json::json!({
+            "width": args.width,
+            "random_rays": args.random,
+            "runs": RUNS,
+            "results": rows.iter().map(|r| serde_json::json!({
+                "tris": r.tris,
+                "rays": r.rays,
+                "structure": r.structure,
+                "threads": r.threads,
+                "mrays_per_s": r.mrays,
+                "runs_ms": r.runs_ms,
+                "hits": r.hits,
+                "bytes": r.bytes,
+                "bytes_per_tri": r.bytes as f64 / r.tris as f64,
+                "build_s": r.build_s,
+            })).collect::<Vec<_>>(),
+            "agreement": agreements.iter().map(|a| serde_json::json!({
+                "tris": a.tris,
+                "rays": a.rays,
+                "structure": a.structure,
+                "hits": a.hits,
+                "hit_miss_mismatches_vs_cbvh": a.hit_miss_mismatches,
+                "distance_mismatches_vs_cbvh": a.t_mismatches,
+                "distance_mismatches_nearer_than_cbvh": a.t_nearer,
+            })).collect::<Vec<_>>(),
+            "brute_force": brute.iter().map(|b| serde_json::json!({
+                "tris": b.tris,
+                "rays": b.rays,
+                "disputed_rays": b.disputed,
+                "brute_force_cbvh_vs_obvhs_triangle_test_disagree": b.tests_disagree,
+                "wrong": b.wrong.iter().map(|(s, w)| serde_json::json!({"structure": s, "rays": w})).collect::<Vec<_>>(),
+            })).collect::<Vec<_>>(),
+        });
+        println!("{}", serde_json::to_string_pretty(&json).unwrap());
+        return;
+    }
+
+    println!(
+        "{:>9} {:>7} {:<15} {:>7} {:>10} {:>9} {:>8} {:>8}",
+        "tris", "rays", "structure", "threads", "M rays/s", "B/tri", "build s", "hits"
+    );
+    for r in &rows {
+        println!(
+            "{:>9} {:>7} {:<15} {:>7} {:>10.2} {:>9.1} {:>8.2} {:>8}",
+            r.tris,
+            r.rays,
+            r.structure,
+            r.threads,
+            r.mrays,
+            r.bytes as f64 / r.tris as f64,
+            r.build_s,
+            r.hits
+        );
+    }
+    println!();
+    println!("agreement with cbvh (per ray; distances within {T_REL_TOL} relative):");
+    for a in &agreements {
+        println!(
+            "{:>9} {:>7} {:<15} hits {:>8}  hit/miss mismatches {:>5}  distance mismatches {:>5} ({} nearer than cbvh)",
+            a.tris, a.rays, a.structure, a.hits, a.hit_miss_mismatches, a.t_mismatches, a.t_nearer
+        );
+    }
+    for b in &brute {
+        let w: Vec<String> = b.wrong.iter().map(|(s, w)| format!("{s} {w}")).collect();
+        println!(
+            "{:>9} {:>7} {} disputed rays ({} where brute force with cbvh's vs obvhs's triangle test disagree), wrong vs brute force with cbvh's test: {}",
+            b.tris,
+            b.rays,
+            b.disputed,
+            b.tests_disagree,
+            w.join(", ")
+        );
+    }
+}
+
+#[cfg(feature = "embree")]
+mod embree_peer {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicIsize, Ordering};
+    use std::time::{Duration, Instant};
+
+    use embree3::{BufferUsage, Device, Format, GeometryKind, IntersectContext, Ray, RayHit, Scene};
+    use glam::Vec3A;
+
+    use super::Peer;
+
+    /// An Embree scene with one triangle geometry, and its memory as
+    /// Embree's memory monitor reports it (net bytes allocated by the
+    /// device after the commit: geometry buffers plus the BVH).
+    pub struct Embree {
+        scene: Scene<'static>,
+        bytes: usize,
+        build: Duration,
+    }
+
+    impl Embree {
+        pub fn new(mesh: &cbvh::Mesh) -> Self {
+            let device = Device::new().expect("embree device");
+            let net = Arc::new(AtomicIsize::new(0));
+            let counter = net.clone();
+            device.set_memory_monitor_function(move |bytes, _post| {
+                counter.fetch_add(bytes, Ordering::Relaxed);
+                true
+            });
+            let t0 = Instant::now();
+            let mut scene = device.create_scene().expect("embree scene");
+            let mut g = device
+                .create_geometry(GeometryKind::TRIANGLE)
+                .expect("embree geometry");
+            g.set_new_buffer::<[f32; 3]>(
+                BufferUsage::VERTEX,
+                0,
+                Format::FLOAT3,
+                3 * 4,
+                mesh.vertices.len(),
+            )
+            .expect("vertex buffer")
+            .copy_from_slice(&mesh.vertices);
+            g.set_new_buffer::<[u32; 3]>(
+                BufferUsage::INDEX,
+                0,
+                Format::UINT3,
+                3 * 4,
+                mesh.triangles.len(),
+            )
+            .expect("index buffer")
+            .copy_from_slice(&mesh.triangles);
+            let g = g.commit();
+            scene.attach_geometry(&g);
+            scene.commit();
+            let build = t0.elapsed();
+            let bytes = net.load(Ordering::Relaxed).max(0) as usize;
+            Self {
+                scene,
+                bytes,
+                build,
+            }
+        }
+
+        pub fn peer(&self) -> Peer<'_> {
+            let scene = &self.scene;
+            Peer {
+                name: "embree",
+                bytes: self.bytes,
+                build: self.build,
+                cast: Box::new(move |o: Vec3A, d: Vec3A| {
+                    let mut ctx = IntersectContext::coherent();
+                    let mut rh = RayHit::from(Ray::segment(
+                        o.to_array(),
+                        d.to_array(),
+                        0.0,
+                        f32::INFINITY,
+                    ));
+                    scene.intersect(&mut ctx, &mut rh);
+                    rh.hit.is_valid().then_some(rh.ray.tfar)
+                }),
+            }
+        }
+    }
+}
