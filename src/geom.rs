@@ -240,7 +240,7 @@ impl Pose {
 }
 
 /// A ray `origin + t · dir`, with the reciprocal direction precomputed for
-/// slab tests.
+/// slab tests and the shear of the watertight triangle test.
 #[derive(Clone, Copy, Debug)]
 pub struct Ray {
     /// Origin.
@@ -249,16 +249,37 @@ pub struct Ray {
     pub dir: Vec3A,
     /// `1 / dir`, component-wise (infinite where a component is 0).
     pub inv_dir: Vec3A,
+    /// Axis permutation of the watertight test: `kz` is the direction's
+    /// dominant axis.
+    k: [usize; 3],
+    /// Shear constants `(dir[kx] / dir[kz], dir[ky] / dir[kz], 1 / dir[kz])`.
+    shear: [f32; 3],
 }
 
 impl Ray {
     /// A ray from an origin and a direction.
     #[inline]
     pub fn new(origin: Vec3A, dir: Vec3A) -> Self {
+        let a = dir.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        if dir[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        let shear = [dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]];
         Self {
             origin,
             dir,
             inv_dir: dir.recip(),
+            k: [kx, ky, kz],
+            shear,
         }
     }
 
@@ -301,31 +322,49 @@ pub struct TriHit {
     pub v: f32,
 }
 
-/// Möller–Trumbore ray/triangle intersection, two-sided. Returns the hit
-/// if `t` lies in `[0, t_max]`.
+/// Watertight ray/triangle intersection (Woop, Benthin and Wald, JCGT
+/// 2013), two-sided. Returns the hit if `t` lies in `[0, t_max]`.
+///
+/// Edges shared by two triangles are decided the same way for both, so a
+/// ray never slips through the crack between neighbours (Möller–Trumbore
+/// can miss both triangles of an edge through rounding).
 #[inline]
 pub fn ray_triangle(ray: &Ray, tri: &Triangle, t_max: f32) -> Option<TriHit> {
-    let e1 = tri[1] - tri[0];
-    let e2 = tri[2] - tri[0];
-    let p = ray.dir.cross(e2);
-    let det = e1.dot(p);
+    let [kx, ky, kz] = ray.k;
+    let [sx, sy, sz] = ray.shear;
+    let a = tri[0] - ray.origin;
+    let b = tri[1] - ray.origin;
+    let c = tri[2] - ray.origin;
+    let (ax, ay) = (a[kx] - sx * a[kz], a[ky] - sy * a[kz]);
+    let (bx, by) = (b[kx] - sx * b[kz], b[ky] - sy * b[kz]);
+    let (cx, cy) = (c[kx] - sx * c[kz], c[ky] - sy * c[kz]);
+    let mut u = cx * by - cy * bx;
+    let mut v = ax * cy - ay * cx;
+    let mut w = bx * ay - by * ax;
+    if u == 0.0 || v == 0.0 || w == 0.0 {
+        // On an edge in single precision: decide it in double precision.
+        let (ax, ay, bx, by, cx, cy) = (
+            ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64,
+        );
+        u = (cx * by - cy * bx) as f32;
+        v = (ax * cy - ay * cx) as f32;
+        w = (bx * ay - by * ax) as f32;
+    }
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
     if det == 0.0 || !det.is_finite() {
         return None;
     }
-    let inv = 1.0 / det;
-    let s = ray.origin - tri[0];
-    let u = s.dot(p) * inv;
-    if !(0.0..=1.0).contains(&u) {
-        return None;
-    }
-    let q = s.cross(e1);
-    let v = ray.dir.dot(q) * inv;
-    if v < 0.0 || u + v > 1.0 {
-        return None;
-    }
-    let t = e2.dot(q) * inv;
+    let (az, bz, cz) = (sz * a[kz], sz * b[kz], sz * c[kz]);
+    let t = (u * az + v * bz + w * cz) / det;
     if t >= 0.0 && t <= t_max {
-        Some(TriHit { t, u, v })
+        Some(TriHit {
+            t,
+            u: v / det,
+            v: w / det,
+        })
     } else {
         None
     }
@@ -446,6 +485,37 @@ mod tests {
         assert!((p - Vec3A::new(0.25, 0.25, 0.0)).length() < 1e-6);
         let (p, _, _) = closest_point_on_triangle(Vec3A::new(1.0, 1.0, 0.0), &t);
         assert!((p - Vec3A::new(0.5, 0.5, 0.0)).length() < 1e-6);
+    }
+
+    /// Regression: Möller–Trumbore let some rays slip between two triangles
+    /// sharing an edge (found by comparing with obvhs and Embree).
+    #[test]
+    fn rays_through_shared_edges_never_slip_through() {
+        // A quad split along its diagonal, tilted so the edge is not axis-aligned.
+        let p = [
+            Vec3A::new(0.1, 0.0, 0.3),
+            Vec3A::new(1.3, 0.2, -0.1),
+            Vec3A::new(1.1, 1.4, 0.5),
+            Vec3A::new(-0.2, 1.1, 0.2),
+        ];
+        let t1 = [p[0], p[1], p[2]];
+        let t2 = [p[0], p[2], p[3]];
+        let mut misses = 0;
+        for i in 0..=2000 {
+            let f = i as f32 / 2000.0;
+            let on_edge = p[0] + (p[2] - p[0]) * f;
+            for d in [
+                Vec3A::new(0.3, -0.2, -1.0),
+                Vec3A::new(-0.7, 0.4, -1.3),
+                Vec3A::new(0.01, 0.02, 1.0),
+            ] {
+                let r = Ray::new(on_edge - d * 3.7, d);
+                let hit = ray_triangle(&r, &t1, f32::INFINITY).is_some()
+                    || ray_triangle(&r, &t2, f32::INFINITY).is_some();
+                misses += usize::from(!hit && f > 0.0 && f < 1.0);
+            }
+        }
+        assert_eq!(misses, 0);
     }
 
     #[test]

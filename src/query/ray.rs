@@ -18,7 +18,7 @@ pub struct RayHit {
 }
 
 /// The closest hit of `ray` within `[0, t_max]`, with the two-sided
-/// Möller–Trumbore triangle test.
+/// watertight triangle test ([`ray_triangle`]).
 pub fn closest_hit<C: NodeCursor>(
     c: &C,
     ray: &Ray,
