@@ -184,22 +184,8 @@ fn build_rec(
         b: right,
     };
     let right_ref_base = ref_base + mid as u32;
-    if n >= PARALLEL_THRESHOLD {
-        rayon::join(
-            || build_rec(ctx, left_refs, left_nodes, left, ref_base, depth + 1),
-            || {
-                build_rec(
-                    ctx,
-                    right_refs,
-                    right_nodes,
-                    right,
-                    right_ref_base,
-                    depth + 1,
-                )
-            },
-        );
-    } else {
-        build_rec(ctx, left_refs, left_nodes, left, ref_base, depth + 1);
+    let mut left_job = move || build_rec(ctx, left_refs, left_nodes, left, ref_base, depth + 1);
+    let mut right_job = move || {
         build_rec(
             ctx,
             right_refs,
@@ -207,7 +193,13 @@ fn build_rec(
             right,
             right_ref_base,
             depth + 1,
-        );
+        )
+    };
+    if n >= PARALLEL_THRESHOLD {
+        rayon::join(left_job, right_job);
+    } else {
+        left_job();
+        right_job();
     }
 }
 
