@@ -13,7 +13,7 @@ use parry3d::query::{
     ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher, QueryDispatcher, Ray,
     RayCast,
 };
-use parry3d::shape::SharedShape;
+use parry3d::shape::{SharedShape, TriMesh};
 use rapier3d::prelude::{ColliderBuilder, PhysicsWorld, QueryFilter, RigidBodyBuilder};
 
 fn mesh_of(kind: Kind, tris: usize, seed: u64) -> Mesh {
@@ -46,6 +46,34 @@ fn points_of(manifolds: &[ContactManifold<(), ()>]) -> Points {
     out
 }
 
+/// A 3 k-triangle statue and turbine, as parry TriMeshes and as plain cbvh
+/// shapes: `(statue, turbine, cbvh statue, cbvh turbine)`.
+fn statue_and_turbine() -> (TriMesh, TriMesh, CbvhShape, CbvhShape) {
+    let statue = mesh_of(Kind::Statue, 3000, 3);
+    let turbine = mesh_of(Kind::Turbine, 3000, 4);
+    (
+        parry_trimesh(&statue).unwrap(),
+        parry_trimesh(&turbine).unwrap(),
+        CbvhShape::plain(&statue, &BuildOptions::default()).unwrap(),
+        CbvhShape::plain(&turbine, &BuildOptions::default()).unwrap(),
+    )
+}
+
+/// Fresh contact manifolds of one query through `d`, as points by pair.
+fn contact_points(
+    d: &dyn PersistentQueryDispatcher<(), ()>,
+    pos12: &Pose,
+    g1: &dyn parry3d::shape::Shape,
+    g2: &dyn parry3d::shape::Shape,
+    prediction: f32,
+) -> Points {
+    let mut m = Vec::new();
+    let mut ws = None;
+    d.contact_manifolds(pos12, g1, g2, prediction, &mut m, &mut ws)
+        .unwrap();
+    points_of(&m)
+}
+
 /// The same triangle pairs carry contact points, with the same number of
 /// points each, agreeing within 1e-5.
 fn assert_same_contacts(want: &Points, got: &Points, at: &str) {
@@ -68,12 +96,7 @@ fn assert_same_contacts(want: &Points, got: &Points, at: &str) {
 
 #[test]
 fn cbvh_contacts_equal_parry_trimesh_contacts() {
-    let statue = mesh_of(Kind::Statue, 3000, 3);
-    let turbine = mesh_of(Kind::Turbine, 3000, 4);
-    let t1 = parry_trimesh(&statue).unwrap();
-    let t2 = parry_trimesh(&turbine).unwrap();
-    let c1 = CbvhShape::plain(&statue, &BuildOptions::default()).unwrap();
-    let c2 = CbvhShape::plain(&turbine, &BuildOptions::default()).unwrap();
+    let (t1, t2, c1, c2) = statue_and_turbine();
     let poses = [
         Pose::from_translation(Vector::new(0.0, -1.2, 0.0)),
         Pose::from_translation(Vector::new(0.7, -0.9, 0.3)),
@@ -83,31 +106,8 @@ fn cbvh_contacts_equal_parry_trimesh_contacts() {
     let mut total = 0;
     for pos12 in poses {
         for prediction in [0.0, 0.02] {
-            let mut want = Vec::new();
-            let mut ws = None;
-            PersistentQueryDispatcher::<(), ()>::contact_manifolds(
-                &DefaultQueryDispatcher,
-                &pos12,
-                &t1,
-                &t2,
-                prediction,
-                &mut want,
-                &mut ws,
-            )
-            .unwrap();
-            let mut got = Vec::new();
-            let mut ws = None;
-            PersistentQueryDispatcher::<(), ()>::contact_manifolds(
-                &Dispatcher,
-                &pos12,
-                &c1,
-                &c2,
-                prediction,
-                &mut got,
-                &mut ws,
-            )
-            .unwrap();
-            let (want, got) = (points_of(&want), points_of(&got));
+            let want = contact_points(&DefaultQueryDispatcher, &pos12, &t1, &t2, prediction);
+            let got = contact_points(&Dispatcher, &pos12, &c1, &c2, prediction);
             assert_same_contacts(&want, &got, &format!("{pos12:?}"));
             total += want.len();
             // The native path never built the fallback.
@@ -428,29 +428,18 @@ fn distance_closest_points_and_casts_match_trimesh() {
 
 #[test]
 fn cbvh_vs_trimesh_contacts_equal_trimesh_vs_trimesh() {
-    let statue = mesh_of(Kind::Statue, 3000, 3);
-    let turbine = mesh_of(Kind::Turbine, 3000, 4);
-    let t1 = parry_trimesh(&statue).unwrap();
-    let t2 = parry_trimesh(&turbine).unwrap();
-    let c1 = CbvhShape::plain(&statue, &BuildOptions::default()).unwrap();
-    let c2 = CbvhShape::plain(&turbine, &BuildOptions::default()).unwrap();
+    let (t1, t2, c1, c2) = statue_and_turbine();
     let mut total = 0;
     for pos12 in [
         Pose::from_translation(Vector::new(0.0, -1.2, 0.0)),
         Pose::new(Vector::new(-0.4, -1.0, 0.2), Vector::new(0.3, 0.8, -0.2)),
     ] {
-        let run = |g1: &dyn parry3d::shape::Shape,
-                   g2: &dyn parry3d::shape::Shape,
-                   d: &dyn PersistentQueryDispatcher<(), ()>| {
-            let mut m = Vec::new();
-            let mut ws = None;
-            d.contact_manifolds(&pos12, g1, g2, 0.01, &mut m, &mut ws)
-                .unwrap();
-            points_of(&m)
-        };
-        let want = run(&t1, &t2, &DefaultQueryDispatcher);
+        let want = contact_points(&DefaultQueryDispatcher, &pos12, &t1, &t2, 0.01);
         let chain = Dispatcher.chain(DefaultQueryDispatcher);
-        for got in [run(&c1, &t2, &chain), run(&t1, &c2, &chain)] {
+        for got in [
+            contact_points(&chain, &pos12, &c1, &t2, 0.01),
+            contact_points(&chain, &pos12, &t1, &c2, 0.01),
+        ] {
             assert_same_contacts(&want, &got, &format!("{pos12:?}"));
         }
         total += want.len();
