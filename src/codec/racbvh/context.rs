@@ -73,3 +73,15 @@ pub(super) fn raw_bits(ctx: usize, h: &Header) -> u32 {
         _ => 5,
     }
 }
+
+/// Number of bit streams in a cluster: the tree (structure, pair indices,
+/// triangle ids, local-leaf children), the zero masks, and one per box
+/// residual component (min x, y, z, max x, y, z). Decoding reads them side
+/// by side, so each stream's chain of dependent reads (a code's length
+/// depends on the previous code) is a sixth of a node's, and the processor
+/// overlaps them.
+pub(super) const STREAMS: usize = 8;
+/// The stream of the boxes' zero masks.
+pub(super) const STREAM_MASK: usize = 1;
+/// The stream of residual component 0 (component `k` is `STREAM_RES + k`).
+pub(super) const STREAM_RES: usize = 2;

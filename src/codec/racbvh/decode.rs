@@ -8,7 +8,7 @@ use super::coder::{BitReader, DictDecoder, SymbolDecoder, unzigzag};
 use super::node::{CoreNode, INCOMPLETE, LEAF_FLAG, QBox, apply, qbox_of};
 use super::{
     CTX_CHILD, CTX_COUNT, CTX_PCLUSTER, CTX_STRUCT, CTX_TRI, CTX_TRI_FAR, Header, NCTX, RacBvh,
-    RacError, mask_context, raw_bits, value_context,
+    RacError, STREAMS, mask_context, raw_bits, value_context,
 };
 use crate::cursor::NodeCursor;
 use crate::geom::{Aabb, Triangle};
@@ -62,26 +62,28 @@ fn decode_cluster(
     live: &Arc<Live>,
 ) -> Result<Cluster, RacError> {
     let bad = |what| RacError::CorruptCluster { cluster: c, what };
-    let len = |at: usize| {
-        bytes
-            .get(at..at + 4)
-            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
-    };
-    let (l0, l1) = (
-        len(0).ok_or_else(|| bad("its stream table is truncated"))?,
-        len(4).unwrap_or(0),
-    );
-    let s1 = 8usize
-        .checked_add(l0)
-        .filter(|&x| x <= bytes.len())
-        .ok_or_else(|| bad("its tree stream overruns"))?;
-    let s2 = s1
-        .checked_add(l1)
-        .filter(|&x| x <= bytes.len())
-        .ok_or_else(|| bad("its box stream overruns"))?;
-    let mut r = BitReader::with_limit(&bytes[8..], l0);
-    let mut rb0 = BitReader::with_limit(&bytes[s1..], l1);
-    let mut rb1 = BitReader::new(&bytes[s2..]);
+    // The stream table: the byte lengths of all streams but the last.
+    let table = 4 * (STREAMS - 1);
+    if bytes.len() < table {
+        return Err(bad("its stream table is truncated"));
+    }
+    let mut readers: [BitReader<'_>; STREAMS] = std::array::from_fn(|_| BitReader::new(&[]));
+    let mut at = table;
+    for (k, reader) in readers.iter_mut().enumerate() {
+        let len = if k + 1 < STREAMS {
+            let b = &bytes[4 * k..4 * k + 4];
+            u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize
+        } else {
+            bytes.len() - at
+        };
+        if at.checked_add(len).is_none_or(|end| end > bytes.len()) {
+            return Err(bad("a stream overruns the cluster"));
+        }
+        *reader = BitReader::with_limit(&bytes[at..], len);
+        at += len;
+    }
+    let [mut r, mut rmask, rx0, ry0, rz0, rx1, ry1, rz1] = readers;
+    let mut rres = [rx0, ry0, rz0, rx1, ry1, rz1];
     let from_oldest = r.get(1) == 1;
     let mut dec: [DictDecoder; NCTX] =
         std::array::from_fn(|ctx| DictDecoder::new(r.get(2) as u32, raw_bits(ctx, h)));
@@ -100,7 +102,9 @@ fn decode_cluster(
     let n_us = n as usize;
     let mut words: Vec<[u32; 8]> = vec![[0; 8]; n_us];
     let mut got = vec![0u8; n_us];
-    let mut res = vec![[0u32; 6]; n_us];
+    // Per node, which of its residuals are non-zero (the sibling's predict
+    // the mask).
+    let mut nonzero_of = vec![0u8; n_us];
     let mut root_of = vec![u16::MAX; n_us];
     let mut roots: Vec<LocalRoot> = Vec::new();
     let mut front: Vec<u32> = Vec::new();
@@ -164,7 +168,12 @@ fn decode_cluster(
             }
             words[p][6 + usize::from(right)] = g;
             if got[p] == 3 {
-                front.remove(at);
+                // Depth-first orders close the newest entry: no memmove call.
+                if at + 1 == front.len() {
+                    front.pop();
+                } else {
+                    front.remove(at);
+                }
             }
             root_of[l] = root_of[p];
             if words[p][0] & INCOMPLETE == 0 {
@@ -173,38 +182,33 @@ fn decode_cluster(
         }
         if g != 0 {
             let mut rs = [0u32; 6];
-            let sib = sibling.map(|x| res[x]);
+            let sib = sibling.map(|x| u32::from(nonzero_of[x]));
             let has_sib = sib.is_some();
-            let mut zero = dec[mask_context(leaf, right, has_sib)].decode(&mut rb0)?;
+            let mut zero = dec[mask_context(leaf, right, has_sib)].decode(&mut rmask)?;
             if zero >= 64 {
                 return Err(bad("a zero mask is out of range"));
             }
-            if let Some(s) = sib {
-                for (k, v) in s.iter().enumerate() {
-                    zero ^= u32::from(*v != 0) << k;
-                }
-            }
-            // The min and max halves come from two streams: two independent
-            // dependency chains for the processor to overlap.
+            zero ^= sib.unwrap_or(0);
+            // Each component comes from a stream of its own: six
+            // independent dependency chains for the processor to overlap.
             let maxb = h.bits + 2;
-            for k in 0..3 {
-                if zero & (1 << k) == 0 {
-                    rs[k] = dec[value_context(leaf, right, k, has_sib)]
-                        .decode_bucketed(&mut rb0, maxb)?;
-                }
-                if zero & (8 << k) == 0 {
-                    rs[k + 3] = dec[value_context(leaf, right, k + 3, has_sib)]
-                        .decode_bucketed(&mut rb1, maxb)?;
-                }
+            // One loop over the non-zero components rather than six
+            // branches on the mask, which the predictor cannot learn.
+            let mut nonzero = !zero & 63;
+            while nonzero != 0 {
+                let k = nonzero.trailing_zeros() as usize;
+                nonzero &= nonzero - 1;
+                rs[k] = dec[value_context(leaf, right, k, has_sib)]
+                    .decode_bucketed(&mut rres[k], maxb)?;
             }
-            if rs
+            let got_nonzero = rs
                 .iter()
                 .enumerate()
-                .any(|(k, &v)| (v == 0) != (zero & (1 << k) != 0))
-            {
+                .fold(0u32, |m, (k, &v)| m | u32::from(v != 0) << k);
+            if got_nonzero != !zero & 63 {
                 return Err(bad("a residual marked non-zero is zero"));
             }
-            res[l] = rs;
+            nonzero_of[l] = got_nonzero as u8;
             let res = rs;
             match complete_parent {
                 Some(pq) => {
@@ -281,7 +285,7 @@ fn decode_cluster(
             }
         }
     }
-    if r.overran() || rb0.overran() || rb1.overran() {
+    if r.overran() || rmask.overran() || rres.iter().any(|x| x.overran()) {
         return Err(bad("the cluster's bits run past its end"));
     }
     let bytes = n_us * 32 + n_us * 2 + tris.len() * 4 + roots.len() * 12 + 128;

@@ -9,7 +9,8 @@ use super::mesh::PackedMesh;
 use super::node::{Grid, QBox, residuals};
 use super::{
     CTX_CHILD, CTX_COUNT, CTX_PCLUSTER, CTX_STRUCT, CTX_TRI, CTX_TRI_FAR, ClusterMeta, Header,
-    NCTX, RacBvh, RacError, bucket, mask_context, raw_bits, value_context, zero_mask,
+    NCTX, RacBvh, RacError, STREAM_MASK, STREAM_RES, STREAMS, bucket, mask_context, raw_bits,
+    value_context, zero_mask,
 };
 use crate::build::CanonicalBvh;
 use crate::geom::Aabb;
@@ -376,7 +377,7 @@ fn encode_cluster(
                 &mut items,
                 mask_context(leaf == 1, right, has_sib),
                 zero_mask(&r, sib),
-                1,
+                STREAM_MASK,
             );
             for (k, &v) in r.iter().enumerate() {
                 if v == 0 {
@@ -387,13 +388,13 @@ fn encode_cluster(
                     &mut items,
                     value_context(leaf == 1, right, k, has_sib),
                     b,
-                    1 + k / 3,
+                    STREAM_RES + k,
                 );
                 if b > 1 {
                     items.push(Item::Raw {
                         v: u64::from(v),
                         bits: b - 1,
-                        stream: 1 + k / 3,
+                        stream: STREAM_RES + k,
                     });
                 }
             }
@@ -456,9 +457,8 @@ fn encode_cluster(
             .min_by_key(|&k| cost[ctx][k as usize])
             .unwrap_or(0)
     });
-    // Three streams decoded side by side: the tree, the boxes' min halves,
-    // the boxes' max halves.
-    let mut w: [BitWriter; 3] = Default::default();
+    // Streams decoded side by side (see `STREAMS`).
+    let mut w: [BitWriter; STREAMS] = Default::default();
     w[0].put(u64::from(from_oldest), 1);
     for &k in &ks {
         w[0].put(u64::from(k), 2);
@@ -483,14 +483,16 @@ fn encode_cluster(
             Item::Raw { v, bits, stream } => w[stream].put(v, bits),
         }
     }
-    let [w0, w1, w2] = w.map(BitWriter::finish);
-    let mut out = Vec::with_capacity(8 + w0.len() + w1.len() + w2.len());
-    out.extend_from_slice(&(w0.len() as u32).to_le_bytes());
-    out.extend_from_slice(&(w1.len() as u32).to_le_bytes());
-    let tree_bits = (8 + w0.len() as u64) * 8;
-    let bv_bits = (w1.len() + w2.len()) as u64 * 8;
-    out.extend_from_slice(&w0);
-    out.extend_from_slice(&w1);
-    out.extend_from_slice(&w2);
+    let w = w.map(BitWriter::finish);
+    let table = 4 * (STREAMS - 1);
+    let mut out = Vec::with_capacity(table + w.iter().map(Vec::len).sum::<usize>());
+    for stream in &w[..STREAMS - 1] {
+        out.extend_from_slice(&(stream.len() as u32).to_le_bytes());
+    }
+    let tree_bits = (table + w[0].len()) as u64 * 8;
+    let bv_bits = w[1..].iter().map(|x| x.len() as u64 * 8).sum();
+    for stream in &w {
+        out.extend_from_slice(stream);
+    }
     Ok((out, tree_bits, bv_bits))
 }

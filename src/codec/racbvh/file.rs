@@ -7,7 +7,7 @@
 //! | bytes | field |
 //! |---|---|
 //! | 0–7 | magic `CBVHRAC\0` |
-//! | 8–11 | version (1) |
+//! | 8–11 | version (2) |
 //! | 12–15 | flags: bit 0 empty tree, bit 1 lossless vertices |
 //! | 16–19 | cluster bits `k` (clusters of `2^k` nodes, 8..=14) |
 //! | 20–23 | box quantization bits (8..=24) |
@@ -44,7 +44,7 @@ use super::node::Grid;
 use super::{ClusterMeta, Header, RacBvh, RacError};
 
 /// The container version this build writes and reads.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 const MAGIC: [u8; 8] = *b"CBVHRAC\0";
 const HEADER_LEN: usize = 232;
 /// Bytes of one meta-table entry.

@@ -59,11 +59,13 @@
 //!   longer than the raw id by more than the length symbol and is much
 //!   shorter when the mesh's order is only loosely coherent with the tree's.
 //!
-//! A cluster's bits are in three streams, decoded side by side so that the
-//! processor overlaps their dependency chains: the tree (structure, pair
-//! indices, triangle ids, local-leaf children), the boxes' min residuals
-//! with the zero masks, and the boxes' max residuals. The cluster starts
-//! with the first two streams' byte lengths (2 × u32).
+//! A cluster's bits are in eight streams, decoded side by side so that the
+//! processor overlaps their dependency chains (a code's length depends on
+//! the code before it in its stream): the tree (structure, pair indices,
+//! triangle ids, local-leaf children), the boxes' zero masks, and one per
+//! residual component (min x, y, z, max x, y, z). The cluster starts with
+//! the first seven streams' byte lengths (7 × u32, 0.05 bits per node at
+//! 4 K nodes a cluster). Eight streams decode about 7 % faster than three.
 //!
 //! After the nodes, the cluster's *local leaves* (the nodes still in the
 //! front: inner nodes with a child in a later cluster) get their missing
