@@ -286,6 +286,7 @@ fn drop_test_steps_without_the_fallback_and_agrees_with_parry() {
         steps: 60,
         dt: 1.0 / 60.0,
         contact_recycling: false,
+        cluster_nodes: 4096,
     };
     let parry = droptest::run(&scene, ShapeKind::Parry, &mut |_, _| {}).unwrap();
     let plain = droptest::run(&scene, ShapeKind::Plain, &mut |_, _| {}).unwrap();

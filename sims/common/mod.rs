@@ -48,6 +48,9 @@ pub struct SimArgs {
     /// narrow phase on those steps, so off by default when timing).
     #[arg(long)]
     pub contact_recycling: bool,
+    /// Nodes per cluster of the racbvh shapes (power of two, 256 to 16384).
+    #[arg(long, default_value_t = 4096)]
+    pub cluster_nodes: u32,
     /// Horizontal offset of the drop point, as fractions of the base width: X,Z.
     #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [0.0, 0.0])]
     pub offset: Vec<f32>,
@@ -141,6 +144,7 @@ pub fn run_sim(
         steps: args.steps,
         dt: 1.0 / 60.0,
         contact_recycling: args.contact_recycling,
+        cluster_nodes: args.cluster_nodes,
     };
     let threads = rayon::current_num_threads();
     eprintln!(
@@ -174,6 +178,7 @@ pub fn run_sim(
         "base_bounds": [blo, bhi],
         "steps": scene.steps,
         "dt": scene.dt,
+        "racbvh_cluster_nodes": scene.cluster_nodes,
         "threads": threads,
         "machine": machine(),
     });

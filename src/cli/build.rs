@@ -118,7 +118,13 @@ pub fn run(a: BuildArgs) -> CliResult {
                     vertex_bits: (a.vertex_bits != 0).then_some(a.vertex_bits),
                     ..Default::default()
                 };
-                let rac = RacBvh::encode(&bvh, &mesh, &rac_opts)?;
+                let pb = progress_bar("compressing", 0);
+                let rac = RacBvh::encode_with_progress(&bvh, &mesh, &rac_opts, &|done, total| {
+                    pb.set_length(total);
+                    pb.set_position(done);
+                });
+                pb.finish_and_clear();
+                let rac = rac?;
                 if let Some(path) = &a.output {
                     rac.save(path)?;
                     // Read it back so that a bad file is caught here.

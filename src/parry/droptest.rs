@@ -83,6 +83,9 @@ pub struct DropScene {
     /// Let rapier reuse contacts of pairs that barely moved (off for
     /// timing: it skips the narrow phase).
     pub contact_recycling: bool,
+    /// Nodes per RACBVH cluster for the `racbvh` shapes (a power of two,
+    /// 256 to 16 K; 4096 is the codec's default).
+    pub cluster_nodes: u32,
 }
 
 /// How to place a dropped mesh over a base mesh.
@@ -230,6 +233,7 @@ fn make_shapes(kind: ShapeKind, scene: &DropScene) -> Result<Shapes, String> {
             let make = |m: &Mesh| -> Result<CbvhShape, String> {
                 let fits = RacOptions {
                     cache_budget_bytes: usize::MAX,
+                    cluster_nodes: scene.cluster_nodes,
                     ..Default::default()
                 };
                 let shape = CbvhShape::racbvh(m, &opts, &fits)?;

@@ -2,7 +2,10 @@
 //! predicted boxes, delta-coded triangle and child indices.
 
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
+
+use rayon::prelude::*;
 
 use super::coder::{BitWriter, DictEncoder, MAX_K, SymbolEncoder, golomb_len, zigzag};
 use super::mesh::PackedMesh;
@@ -189,6 +192,18 @@ impl RacBvh {
         mesh: &Mesh,
         options: &RacOptions,
     ) -> Result<RacBvh, RacError> {
+        Self::encode_with_progress(bvh, mesh, options, &|_, _| {})
+    }
+
+    /// [`encode`](Self::encode), calling `progress(clusters done, clusters)`
+    /// as clusters finish. Clusters are compressed in parallel on rayon's
+    /// threads; the result does not depend on the thread count.
+    pub fn encode_with_progress(
+        bvh: &CanonicalBvh,
+        mesh: &Mesh,
+        options: &RacOptions,
+        progress: &(dyn Fn(u64, u64) + Sync),
+    ) -> Result<RacBvh, RacError> {
         let start = Instant::now();
         options.validate()?;
         check_tree(bvh, mesh.triangles.len())?;
@@ -209,7 +224,7 @@ impl RacBvh {
             Grid::new(&root_box, options.bits)
         };
         let mut q: Vec<QBox> = boxes
-            .iter()
+            .par_iter()
             .map(|b| {
                 if empty {
                     QBox::default()
@@ -237,17 +252,30 @@ impl RacBvh {
         let mut meta = Vec::new();
         let (mut tree_bits, mut bv_bits) = (0u64, 0u64);
         let csize = options.cluster_nodes as usize;
-        for (c, s) in (0..bvh.nodes.len()).step_by(csize).enumerate() {
+        let clusters = bvh.nodes.len().div_ceil(csize);
+        let done = AtomicU64::new(0);
+        progress(0, clusters as u64);
+        let coded: Vec<(Vec<u8>, u64, u64)> = (0..clusters)
+            .into_par_iter()
+            .map(|c| {
+                let s = c * csize;
+                let e = (s + csize).min(bvh.nodes.len());
+                // Front positions counted from the newest node suit
+                // depth-first orders, from the oldest breadth-first ones:
+                // try both.
+                let newest = encode_cluster(bvh, &q, &header, c as u32, s, e, false)?;
+                let oldest = encode_cluster(bvh, &q, &header, c as u32, s, e, true)?;
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1, clusters as u64);
+                Ok(if oldest.0.len() < newest.0.len() {
+                    oldest
+                } else {
+                    newest
+                })
+            })
+            .collect::<Result<_, RacError>>()?;
+        for (c, (bytes, tb, bb)) in coded.into_iter().enumerate() {
+            let s = c * csize;
             let e = (s + csize).min(bvh.nodes.len());
-            // Front positions counted from the newest node suit depth-first
-            // orders, from the oldest breadth-first ones: try both.
-            let newest = encode_cluster(bvh, &q, &header, c as u32, s, e, false)?;
-            let oldest = encode_cluster(bvh, &q, &header, c as u32, s, e, true)?;
-            let (bytes, tb, bb) = if oldest.0.len() < newest.0.len() {
-                oldest
-            } else {
-                newest
-            };
             meta.push(ClusterMeta {
                 offset: data.len() as u64,
                 nodes: (e - s) as u32,
