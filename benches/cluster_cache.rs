@@ -55,8 +55,9 @@ use lru::LruCache;
 /// `CLUSTER_BYTES_PER_NODE`: the 32-byte node and its local root's ordinal).
 const CLUSTER_BYTES_PER_NODE: usize = 34;
 
-/// Per-thread pins of the codec (`cache::PINS`).
-const PINS: usize = 4;
+/// Per-thread pins of the codec (`cache::PINS`), direct-mapped by cluster
+/// index.
+const PINS: usize = 16;
 
 /// A cached cluster value.
 type Value = Arc<Vec<u8>>;
@@ -136,22 +137,19 @@ impl NodeCursor for Recorder<'_> {
 }
 
 /// The look-ups one thread sends to the shared cache: its rays' cluster
-/// accesses, minus those its [`PINS`] most recently used clusters serve.
+/// accesses, minus those its [`PINS`] direct-mapped pins serve.
 fn thread_trace(per_ray: &[Vec<u32>], thread: usize, threads: usize) -> Vec<u32> {
-    let mut pins: Vec<u32> = Vec::with_capacity(PINS);
+    let mut pins = [u32::MAX; PINS];
     let mut out = Vec::new();
     for ray in per_ray.iter().skip(thread).step_by(threads) {
         for &c in ray {
-            if pins.contains(&c) {
-                // A pinned cluster: no look-up (the codec does not reorder
-                // its pins on a hit either).
+            let slot = &mut pins[c as usize % PINS];
+            if *slot == c {
+                // A pinned cluster: no look-up.
                 continue;
             }
             out.push(c);
-            if pins.len() == PINS {
-                pins.pop();
-            }
-            pins.insert(0, c);
+            *slot = c;
         }
     }
     out

@@ -175,17 +175,19 @@ impl ClusterCache {
     }
 }
 
-/// How many clusters a thread keeps pinned: enough for a traversal's
-/// back-and-forth between a parent cluster and its child clusters to stay
-/// off the shared cache's locks.
-pub const PINS: usize = 4;
+/// How many clusters a thread keeps pinned, direct-mapped by cluster
+/// index: enough for a traversal's back-and-forth between a parent
+/// cluster and its child clusters to stay off the shared cache. Every
+/// look-up that misses the pins takes a shard's lock and moves reference
+/// counts that all threads share (see the module docs for the figures).
+pub const PINS: usize = 16;
 
-/// A thread's pinned clusters: (tree id, cluster index, cluster), newest
-/// first.
+/// A thread's pinned clusters: (tree id, cluster index, cluster), in slot
+/// `cluster index % PINS`.
 type Pins = [Option<(u64, u32, Arc<Cluster>)>; PINS];
 
 thread_local! {
-    static PIN: RefCell<Pins> = const { RefCell::new([None, None, None, None]) };
+    static PIN: RefCell<Pins> = const { RefCell::new([const { None }; PINS]) };
 }
 
 /// Runs `f` on cluster `c` of tree `owner` if this thread has it pinned.
@@ -193,23 +195,26 @@ thread_local! {
 pub fn with_pinned<R>(owner: u64, c: u32, f: impl FnOnce(&Cluster) -> Option<R>) -> Option<R> {
     PIN.with(|p| {
         let p = p.try_borrow().ok()?;
-        let (_, _, cl) = p
-            .iter()
-            .flatten()
-            .find(|(o, k, _)| *o == owner && *k == c)?;
-        f(cl)
+        match &p[c as usize % PINS] {
+            Some((o, k, cl)) if *o == owner && *k == c => f(cl),
+            _ => None,
+        }
     })
 }
 
-/// Pins `cl` for this thread (the oldest pin is dropped if all are taken).
-pub fn pin(owner: u64, c: u32, cl: &Arc<Cluster>) {
+/// Pins `cl` for this thread (replacing the pin in its slot). Takes the
+/// caller's reference rather than a clone: each reference-count change is a
+/// write to a cache line every thread shares.
+pub fn pin(owner: u64, c: u32, cl: Arc<Cluster>) {
     PIN.with(|p| {
         if let Ok(mut p) = p.try_borrow_mut() {
-            if p.iter().flatten().any(|(o, k, _)| *o == owner && *k == c) {
+            let slot = &mut p[c as usize % PINS];
+            if matches!(slot, Some((o, k, _)) if *o == owner && *k == c) {
                 return;
             }
-            p.rotate_right(1);
-            p[0] = Some((owner, c, cl.clone()));
+            let old = slot.replace((owner, c, cl));
+            drop(p);
+            drop(old);
         }
     });
 }
@@ -219,7 +224,10 @@ pub fn pin(owner: u64, c: u32, cl: &Arc<Cluster>) {
 /// cluster it decodes to what the cache holds).
 pub fn unpin() {
     PIN.with(|p| {
-        let old = p.try_borrow_mut().ok().map(|mut p| std::mem::take(&mut *p));
+        let old = p
+            .try_borrow_mut()
+            .ok()
+            .map(|mut p| std::mem::replace(&mut *p, [const { None }; PINS]));
         drop(old);
     });
 }

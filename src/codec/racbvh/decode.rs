@@ -388,7 +388,7 @@ impl RacBvh {
                 .map_err(|what| RacError::CorruptCluster { cluster: c, what })?;
         }
         let w = cl.nodes[l].words();
-        cache::pin(self.id, c, &cl);
+        cache::pin(self.id, c, cl);
         Ok(w)
     }
 
