@@ -111,6 +111,19 @@ fn bar(msg: &str, total: u64) -> ProgressBar {
     pb
 }
 
+/// Sizes rayon's global pool from `--threads`. Call it first: mesh
+/// generation and loading already use the pool.
+pub fn init_threads(args: &SimArgs) -> Result<(), String> {
+    match args.threads {
+        Some(0) => Err("--threads must be at least 1".into()),
+        Some(t) => rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .map_err(|e| format!("--threads {t}: {e}")),
+        None => Ok(()),
+    }
+}
+
 /// Places `dropped` over `base`, runs every shape, prints the table and
 /// writes the JSON and plot. `names` = (dropped, base) for the report.
 pub fn run_sim(
@@ -120,12 +133,6 @@ pub fn run_sim(
     names: (String, String),
     args: &SimArgs,
 ) -> Result<(), String> {
-    if let Some(t) = args.threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build_global()
-            .map_err(|e| e.to_string())?;
-    }
     if args.steps == 0 {
         return Err("--steps must be at least 1".into());
     }

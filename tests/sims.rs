@@ -1,0 +1,86 @@
+//! The drop-test binaries as a user runs them: small generated meshes, a
+//! few steps, every flag that changes the run, and the JSON they write.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn temp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("cbvh-sims-{}-{name}", std::process::id()))
+}
+
+fn run(bin: &str, args: &[&str]) -> (bool, String) {
+    let out = Command::new(bin).args(args).output().expect("run the sim");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+#[test]
+fn lucy_on_turbine_runs_with_threads_and_cluster_size_and_writes_json() {
+    let json = temp("lucy.json");
+    let (ok, stderr) = run(
+        env!("CARGO_BIN_EXE_lucy-on-turbine"),
+        &[
+            "--statue-tris",
+            "3000",
+            "--turbine-tris",
+            "3000",
+            "--steps",
+            "40",
+            "--shapes",
+            "plain,racbvh",
+            "--threads",
+            "1",
+            "--cluster-nodes",
+            "256",
+            "--json",
+            json.to_str().unwrap(),
+        ],
+    );
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    std::fs::remove_file(&json).ok();
+    assert_eq!(v["scene"]["threads"], 1);
+    assert_eq!(v["scene"]["racbvh_cluster_nodes"], 256);
+    let runs = v["runs"].as_array().unwrap();
+    let shapes: Vec<&str> = runs.iter().map(|r| r["shape"].as_str().unwrap()).collect();
+    assert_eq!(shapes, ["plain", "racbvh"]);
+    for r in runs {
+        for key in ["median", "mean", "p95", "max"] {
+            assert!(r["narrow_phase_ms"][key].as_f64().unwrap() >= 0.0, "{r}");
+        }
+        assert_eq!(r["fallback_bvh_built"], false);
+        assert!(r["bytes_per_triangle"].as_f64().unwrap() > 0.0);
+        // 40 steps from just above the turbine: the statue lands.
+        assert!(r["steps_in_contact"].as_u64().unwrap() > 0, "{r}");
+    }
+}
+
+#[test]
+fn sims_reject_bad_flags_with_a_message() {
+    let (ok, stderr) = run(
+        env!("CARGO_BIN_EXE_robot-in-plant"),
+        &["--threads", "0", "--steps", "1"],
+    );
+    assert!(!ok);
+    assert!(stderr.contains("--threads must be at least 1"), "{stderr}");
+    let (ok, stderr) = run(
+        env!("CARGO_BIN_EXE_lucy-on-turbine"),
+        &[
+            "--statue-tris",
+            "1000",
+            "--turbine-tris",
+            "1000",
+            "--steps",
+            "1",
+            "--shapes",
+            "racbvh",
+            "--cluster-nodes",
+            "100",
+        ],
+    );
+    assert!(!ok);
+    assert!(stderr.contains("power of two"), "{stderr}");
+}
