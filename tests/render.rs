@@ -183,6 +183,65 @@ fn parry_image_matches_plain_but_for_a_few_silhouette_pixels() {
 }
 
 #[test]
+fn scene_packets_give_the_single_ray_hits_over_posed_instances() {
+    let (s, r) = (statue(), robot());
+    let (ps, pr) = (
+        plain(&s, Layout::DepthFirst, 1),
+        plain(&r, Layout::VanEmdeBoas, 2),
+    );
+    let (ns, nr) = (VertexNormals::from_mesh(&s), VertexNormals::from_mesh(&r));
+    let scene = scene_of([&ps, &pr], [&ns, &nr]);
+    let b = scene.bounds();
+    let mut stats = TraversalStats::default();
+    let (mut hits, mut by_instance) = (0, [0; 2]);
+    // 8×8 tiles of a camera looking at the two instances from several
+    // sides, and partial packets.
+    for (k, eye) in [
+        Vec3A::new(0.0, 0.3, 1.6),
+        Vec3A::new(-1.2, 0.4, -0.8),
+        Vec3A::new(1.0, 1.2, 0.2),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let eye = b.center() + eye * b.extent().max_element();
+        let fwd = (b.center() - eye).normalize();
+        let right = fwd.cross(Vec3A::Y).normalize();
+        let up = right.cross(fwd);
+        for tile in 0..16 {
+            let (tx, ty) = ((tile % 4) as f32, (tile / 4) as f32);
+            let n = if tile == 5 { 37 } else { 64 };
+            let rays: Vec<Ray> = (0..n)
+                .map(|p| {
+                    let x = (tx * 8.0 + (p % 8) as f32) / 32.0 - 0.5;
+                    let y = (ty * 8.0 + (p / 8) as f32) / 32.0 - 0.5;
+                    let d = fwd + right * x * (0.5 + 0.1 * k as f32) + up * y * 0.5;
+                    Ray::new(eye, d.normalize())
+                })
+                .collect();
+            let mut got = vec![None; n];
+            scene.closest_packet(&rays, &mut got, &mut stats);
+            for (ray, g) in rays.iter().zip(&got) {
+                let want = scene.closest(ray, f32::INFINITY, &mut stats);
+                assert_eq!(
+                    g.map(|h| (h.instance, h.hit)),
+                    want.map(|h| (h.instance, h.hit)),
+                    "{ray:?}"
+                );
+                if let Some(h) = g {
+                    hits += 1;
+                    by_instance[h.instance] += 1;
+                }
+            }
+        }
+    }
+    assert!(
+        hits > 500 && by_instance.iter().all(|&c| c > 50),
+        "{hits} {by_instance:?}"
+    );
+}
+
+#[test]
 fn parry_target_agrees_with_plain_ray_by_ray() {
     let s = statue();
     let p = plain(&s, Layout::DepthFirst, 1);

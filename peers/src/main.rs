@@ -59,7 +59,10 @@ fn parse_args() -> Args {
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
-        let mut val = |name: &str| it.next().unwrap_or_else(|| die(&format!("{name} needs a value")));
+        let mut val = |name: &str| {
+            it.next()
+                .unwrap_or_else(|| die(&format!("{name} needs a value")))
+        };
         match arg.as_str() {
             "--tris" => a.tris = parse_list(&val("--tris"), "--tris"),
             "--threads" => a.threads = parse_list(&val("--threads"), "--threads"),
@@ -70,8 +73,8 @@ fn parse_args() -> Args {
             other => die(&format!("unknown argument {other:?}")),
         }
     }
-    if a.threads.contains(&0) || a.width == 0 {
-        die("--threads and --width must be positive");
+    if a.threads.contains(&0) || a.width == 0 || !a.width.is_multiple_of(8) {
+        die("--threads must be positive and --width a positive multiple of 8");
     }
     a
 }
@@ -94,19 +97,25 @@ fn camera_rays(lo: Vec3A, hi: Vec3A, width: usize) -> RaySet {
     let half = (15f32).to_radians().tan();
     let mut origins = Vec::with_capacity(width * width);
     let mut dirs = Vec::with_capacity(width * width);
-    for y in 0..width {
-        for x in 0..width {
-            let u = ((x as f32 + 0.5) / width as f32 * 2.0 - 1.0) * half;
-            let v = (1.0 - (y as f32 + 0.5) / width as f32 * 2.0) * half;
-            origins.push(eye);
-            dirs.push(Vec3A::new(u, v, -1.0).normalize());
+    // In 8×8 tiles (row-major tiles, row-major pixels in a tile), so that a
+    // packet peer casts a tile per packet; a chunk is a row of tiles.
+    for ty in (0..width).step_by(8) {
+        for tx in (0..width).step_by(8) {
+            for y in ty..ty + 8 {
+                for x in tx..tx + 8 {
+                    let u = ((x as f32 + 0.5) / width as f32 * 2.0 - 1.0) * half;
+                    let v = (1.0 - (y as f32 + 0.5) / width as f32 * 2.0) * half;
+                    origins.push(eye);
+                    dirs.push(Vec3A::new(u, v, -1.0).normalize());
+                }
+            }
         }
     }
     RaySet {
         name: "camera",
         origins,
         dirs,
-        chunk: width,
+        chunk: width * 8,
     }
 }
 
@@ -148,32 +157,23 @@ fn random_rays(lo: Vec3A, hi: Vec3A, n: usize, chunk: usize) -> RaySet {
 
 /// Casts every ray of `rays` with `cast` (returning the hit distance) on
 /// the current rayon pool, one chunk per task; returns the number of hits.
-fn cast_all<F>(rays: &RaySet, cast: &F) -> usize
-where
-    F: Fn(Vec3A, Vec3A) -> Option<f32> + Sync,
-{
+fn cast_all(rays: &RaySet, p: &Peer) -> usize {
     rays.origins
         .par_chunks(rays.chunk)
         .zip(rays.dirs.par_chunks(rays.chunk))
         .map(|(os, ds)| {
-            os.iter()
-                .zip(ds)
-                .filter(|(o, d)| cast(**o, **d).is_some())
-                .count()
+            let mut out = vec![None; os.len()];
+            cast_slice(p, os, ds, &mut out);
+            out.iter().filter(|h| h.is_some()).count()
         })
         .sum()
 }
 
 /// Single-threaded, per-ray results, for the agreement check.
-fn cast_each<F>(rays: &RaySet, cast: &F) -> Vec<Option<f32>>
-where
-    F: Fn(Vec3A, Vec3A) -> Option<f32> + Sync,
-{
-    rays.origins
-        .iter()
-        .zip(&rays.dirs)
-        .map(|(o, d)| cast(*o, *d))
-        .collect()
+fn cast_each(rays: &RaySet, p: &Peer) -> Vec<Option<f32>> {
+    let mut out = vec![None; rays.origins.len()];
+    cast_slice(p, &rays.origins, &rays.dirs, &mut out);
+    out
 }
 
 struct Row {
@@ -266,6 +266,35 @@ struct Peer<'a> {
     bytes: usize,
     build: Duration,
     cast: Box<dyn Fn(Vec3A, Vec3A) -> Option<f32> + Sync + 'a>,
+    /// Casts up to 64 rays as one packet, if the structure has a packet
+    /// path (`cast` is then used for nothing).
+    packet: Option<PacketFn<'a>>,
+}
+
+/// A packet caster: origins, directions, one result slot per ray.
+type PacketFn<'a> = Box<dyn Fn(&[Vec3A], &[Vec3A], &mut [Option<f32>]) + Sync + 'a>;
+
+/// Rays per packet: an 8×8 tile of the camera.
+const PACKET: usize = 64;
+
+/// Casts `os`/`ds` through `p`, in packets of [`PACKET`] if it has them.
+fn cast_slice(p: &Peer, os: &[Vec3A], ds: &[Vec3A], out: &mut [Option<f32>]) {
+    match &p.packet {
+        Some(f) => {
+            for ((o, d), r) in os
+                .chunks(PACKET)
+                .zip(ds.chunks(PACKET))
+                .zip(out.chunks_mut(PACKET))
+            {
+                f(o, d, r);
+            }
+        }
+        None => {
+            for ((o, d), r) in os.iter().zip(ds).zip(out.iter_mut()) {
+                *r = (p.cast)(*o, *d);
+            }
+        }
+    }
 }
 
 fn main() {
@@ -317,6 +346,66 @@ fn main() {
                 )
                 .map(|h| h.t)
             }),
+            packet: None,
+        };
+
+        // cbvh plain again, casting 8×8 tiles as packets.
+        let p_packets = Peer {
+            name: "cbvh plain packets",
+            bytes: plain.bytes_total(),
+            build: p_cbvh.build,
+            cast: Box::new(|_, _| unreachable!("a packet peer")),
+            packet: Some(Box::new(move |os, ds, out| {
+                let rays: Vec<cbvh::geom::Ray> = os
+                    .iter()
+                    .zip(ds)
+                    .map(|(o, d)| cbvh::geom::Ray::new(*o, *d))
+                    .collect();
+                let mut hits = [None; PACKET];
+                cbvh::query::closest_hits(
+                    plain_ref,
+                    &rays,
+                    f32::INFINITY,
+                    &mut hits[..rays.len()],
+                    &mut cbvh::TraversalStats::default(),
+                );
+                for (o, h) in out.iter_mut().zip(&hits) {
+                    *o = h.map(|h| h.t);
+                }
+            })),
+        };
+
+        // cbvh, RACBVH codec, with a cache that holds every cluster (warmed
+        // by the agreement pass below, before anything is timed).
+        let t0 = Instant::now();
+        let bvh = cbvh::build::build(&mesh, &cbvh::build::BuildOptions::default(), &|_, _| {})
+            .unwrap_or_else(|e| die(&format!("cbvh build: {e}")));
+        let rac = cbvh::codec::racbvh::RacBvh::encode(
+            &bvh,
+            &mesh,
+            &cbvh::codec::racbvh::RacOptions {
+                cache_budget_bytes: usize::MAX,
+                ..Default::default()
+            },
+        )
+        .unwrap_or_else(|e| die(&format!("racbvh: {e}")));
+        let build = t0.elapsed();
+        drop(bvh);
+        let rac_ref = &rac;
+        let p_rac = Peer {
+            name: "cbvh racbvh",
+            bytes: rac.bytes_total(),
+            build,
+            cast: Box::new(move |o, d| {
+                cbvh::query::closest_hit(
+                    rac_ref,
+                    &cbvh::geom::Ray::new(o, d),
+                    f32::INFINITY,
+                    &mut cbvh::TraversalStats::default(),
+                )
+                .map(|h| h.t)
+            }),
+            packet: None,
         };
 
         // parry TriMesh.
@@ -341,6 +430,7 @@ fn main() {
                 );
                 tm_ref.cast_local_ray(&ray, f32::MAX, true)
             }),
+            packet: None,
         };
 
         // obvhs CWBVH (PLOC + reinsertion, medium preset), with the
@@ -383,12 +473,13 @@ fn main() {
                     .ray_traverse(ray, &mut hit, |r, id| cwt_ref[id].intersect(r))
                     .then_some(hit.t)
             }),
+            packet: None,
         };
 
         #[cfg(feature = "embree")]
         let embree = embree_peer::Embree::new(&mesh);
         #[allow(unused_mut)]
-        let mut peers: Vec<Peer> = vec![p_cbvh, p_parry, p_obvhs];
+        let mut peers: Vec<Peer> = vec![p_cbvh, p_packets, p_rac, p_parry, p_obvhs];
         #[cfg(feature = "embree")]
         peers.push(embree.peer());
 
@@ -399,8 +490,7 @@ fn main() {
 
         for rays in &ray_sets {
             // Agreement: every structure against cbvh, ray by ray.
-            let results: Vec<Vec<Option<f32>>> =
-                peers.iter().map(|p| cast_each(rays, &p.cast)).collect();
+            let results: Vec<Vec<Option<f32>>> = peers.iter().map(|p| cast_each(rays, p)).collect();
             let reference = &results[0];
             for (p, mine) in peers.iter().zip(&results) {
                 let mut hm = 0;
@@ -502,7 +592,7 @@ fn main() {
                     pool.install(|| {
                         for _ in 0..RUNS {
                             let t0 = Instant::now();
-                            hits = cast_all(rays, &p.cast);
+                            hits = cast_all(rays, p);
                             times.push(t0.elapsed().as_secs_f64());
                         }
                     });
@@ -611,7 +701,9 @@ mod embree_peer {
     use std::sync::atomic::{AtomicIsize, Ordering};
     use std::time::{Duration, Instant};
 
-    use embree3::{BufferUsage, Device, Format, GeometryKind, IntersectContext, Ray, RayHit, Scene};
+    use embree3::{
+        BufferUsage, Device, Format, GeometryKind, IntersectContext, Ray, RayHit, Scene,
+    };
     use glam::Vec3A;
 
     use super::Peer;
@@ -677,15 +769,12 @@ mod embree_peer {
                 build: self.build,
                 cast: Box::new(move |o: Vec3A, d: Vec3A| {
                     let mut ctx = IntersectContext::coherent();
-                    let mut rh = RayHit::from(Ray::segment(
-                        o.to_array(),
-                        d.to_array(),
-                        0.0,
-                        f32::INFINITY,
-                    ));
+                    let mut rh =
+                        RayHit::from(Ray::segment(o.to_array(), d.to_array(), 0.0, f32::INFINITY));
                     scene.intersect(&mut ctx, &mut rh);
                     rh.hit.is_valid().then_some(rh.ray.tfar)
                 }),
+                packet: None,
             }
         }
     }

@@ -3,6 +3,8 @@
 //!
 //! - [`ray`]: closest hit (distance, triangle id, barycentrics) and any hit
 //!   within a distance (shadow rays);
+//! - [`packet`]: closest hits of a packet of coherent rays traversed
+//!   together (camera tiles);
 //! - [`mod@overlap`]: triangles whose boxes overlap a box, and a generic
 //!   box-pruned visit;
 //! - [`point`]: the closest point of the mesh to a point;
@@ -16,12 +18,14 @@
 pub mod best;
 pub mod bvtt;
 pub mod overlap;
+pub mod packet;
 pub mod point;
 pub mod ray;
 
 pub use best::find_best;
 pub use bvtt::{bvtt, bvtt_min, bvtt_pairs};
 pub use overlap::{overlap, visit};
+pub use packet::{closest_hits, closest_hits_within};
 pub use point::{PointHit, closest_point};
 pub use ray::{RayHit, any_hit, any_hit_with, closest_hit, closest_hit_with};
 

@@ -7,6 +7,7 @@ use super::target::RayTarget;
 use crate::cursor::TraversalStats;
 use crate::geom::{Aabb, Pose, Ray};
 use crate::mesh::Mesh;
+use crate::query::packet::MAX_PACKET;
 use crate::query::ray::RayHit;
 
 /// Area-weighted per-vertex normals of a mesh, computed once.
@@ -227,6 +228,57 @@ impl<'a> Scene<'a> {
             }
         }
         best
+    }
+
+    /// [`Scene::closest`] for a packet of up to
+    /// [`MAX_PACKET`] coherent rays
+    /// (within `[0, ∞)`), each instance traversed once for the rays that
+    /// meet its box: the same hits, ray by ray.
+    pub fn closest_packet(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<SceneHit>],
+        stats: &mut TraversalStats,
+    ) {
+        let n = rays.len();
+        assert!(
+            n <= MAX_PACKET && out.len() == n,
+            "a packet of at most {MAX_PACKET} rays"
+        );
+        out.fill(None);
+        let mut best_t = [f32::INFINITY; MAX_PACKET];
+        let mut local = [Ray::new(Vec3A::ZERO, Vec3A::Z); MAX_PACKET];
+        let mut limit = [0.0f32; MAX_PACKET];
+        let mut which = [0usize; MAX_PACKET];
+        let mut hits = [None; MAX_PACKET];
+        for (i, inst) in self.instances.iter().enumerate() {
+            let mut k = 0;
+            for (r, ray) in rays.iter().enumerate() {
+                if ray.intersect_aabb(&self.boxes[i], best_t[r]).is_some() {
+                    local[k] = self.local_ray(i, ray);
+                    limit[k] = best_t[r];
+                    which[k] = r;
+                    k += 1;
+                }
+            }
+            if k == 0 {
+                continue;
+            }
+            inst.target
+                .closest_packet(&local[..k], &limit[..k], &mut hits[..k], stats);
+            for (j, h) in hits[..k].iter().enumerate() {
+                let r = which[j];
+                if let Some(h) = h
+                    && (h.t < best_t[r] || out[r].is_none())
+                {
+                    best_t[r] = h.t;
+                    out[r] = Some(SceneHit {
+                        instance: i,
+                        hit: *h,
+                    });
+                }
+            }
+        }
     }
 
     /// Whether anything is hit within `[0, t_max]`.

@@ -3,7 +3,7 @@
 
 use glam::Vec3A;
 
-use super::scene::{Material, Scene, Surface};
+use super::scene::{Material, Scene, SceneHit, Surface};
 use crate::cursor::TraversalStats;
 use crate::geom::{Aabb, Ray};
 
@@ -184,6 +184,19 @@ impl Shading {
     /// The colour seen along `ray` (unit direction), `depth` bounces deep.
     pub fn trace(&self, scene: &Scene, ray: &Ray, depth: u32, counts: &mut RayCounts) -> Vec3A {
         let hit = scene.closest(ray, f32::INFINITY, &mut counts.traversal);
+        self.trace_hit(scene, ray, hit, depth, counts)
+    }
+
+    /// [`Shading::trace`] given the meshes' closest hit along `ray` (from
+    /// [`Scene::closest`] or [`Scene::closest_packet`]).
+    pub fn trace_hit(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        hit: Option<SceneHit>,
+        depth: u32,
+        counts: &mut RayCounts,
+    ) -> Vec3A {
         let t_mesh = hit.map_or(f32::INFINITY, |h| h.hit.t);
         let (surface, fog) = match (self.ground_hit(ray, t_mesh), hit) {
             (Some(t), _) => {

@@ -9,6 +9,7 @@ use crate::codec::ByteSize;
 use crate::codec::plain::PlainBvh;
 use crate::cursor::{NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Ray, Triangle};
+use crate::query::packet::closest_hits_within;
 use crate::query::ray::{RayHit, any_hit, closest_hit};
 
 /// An acceleration structure the ray tracer can shoot rays at, in its own
@@ -19,6 +20,22 @@ pub trait RayTarget: Sync {
 
     /// Whether `ray` hits anything with `t` in `[0, t_max]` (shadow rays).
     fn any(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> bool;
+
+    /// The closest hits of a packet of up to
+    /// [`MAX_PACKET`](crate::query::packet::MAX_PACKET) coherent rays,
+    /// `rays[i]` within `[0, t_max[i]]` into `out[i]`: the same hits as
+    /// [`RayTarget::closest`] ray by ray (which is what this default does).
+    fn closest_packet(
+        &self,
+        rays: &[Ray],
+        t_max: &[f32],
+        out: &mut [Option<RayHit>],
+        stats: &mut TraversalStats,
+    ) {
+        for ((ray, &t), o) in rays.iter().zip(t_max).zip(out.iter_mut()) {
+            *o = self.closest(ray, t, stats);
+        }
+    }
 
     /// The corners of triangle `id` (an id [`RayTarget::closest`] reported).
     fn triangle(&self, id: u32) -> Triangle;
@@ -109,6 +126,16 @@ impl<C: NodeCursor> RayTarget for CursorTarget<C> {
     #[inline]
     fn any(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> bool {
         any_hit(&self.cursor, ray, t_max, stats)
+    }
+
+    fn closest_packet(
+        &self,
+        rays: &[Ray],
+        t_max: &[f32],
+        out: &mut [Option<RayHit>],
+        stats: &mut TraversalStats,
+    ) {
+        closest_hits_within(&self.cursor, rays, t_max, out, stats);
     }
 
     fn triangle(&self, id: u32) -> Triangle {

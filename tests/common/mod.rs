@@ -190,6 +190,10 @@ pub fn check_queries<C: NodeCursor>(c: &C, mesh: &Mesh, seed: u64) {
             assert_eq!(any, want.is_some(), "any hit disagrees for {ray:?}");
         }
     }
+    let packet_hits = check_packets(c, mesh, seed, &mut stats);
+    if mesh.triangles.len() >= 100 {
+        assert!(packet_hits > 50, "only {packet_hits} packet rays hit");
+    }
     let mut rng = Rng(seed ^ 0xABCD);
     let (lo, hi) = mesh.bounds().unwrap_or(([0.0; 3], [1.0; 3]));
     let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
@@ -235,6 +239,66 @@ pub fn check_queries<C: NodeCursor>(c: &C, mesh: &Mesh, seed: u64) {
         }
     }
     assert!(stats.nodes_visited > 0);
+}
+
+/// Packets give the single-ray hits, ray for ray: incoherent packets of
+/// the test rays (every size up to the largest), and coherent 8×8 camera
+/// tiles looking at the mesh from several sides.
+/// Returns how many packet rays hit.
+pub fn check_packets<C: NodeCursor>(
+    c: &C,
+    mesh: &Mesh,
+    seed: u64,
+    stats: &mut TraversalStats,
+) -> usize {
+    let mut packets: Vec<Vec<Ray>> = Vec::new();
+    let rays = test_rays(mesh, seed, 130);
+    packets.push(rays[..64].to_vec());
+    packets.push(rays[64..127].to_vec());
+    packets.push(rays[127..].to_vec());
+    packets.push(Vec::new());
+    let (lo, hi) = mesh.bounds().unwrap_or(([0.0; 3], [1.0; 3]));
+    let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
+    let centre = (lo + hi) * 0.5;
+    let r = (hi - lo).length().max(1e-3);
+    for (k, side) in [
+        Vec3A::X,
+        Vec3A::NEG_Y,
+        Vec3A::new(0.3, 0.5, -1.0).normalize(),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let eye = centre + side * r * 1.5;
+        let fwd = (centre - eye).normalize();
+        let right = fwd.any_orthonormal_vector();
+        let up = right.cross(fwd);
+        // A tile over the middle of the view and one at its edge.
+        for offset in [0.0f32, 0.3 + 0.1 * k as f32] {
+            packets.push(
+                (0..64)
+                    .map(|p| {
+                        let (x, y) = ((p % 8) as f32 / 7.0 - 0.5, (p / 8) as f32 / 7.0 - 0.5);
+                        let d = fwd + right * (x * 0.6 + offset) + up * (y * 0.6);
+                        Ray::new(eye, d.normalize())
+                    })
+                    .collect(),
+            );
+        }
+    }
+    let mut hits = 0;
+    for packet in &packets {
+        for t_max in [f32::INFINITY, r] {
+            let mut got = vec![None; packet.len()];
+            query::closest_hits(c, packet, t_max, &mut got, stats);
+            for (ray, g) in packet.iter().zip(&got) {
+                let want = query::closest_hit(c, ray, t_max, stats);
+                assert_eq!(*g, want, "packet and single ray differ for {ray:?}");
+                hits += usize::from(g.is_some());
+            }
+        }
+    }
+    hits
 }
 
 /// A few relative poses of B in A's frame: identity, shifted, rotated.

@@ -1,0 +1,124 @@
+//! Camera rays one at a time against 8×8 packets, on one thread, same
+//! tree, same rays, side by side (the peers crate compares with parry,
+//! obvhs and Embree).
+//!
+//! ```text
+//! cargo run --release --example packet_bench -- [tris] [width] [codec: plain|racbvh]
+//! ```
+
+use std::time::Instant;
+
+use cbvh::TraversalStats;
+use cbvh::build::{BuildOptions, build};
+use cbvh::codec::plain::PlainBvh;
+use cbvh::codec::racbvh::{RacBvh, RacOptions};
+use cbvh::cursor::NodeCursor;
+use cbvh::geom::Ray;
+use cbvh::query::{self, RayHit};
+use cbvh::scene::{Kind, generate};
+use glam::Vec3A;
+
+/// The peers crate's camera: +Z side, 2.2 extents away, 30° field of view,
+/// rays in 8×8 tiles.
+fn camera(lo: Vec3A, hi: Vec3A, width: usize) -> Vec<Ray> {
+    let centre = (lo + hi) * 0.5;
+    let size = (hi - lo).max_element();
+    let eye = centre + Vec3A::new(0.0, 0.0, 2.2 * size);
+    let half = 15f32.to_radians().tan();
+    let mut rays = Vec::with_capacity(width * width);
+    for ty in (0..width).step_by(8) {
+        for tx in (0..width).step_by(8) {
+            for y in ty..ty + 8 {
+                for x in tx..tx + 8 {
+                    let u = ((x as f32 + 0.5) / width as f32 * 2.0 - 1.0) * half;
+                    let v = (1.0 - (y as f32 + 0.5) / width as f32 * 2.0) * half;
+                    rays.push(Ray::new(eye, Vec3A::new(u, v, -1.0).normalize()));
+                }
+            }
+        }
+    }
+    rays
+}
+
+fn bench<C: NodeCursor>(c: &C, rays: &[Ray]) {
+    let single = |out: &mut Vec<Option<RayHit>>| {
+        out.clear();
+        let mut s = TraversalStats::default();
+        out.extend(
+            rays.iter()
+                .map(|r| query::closest_hit(c, r, f32::INFINITY, &mut s)),
+        );
+        s
+    };
+    let packets = |out: &mut Vec<Option<RayHit>>| {
+        out.clear();
+        out.resize(rays.len(), None);
+        let mut s = TraversalStats::default();
+        for (r, o) in rays.chunks(64).zip(out.chunks_mut(64)) {
+            query::closest_hits(c, r, f32::INFINITY, o, &mut s);
+        }
+        s
+    };
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    single(&mut a);
+    packets(&mut b);
+    let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
+    assert_eq!(
+        differ, 0,
+        "packets and single rays disagree on {differ} rays"
+    );
+    let hits = a.iter().filter(|h| h.is_some()).count();
+    for (name, f) in [
+        (
+            "single",
+            &single as &dyn Fn(&mut Vec<Option<RayHit>>) -> TraversalStats,
+        ),
+        ("packets", &packets),
+    ] {
+        let mut runs = Vec::new();
+        let mut stats = TraversalStats::default();
+        for _ in 0..7 {
+            let t = Instant::now();
+            stats = f(&mut a);
+            runs.push(rays.len() as f64 / t.elapsed().as_secs_f64() / 1e6);
+        }
+        runs.sort_by(f64::total_cmp);
+        println!(
+            "{name:>8}: {:.2} M rays/s (median of 7), {hits} hits of {}, {:.1} nodes and {:.1} triangle tests per ray",
+            runs[3],
+            rays.len(),
+            stats.nodes_visited as f64 / rays.len() as f64,
+            stats.primitive_tests as f64 / rays.len() as f64
+        );
+    }
+}
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let tris: usize = args
+        .next()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1_000_000);
+    let width: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(512);
+    let codec = args.next().unwrap_or_else(|| "plain".into());
+    assert!(width.is_multiple_of(8), "width must be a multiple of 8");
+    let mesh = generate(Kind::Statue, tris, 0, &mut |_, _| {}).expect("generate");
+    let (lo, hi) = mesh.bounds().expect("non-empty");
+    let rays = camera(Vec3A::from(lo), Vec3A::from(hi), width);
+    let bvh = build(&mesh, &BuildOptions::default(), &|_, _| {}).expect("build");
+    println!(
+        "statue, {} triangles, {width}×{width} camera, 1 thread, {codec}",
+        mesh.triangle_count()
+    );
+    match codec.as_str() {
+        "plain" => bench(&PlainBvh::new(&bvh, &mesh), &rays),
+        "racbvh" => {
+            let opts = RacOptions {
+                cache_budget_bytes: usize::MAX,
+                ..Default::default()
+            };
+            bench(&RacBvh::encode(&bvh, &mesh, &opts).expect("encode"), &rays)
+        }
+        other => panic!("unknown codec {other}"),
+    }
+}
