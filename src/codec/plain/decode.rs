@@ -23,8 +23,17 @@ impl NodeCursor for PlainBvh {
     #[inline]
     fn for_each_child(&self, node: &u32, mut f: impl FnMut(u32, Aabb)) {
         let n = &self.nodes[*node as usize];
-        f(n.left, self.nodes[n.left as usize].aabb());
-        f(n.right, self.nodes[n.right as usize].aabb());
+        let (l, r) = (&self.nodes[n.left as usize], &self.nodes[n.right as usize]);
+        // Ask for the grandchildren now: a traversal that descends into a
+        // child reads them next, and the far one is a cache miss otherwise.
+        for c in [l, r] {
+            if !c.is_leaf() {
+                prefetch(self.nodes.as_ptr().wrapping_add(c.left as usize));
+                prefetch(self.nodes.as_ptr().wrapping_add(c.right as usize));
+            }
+        }
+        f(n.left, l.aabb());
+        f(n.right, r.aabb());
     }
 
     #[inline]
@@ -55,4 +64,19 @@ impl NodeCursor for PlainBvh {
     fn triangle_count(&self) -> usize {
         self.triangles.len()
     }
+}
+
+/// Hints the processor to bring the cache line at `p` in; never faults, so
+/// any address (even one past the array) is fine.
+#[inline(always)]
+fn prefetch<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        // SAFETY: a prefetch is a hint that never dereferences its address
+        // architecturally (no fault on any address); SSE is part of x86_64.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(p.cast::<i8>()) };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
 }
