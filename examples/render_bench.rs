@@ -1,5 +1,5 @@
-//! Ray-tracing throughput of cbvh's plain BVH and parry's `TriMesh`, side
-//! by side in one process: rays per second on generated statues, primary
+//! Ray-tracing throughput of cbvh's plain and RACBVH codecs and parry's
+//! `TriMesh`, side by side in one process: rays per second on generated statues, primary
 //! rays only and full Whitted (shadows from 3 lights, 2 mirror bounces),
 //! on 1 and 2 threads.
 //!
@@ -17,6 +17,7 @@ use std::time::Instant;
 
 use cbvh::build::{BuildOptions, build};
 use cbvh::codec::plain::PlainBvh;
+use cbvh::codec::racbvh::{RacBvh, RacOptions};
 use cbvh::render::{
     CursorTarget, RayTarget, RenderOptions, RenderStats, Scene, VertexNormals, render,
 };
@@ -94,7 +95,7 @@ fn main() {
     let a = Args::parse();
     if !a.json {
         println!(
-            "{:>10} {:>6} {:>8} {:>7} {:>10} {:>8} {:>9} {:>8} {:>8} {:>7}",
+            "{:>10} {:>6} {:>8} {:>7} {:>10} {:>8} {:>9} {:>11} {:>8} {:>8} {:>7}",
             "triangles",
             "codec",
             "mode",
@@ -102,6 +103,7 @@ fn main() {
             "rays",
             "seconds",
             "Mrays/s",
+            "Mrays/cpu-s",
             "steps/r",
             "prims/r",
             "B/tri"
@@ -112,15 +114,31 @@ fn main() {
         let t0 = Instant::now();
         let bvh = build(&mesh, &BuildOptions::default(), &|_, _| {}).expect("build");
         let plain = CursorTarget::plain(PlainBvh::new(&bvh, &mesh));
-        drop(bvh);
         let plain_build = t0.elapsed().as_secs_f64();
+        // RACBVH with a cache that holds the whole tree (the warm-up render
+        // fills it).
+        let t0 = Instant::now();
+        let rac_opts = RacOptions {
+            cache_budget_bytes: usize::MAX,
+            ..Default::default()
+        };
+        let rac = CursorTarget::new(
+            RacBvh::encode(&bvh, &mesh, &rac_opts).expect("racbvh"),
+            "racbvh",
+        );
+        let rac_build = plain_build + t0.elapsed().as_secs_f64();
+        drop(bvh);
         let t0 = Instant::now();
         let parry = cbvh::parry::parry_trimesh(&mesh).expect("parry TriMesh");
         let parry_build = t0.elapsed().as_secs_f64();
         let normals = VertexNormals::from_mesh(&mesh);
         let n = mesh.triangle_count();
         drop(mesh);
-        let targets: [(&dyn RayTarget, f64); 2] = [(&plain, plain_build), (&parry, parry_build)];
+        let targets: [(&dyn RayTarget, f64); 3] = [
+            (&plain, plain_build),
+            (&rac, rac_build),
+            (&parry, parry_build),
+        ];
         let base = RenderOptions {
             width: a.width,
             height: a.height,
