@@ -377,3 +377,38 @@ fn trees_and_handles_cross_threads() {
     send_sync::<RacBvh>();
     send_sync::<<RacBvh as NodeCursor>::Node>();
 }
+
+#[test]
+fn triangles_of_two_trees_do_not_mix_in_the_per_thread_cache() {
+    // Same triangle ids in both trees, different geometry; a dropped tree's
+    // successor must not see its cached triangles either.
+    let (a, b) = (statue(3_000), soup(4, 3_000, 5.0));
+    let ra = RacBvh::encode(&tree(&a, Layout::DepthFirst, 1), &a, &opts(256, None)).unwrap();
+    let rb = RacBvh::encode(&tree(&b, Layout::DepthFirst, 1), &b, &opts(256, None)).unwrap();
+    let (da, db) = (ra.decoded_mesh(), rb.decoded_mesh());
+    let corners = |m: &Mesh, id: u32| m.triangle_vertices(id as usize);
+    let n = a.triangles.len().min(b.triangles.len()) as u32;
+    for round in 0..3 {
+        for id in (0..n).step_by(7) {
+            assert_eq!(
+                NodeCursor::triangle(&ra, id).map(|v| v.to_array()),
+                corners(&da, id)
+            );
+            assert_eq!(
+                NodeCursor::triangle(&rb, id).map(|v| v.to_array()),
+                corners(&db, id)
+            );
+        }
+        if round == 1 {
+            let rc = RacBvh::encode(&tree(&b, Layout::VanEmdeBoas, 1), &b, &opts(1024, Some(12)))
+                .unwrap();
+            let dc = rc.decoded_mesh();
+            for id in (0..n).step_by(7) {
+                assert_eq!(
+                    NodeCursor::triangle(&rc, id).map(|v| v.to_array()),
+                    corners(&dc, id)
+                );
+            }
+        }
+    }
+}

@@ -548,6 +548,44 @@ fn complete(cl: &Cluster, root: LocalRoot, parent: &QBox, max_q: u32) -> Result<
     Ok(())
 }
 
+/// Decoded triangles per thread, direct-mapped by triangle id: (tree id,
+/// triangle id, corners). A traversal of two trees meets the same leaf
+/// again and again (once per leaf of the other tree it overlaps), and a
+/// stored triangle costs twelve frame-of-reference look-ups to decode.
+const TRI_CACHE: usize = 1024;
+
+type TriSlot = (u64, u32, Triangle);
+
+thread_local! {
+    static TRIS: std::cell::RefCell<Box<[TriSlot]>> =
+        std::cell::RefCell::new(vec![(0, 0, [glam::Vec3A::ZERO; 3]); TRI_CACHE].into_boxed_slice());
+}
+
+impl RacBvh {
+    /// Triangle `id` of the stored mesh, through this thread's cache of
+    /// decoded triangles (tree ids start at 1, so an empty slot never
+    /// matches).
+    #[inline]
+    fn cached_triangle(&self, id: u32) -> Triangle {
+        let slot = id as usize % TRI_CACHE;
+        let hit = TRIS.with(|c| {
+            let c = c.try_borrow().ok()?;
+            let (tree, tid, tri) = &c[slot];
+            (*tree == self.id && *tid == id).then_some(*tri)
+        });
+        if let Some(t) = hit {
+            return t;
+        }
+        let t = self.mesh.triangle(id);
+        TRIS.with(|c| {
+            if let Ok(mut c) = c.try_borrow_mut() {
+                c[slot] = (self.id, id, t);
+            }
+        });
+        t
+    }
+}
+
 /// The cursor's node handle: the global node index with the node's words
 /// 6 and 7 (children, or a leaf's triangle id / slot and count), so that
 /// `is_leaf`, `for_each_child` and a one-triangle leaf's
@@ -618,16 +656,16 @@ impl NodeCursor for RacBvh {
     fn for_each_triangle(&self, node: &RacNode, mut f: impl FnMut(u32, &Triangle)) {
         let count = node.b & !LEAF_FLAG;
         if count == 1 {
-            f(node.a, &self.mesh.triangle(node.a));
+            f(node.a, &self.cached_triangle(node.a));
         } else if count > 1 {
-            self.try_leaf_ids(node.index, &mut |id| f(id, &self.mesh.triangle(id)))
+            self.try_leaf_ids(node.index, &mut |id| f(id, &self.cached_triangle(id)))
                 .unwrap_or_else(|e| panic!("racbvh: {e}"));
         }
     }
 
     #[inline]
     fn triangle(&self, id: u32) -> Triangle {
-        self.mesh.triangle(id)
+        self.cached_triangle(id)
     }
 
     fn triangle_count(&self) -> usize {
