@@ -124,7 +124,11 @@
 //! - **Mesh** ([`mesh`]): vertices quantized over the mesh's box (16 bits
 //!   by default) or lossless `f32`; coordinates and vertex indices in
 //!   frame-of-reference blocks of 128 values, so any triangle is O(1) away
-//!   without a decoded-mesh cache. Not RACM (see [`mesh`] for why).
+//!   without a decoded-mesh cache. Not RACM (see [`mesh`] for why). The
+//!   cursor keeps the last 1024 triangles each thread decoded (direct-mapped
+//!   by id, keyed by tree): a two-tree traversal meets each leaf once per
+//!   overlapping leaf of the other tree, and this took the drop test's
+//!   narrow phase from 1.65 to 1.14 ms.
 //!
 //! Errors: every cluster carries an xxh3 checksum in the meta table, checked
 //! whenever the cluster is decoded; the header, the meta table and the mesh
