@@ -22,6 +22,7 @@ pub mod build;
 pub mod codec;
 pub mod cursor;
 pub mod geom;
+mod hash;
 pub mod mesh;
 pub mod parry;
 pub mod plot;

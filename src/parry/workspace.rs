@@ -1,8 +1,7 @@
 //! The persistent per-triangle-pair workspace of cbvh's manifold queries,
 //! so that rapier warm-starts contacts as it does for parry's meshes.
 
-use std::collections::HashMap;
-
+use crate::hash::FastMap;
 use parry3d::query::{
     ContactManifold, ContactManifoldsWorkspace, TypedWorkspaceData, WorkspaceData,
 };
@@ -18,7 +17,7 @@ struct SubDetector {
 #[derive(Clone, Default)]
 pub struct CbvhWorkspace {
     timestamp: bool,
-    sub_detectors: HashMap<(u32, u32), SubDetector>,
+    sub_detectors: FastMap<(u32, u32), SubDetector>,
 }
 
 impl WorkspaceData for CbvhWorkspace {

@@ -180,7 +180,7 @@ pub trait SymbolDecoder {
 /// The dictionary for the encoder: symbols by rank and ranks by symbol.
 pub struct DictEncoder {
     by_rank: Vec<u32>,
-    rank_of: std::collections::HashMap<u32, u32>,
+    rank_of: crate::hash::FastMap<u32, u32>,
     esc: u32,
 }
 
@@ -189,7 +189,7 @@ impl DictEncoder {
     pub fn new() -> Self {
         Self {
             by_rank: vec![0],
-            rank_of: std::collections::HashMap::new(),
+            rank_of: crate::hash::FastMap::default(),
             esc: 0,
         }
     }

@@ -8,12 +8,11 @@
 //! is indexed. ASCII loops with more than three vertices are
 //! fan-triangulated. Normals and attribute bytes are ignored.
 
-use std::collections::HashMap;
 use std::collections::hash_map::Entry;
-use std::hash::{BuildHasherDefault, Hasher};
 use std::io::{BufRead, Read};
 
 use super::{Bytes, Encoding, Lines, Src, fan, finite, parse_f32, show, tokens};
+use crate::hash::FastMap;
 use crate::mesh::{Mesh, MeshError, Place};
 
 /// How many leading bytes decide between ASCII and binary.
@@ -42,38 +41,10 @@ pub(super) fn read<R: BufRead>(mut reader: R, src: &Src) -> Result<(Mesh, Encodi
     }
 }
 
-/// Hashes the 96-bit keys of the welder (std's default SipHash is several
-/// times slower, and keys here do not come from an adversary that matters).
-#[derive(Default)]
-struct WeldHasher(u64);
-
-impl Hasher for WeldHasher {
-    fn finish(&self) -> u64 {
-        // murmur3's finaliser: every input bit affects the high and low bits.
-        let mut h = self.0;
-        h ^= h >> 33;
-        h = h.wrapping_mul(0xff51_afd7_ed55_8ccd);
-        h ^= h >> 33;
-        h = h.wrapping_mul(0xc4ce_b9fe_1a85_ec53);
-        h ^ (h >> 33)
-    }
-
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0.rotate_left(8) ^ u64::from(b)).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-        }
-    }
-
-    fn write_u128(&mut self, x: u128) {
-        let (lo, hi) = (x as u64, (x >> 64) as u64);
-        self.0 ^= lo.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ hi.rotate_left(29);
-    }
-}
-
 /// Merges corners with bitwise equal positions into indexed vertices.
 #[derive(Default)]
 struct Welder {
-    map: HashMap<u128, u32, BuildHasherDefault<WeldHasher>>,
+    map: FastMap<u128, u32>,
     vertices: Vec<[f32; 3]>,
 }
 
