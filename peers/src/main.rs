@@ -16,6 +16,8 @@ use glam::Vec3A;
 use rayon::prelude::*;
 
 use cbvh::codec::ByteSize;
+
+mod whitted;
 use cbvh::codec::plain::PlainBvh;
 
 const RUNS: usize = 5;
@@ -28,6 +30,7 @@ struct Args {
     width: usize,
     random: usize,
     json: bool,
+    whitted: bool,
 }
 
 fn parse_list(s: &str, what: &str) -> Vec<usize> {
@@ -44,7 +47,7 @@ fn parse_list(s: &str, what: &str) -> Vec<usize> {
 fn die(msg: &str) -> ! {
     eprintln!("peers: {msg}");
     eprintln!(
-        "usage: peers [--tris N[,N..]] [--threads T[,T..]] [--width PX] [--random RAYS] [--json]"
+        "usage: peers [--tris N[,N..]] [--threads T[,T..]] [--width PX] [--random RAYS] [--whitted] [--json]"
     );
     std::process::exit(2)
 }
@@ -56,6 +59,7 @@ fn parse_args() -> Args {
         width: 512,
         random: 0,
         json: false,
+        whitted: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
@@ -69,6 +73,7 @@ fn parse_args() -> Args {
             "--width" => a.width = parse_list(&val("--width"), "--width")[0],
             "--random" => a.random = parse_list(&val("--random"), "--random")[0],
             "--json" => a.json = true,
+            "--whitted" => a.whitted = true,
             "-h" | "--help" => die("help"),
             other => die(&format!("unknown argument {other:?}")),
         }
@@ -317,6 +322,11 @@ fn main() {
         .collect();
 
     for &n in &args.tris {
+        let whitted_opts = cbvh::render::RenderOptions {
+            width: 640,
+            height: 480,
+            ..Default::default()
+        };
         eprintln!("[{n} tris] generating statue");
         let mesh = cbvh::scene::generate(cbvh::scene::Kind::Statue, n, 0, &mut |_, _| {})
             .unwrap_or_else(|e| die(&format!("generate: {e}")));
@@ -329,10 +339,12 @@ fn main() {
         let t0 = Instant::now();
         let bvh = cbvh::build::build(&mesh, &cbvh::build::BuildOptions::default(), &|_, _| {})
             .unwrap_or_else(|e| die(&format!("cbvh build: {e}")));
-        let plain = PlainBvh::new(&bvh, &mesh);
+        let plain_target =
+            cbvh::render::CursorTarget::new(PlainBvh::new(&bvh, &mesh), "cbvh plain");
         let build = t0.elapsed();
         drop(bvh);
-        let plain_ref = &plain;
+        let plain_ref = plain_target.cursor();
+        let plain = plain_ref;
         let p_cbvh = Peer {
             name: "cbvh plain",
             bytes: plain.bytes_total(),
@@ -391,7 +403,9 @@ fn main() {
         .unwrap_or_else(|e| die(&format!("racbvh: {e}")));
         let build = t0.elapsed();
         drop(bvh);
-        let rac_ref = &rac;
+        let rac_target = cbvh::render::CursorTarget::new(rac, "cbvh racbvh");
+        let rac_ref = rac_target.cursor();
+        let rac = rac_ref;
         let p_rac = Peer {
             name: "cbvh racbvh",
             bytes: rac.bytes_total(),
@@ -617,6 +631,53 @@ fn main() {
                 }
             }
         }
+
+        // Full Whitted renders, every structure behind cbvh's renderer.
+        if args.whitted {
+            let (lo, hi) = mesh.bounds().expect("non-empty mesh");
+            let ob = whitted::ObvhsTarget {
+                cw: &cw,
+                tris: &cw_tris,
+                mesh: &mesh,
+                bounds: cbvh::geom::Aabb::from_arrays(lo, hi),
+                bytes: cw_bytes,
+            };
+            #[allow(unused_mut)]
+            let mut targets: Vec<(
+                &dyn cbvh::render::RayTarget,
+                &'static str,
+                Duration,
+            )> = vec![
+                (&plain_target, "cbvh plain", peers[0].build),
+                (&rac_target, "cbvh racbvh", peers[2].build),
+                (&trimesh, "parry TriMesh", peers[3].build),
+                (&ob, "obvhs CWBVH", peers[4].build),
+            ];
+            #[cfg(feature = "embree")]
+            let et = embree.target(&mesh);
+            #[cfg(feature = "embree")]
+            targets.push((&et, "embree", peers[5].build));
+            for (threads, pool) in &pools {
+                for &(t, name, build) in &targets {
+                    let (rays, secs) = whitted::best_render(t, &whitted_opts, pool, 3);
+                    let mrays = rays as f64 / secs / 1e6;
+                    eprintln!(
+                        "[{n} tris] whitted 640x480, {name}, {threads} thread(s): {mrays:.2} M rays/s ({rays} rays)"
+                    );
+                    rows.push(Row {
+                        tris: ntri,
+                        rays: "whitted",
+                        structure: name,
+                        threads: *threads,
+                        mrays,
+                        runs_ms: vec![secs * 1e3],
+                        hits: 0,
+                        bytes: t.bytes_total(),
+                        build_s: build.as_secs_f64(),
+                    });
+                }
+            }
+        }
     }
 
     if args.json {
@@ -697,6 +758,74 @@ fn main() {
 
 #[cfg(feature = "embree")]
 mod embree_peer {
+    /// Embree behind cbvh's `RayTarget`: `rtcIntersect1` for closest hits,
+    /// `rtcOccluded1` for shadow rays.
+    pub struct EmbreeTarget<'a> {
+        scene: &'a Scene<'static>,
+        mesh: &'a cbvh::Mesh,
+        bounds: cbvh::geom::Aabb,
+        bytes: usize,
+    }
+
+    impl cbvh::render::RayTarget for EmbreeTarget<'_> {
+        fn closest(
+            &self,
+            ray: &cbvh::geom::Ray,
+            t_max: f32,
+            _stats: &mut cbvh::TraversalStats,
+        ) -> Option<cbvh::query::RayHit> {
+            let mut ctx = IntersectContext::coherent();
+            let mut rh = RayHit::from(Ray::segment(
+                ray.origin.to_array(),
+                ray.dir.to_array(),
+                0.0,
+                t_max,
+            ));
+            self.scene.intersect(&mut ctx, &mut rh);
+            rh.hit.is_valid().then(|| cbvh::query::RayHit {
+                t: rh.ray.tfar,
+                triangle: rh.hit.primID,
+                u: rh.hit.u,
+                v: rh.hit.v,
+            })
+        }
+
+        fn any(
+            &self,
+            ray: &cbvh::geom::Ray,
+            t_max: f32,
+            _stats: &mut cbvh::TraversalStats,
+        ) -> bool {
+            let mut ctx = IntersectContext::incoherent();
+            let mut r = Ray::segment(ray.origin.to_array(), ray.dir.to_array(), 0.0, t_max);
+            self.scene.occluded(&mut ctx, &mut r)
+        }
+
+        fn triangle(&self, id: u32) -> cbvh::geom::Triangle {
+            cbvh::geom::triangle_from_arrays(self.mesh.triangle_vertices(id as usize))
+        }
+
+        fn triangle_count(&self) -> usize {
+            self.mesh.triangle_count()
+        }
+
+        fn bounds(&self) -> cbvh::geom::Aabb {
+            self.bounds
+        }
+
+        fn bytes_total(&self) -> usize {
+            self.bytes
+        }
+
+        fn counts_traversal(&self) -> bool {
+            false
+        }
+
+        fn name(&self) -> &str {
+            "embree"
+        }
+    }
+
     use std::sync::Arc;
     use std::sync::atomic::{AtomicIsize, Ordering};
     use std::time::{Duration, Instant};
@@ -758,6 +887,17 @@ mod embree_peer {
                 scene,
                 bytes,
                 build,
+            }
+        }
+
+        /// The scene behind cbvh's renderer interface (face normals).
+        pub fn target<'a>(&'a self, mesh: &'a cbvh::Mesh) -> EmbreeTarget<'a> {
+            let (lo, hi) = mesh.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
+            EmbreeTarget {
+                scene: &self.scene,
+                mesh,
+                bounds: cbvh::geom::Aabb::from_arrays(lo, hi),
+                bytes: self.bytes,
             }
         }
 
