@@ -66,3 +66,19 @@ impl TraversalStats {
         self.primitive_tests += o.primitive_tests;
     }
 }
+
+/// Hints the processor to bring the cache line at `p` in (for cursors that
+/// know which nodes a traversal reads next); never faults, so any address
+/// (even one past the array) is fine.
+#[inline(always)]
+pub(crate) fn prefetch<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        // SAFETY: a prefetch is a hint that never dereferences its address
+        // architecturally (no fault on any address); SSE is part of x86_64.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(p.cast::<i8>()) };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
+}

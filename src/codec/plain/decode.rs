@@ -3,7 +3,7 @@
 use glam::Vec3A;
 
 use super::PlainBvh;
-use crate::cursor::NodeCursor;
+use crate::cursor::{NodeCursor, prefetch};
 use crate::geom::{Aabb, Triangle};
 
 impl NodeCursor for PlainBvh {
@@ -64,19 +64,4 @@ impl NodeCursor for PlainBvh {
     fn triangle_count(&self) -> usize {
         self.triangles.len()
     }
-}
-
-/// Hints the processor to bring the cache line at `p` in; never faults, so
-/// any address (even one past the array) is fine.
-#[inline(always)]
-fn prefetch<T>(p: *const T) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        // SAFETY: a prefetch is a hint that never dereferences its address
-        // architecturally (no fault on any address); SSE is part of x86_64.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>(p.cast::<i8>()) };
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = p;
 }
