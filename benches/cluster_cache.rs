@@ -11,7 +11,8 @@
 //! to its RACBVH cluster, `node >> log2(cluster_nodes)` (RACBVH keeps the
 //! layout order). The rays are dealt round-robin to the threads, and each
 //! thread's sequence goes through a model of the codec's per-thread pins
-//! (the last four distinct clusters are read without the shared cache), so
+//! (16 clusters, direct-mapped by cluster index, are read without the
+//! shared cache), so
 //! what is replayed is what reaches the shared cache (the codec also drops
 //! a thread's pins when it decodes; the model does not). `CBVH_CACHE_RAYS`
 //! sets the ray count (default 20 000).
