@@ -634,13 +634,14 @@ fn main() {
 
         // Full Whitted renders, every structure behind cbvh's renderer.
         if args.whitted {
-            let (lo, hi) = mesh.bounds().expect("non-empty mesh");
-            let ob = whitted::ObvhsTarget {
-                cw: &cw,
-                tris: &cw_tris,
+            let ob = whitted::Foreign {
+                queries: whitted::Obvhs {
+                    cw: &cw,
+                    tris: &cw_tris,
+                },
                 mesh: &mesh,
-                bounds: cbvh::geom::Aabb::from_arrays(lo, hi),
                 bytes: cw_bytes,
+                name: "obvhs CWBVH",
             };
             #[allow(unused_mut)]
             let mut targets: Vec<(
@@ -758,22 +759,12 @@ fn main() {
 
 #[cfg(feature = "embree")]
 mod embree_peer {
-    /// Embree behind cbvh's `RayTarget`: `rtcIntersect1` for closest hits,
-    /// `rtcOccluded1` for shadow rays.
-    pub struct EmbreeTarget<'a> {
-        scene: &'a Scene<'static>,
-        mesh: &'a cbvh::Mesh,
-        bounds: cbvh::geom::Aabb,
-        bytes: usize,
-    }
+    /// Embree's queries for cbvh's renderer: `rtcIntersect1` for closest
+    /// hits, `rtcOccluded1` for shadow rays.
+    pub struct EmbreeQueries<'a>(&'a Scene<'static>);
 
-    impl cbvh::render::RayTarget for EmbreeTarget<'_> {
-        fn closest(
-            &self,
-            ray: &cbvh::geom::Ray,
-            t_max: f32,
-            _stats: &mut cbvh::TraversalStats,
-        ) -> Option<cbvh::query::RayHit> {
+    impl crate::whitted::Queries for EmbreeQueries<'_> {
+        fn closest(&self, ray: &cbvh::geom::Ray, t_max: f32) -> Option<(f32, u32)> {
             let mut ctx = IntersectContext::coherent();
             let mut rh = RayHit::from(Ray::segment(
                 ray.origin.to_array(),
@@ -781,48 +772,14 @@ mod embree_peer {
                 0.0,
                 t_max,
             ));
-            self.scene.intersect(&mut ctx, &mut rh);
-            rh.hit.is_valid().then(|| cbvh::query::RayHit {
-                t: rh.ray.tfar,
-                triangle: rh.hit.primID,
-                u: rh.hit.u,
-                v: rh.hit.v,
-            })
+            self.0.intersect(&mut ctx, &mut rh);
+            rh.hit.is_valid().then_some((rh.ray.tfar, rh.hit.primID))
         }
 
-        fn any(
-            &self,
-            ray: &cbvh::geom::Ray,
-            t_max: f32,
-            _stats: &mut cbvh::TraversalStats,
-        ) -> bool {
+        fn any(&self, ray: &cbvh::geom::Ray, t_max: f32) -> bool {
             let mut ctx = IntersectContext::incoherent();
             let mut r = Ray::segment(ray.origin.to_array(), ray.dir.to_array(), 0.0, t_max);
-            self.scene.occluded(&mut ctx, &mut r)
-        }
-
-        fn triangle(&self, id: u32) -> cbvh::geom::Triangle {
-            cbvh::geom::triangle_from_arrays(self.mesh.triangle_vertices(id as usize))
-        }
-
-        fn triangle_count(&self) -> usize {
-            self.mesh.triangle_count()
-        }
-
-        fn bounds(&self) -> cbvh::geom::Aabb {
-            self.bounds
-        }
-
-        fn bytes_total(&self) -> usize {
-            self.bytes
-        }
-
-        fn counts_traversal(&self) -> bool {
-            false
-        }
-
-        fn name(&self) -> &str {
-            "embree"
+            self.0.occluded(&mut ctx, &mut r)
         }
     }
 
@@ -891,13 +848,15 @@ mod embree_peer {
         }
 
         /// The scene behind cbvh's renderer interface (face normals).
-        pub fn target<'a>(&'a self, mesh: &'a cbvh::Mesh) -> EmbreeTarget<'a> {
-            let (lo, hi) = mesh.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
-            EmbreeTarget {
-                scene: &self.scene,
+        pub fn target<'a>(
+            &'a self,
+            mesh: &'a cbvh::Mesh,
+        ) -> crate::whitted::Foreign<'a, EmbreeQueries<'a>> {
+            crate::whitted::Foreign {
+                queries: EmbreeQueries(&self.scene),
                 mesh,
-                bounds: cbvh::geom::Aabb::from_arrays(lo, hi),
                 bytes: self.bytes,
+                name: "embree",
             }
         }
 

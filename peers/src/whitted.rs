@@ -14,34 +14,38 @@ use cbvh::geom::{Aabb, Ray, Triangle};
 use cbvh::query::RayHit;
 use cbvh::render::{RayTarget, RenderOptions, Scene, render};
 
-/// obvhs's CWBVH with its triangles in BVH order.
-pub struct ObvhsTarget<'a> {
-    pub cw: &'a obvhs::cwbvh::CwBvh,
-    pub tris: &'a [obvhs::triangle::Triangle],
-    pub mesh: &'a cbvh::Mesh,
-    pub bounds: Aabb,
-    pub bytes: usize,
+/// A foreign structure's two ray queries, in cbvh's terms.
+pub trait Queries: Sync {
+    /// The closest hit within `[0, t_max]`: distance and original triangle
+    /// id.
+    fn closest(&self, ray: &Ray, t_max: f32) -> Option<(f32, u32)>;
+    /// Whether anything is hit within `[0, t_max]`.
+    fn any(&self, ray: &Ray, t_max: f32) -> bool;
 }
 
-impl RayTarget for ObvhsTarget<'_> {
+/// A foreign structure behind cbvh's `RayTarget`, over the mesh it was
+/// built from (for the triangles shading needs). Barycentrics are not
+/// reported: the scene is shaded with face normals.
+pub struct Foreign<'a, Q> {
+    pub queries: Q,
+    pub mesh: &'a cbvh::Mesh,
+    pub bytes: usize,
+    pub name: &'static str,
+}
+
+impl<Q: Queries> RayTarget for Foreign<'_, Q> {
     fn closest(&self, ray: &Ray, t_max: f32, _stats: &mut TraversalStats) -> Option<RayHit> {
-        let r = obvhs::ray::Ray::new(ray.origin, ray.dir, 0.0, t_max);
-        let mut hit = obvhs::ray::RayHit::none();
-        self.cw
-            .ray_traverse(r, &mut hit, |r, id| self.tris[id].intersect(r))
-            .then(|| RayHit {
-                t: hit.t,
-                triangle: self.cw.primitive_indices[hit.primitive_id as usize],
-                u: 0.0,
-                v: 0.0,
-            })
+        let (t, triangle) = self.queries.closest(ray, t_max)?;
+        Some(RayHit {
+            t,
+            triangle,
+            u: 0.0,
+            v: 0.0,
+        })
     }
 
     fn any(&self, ray: &Ray, t_max: f32, _stats: &mut TraversalStats) -> bool {
-        let r = obvhs::ray::Ray::new(ray.origin, ray.dir, 0.0, t_max);
-        !self
-            .cw
-            .ray_traverse_miss(r, |r, id| self.tris[id].intersect(r))
+        self.queries.any(ray, t_max)
     }
 
     fn triangle(&self, id: u32) -> Triangle {
@@ -53,7 +57,8 @@ impl RayTarget for ObvhsTarget<'_> {
     }
 
     fn bounds(&self) -> Aabb {
-        self.bounds
+        let (lo, hi) = self.mesh.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
+        Aabb::from_arrays(lo, hi)
     }
 
     fn bytes_total(&self) -> usize {
@@ -65,7 +70,30 @@ impl RayTarget for ObvhsTarget<'_> {
     }
 
     fn name(&self) -> &str {
-        "obvhs CWBVH"
+        self.name
+    }
+}
+
+/// obvhs's CWBVH with its triangles in BVH order.
+pub struct Obvhs<'a> {
+    pub cw: &'a obvhs::cwbvh::CwBvh,
+    pub tris: &'a [obvhs::triangle::Triangle],
+}
+
+impl Queries for Obvhs<'_> {
+    fn closest(&self, ray: &Ray, t_max: f32) -> Option<(f32, u32)> {
+        let r = obvhs::ray::Ray::new(ray.origin, ray.dir, 0.0, t_max);
+        let mut hit = obvhs::ray::RayHit::none();
+        self.cw
+            .ray_traverse(r, &mut hit, |r, id| self.tris[id].intersect(r))
+            .then(|| (hit.t, self.cw.primitive_indices[hit.primitive_id as usize]))
+    }
+
+    fn any(&self, ray: &Ray, t_max: f32) -> bool {
+        let r = obvhs::ray::Ray::new(ray.origin, ray.dir, 0.0, t_max);
+        !self
+            .cw
+            .ray_traverse_miss(r, |r, id| self.tris[id].intersect(r))
     }
 }
 

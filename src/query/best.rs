@@ -1,6 +1,7 @@
 //! Best-first search: the leaf minimising a cost, with node costs as lower
 //! bounds (for shape casts and other branch-and-bound queries).
 
+use super::far_first;
 use crate::cursor::{MAX_CHILDREN, NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Triangle};
 
@@ -55,7 +56,7 @@ pub fn find_best<C: NodeCursor, T>(
             }
         });
         let kids = &mut kids[..n];
-        kids.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+        far_first(kids);
         for (k, node) in kids.iter() {
             if let Some(node) = node {
                 stack.push((*node, *k));

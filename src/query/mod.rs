@@ -29,6 +29,20 @@ pub use packet::{closest_hits, closest_hits_within};
 pub use point::{PointHit, closest_point};
 pub use ray::{RayHit, any_hit, any_hit_with, closest_hit, closest_hit_with};
 
+/// Orders children by entry distance, farthest first, so that pushing them
+/// in this order pops the nearest next (two children, the usual case,
+/// without a sort).
+#[inline]
+pub(crate) fn far_first<T>(kids: &mut [(f32, T)]) {
+    if kids.len() == 2 {
+        if kids[0].0 < kids[1].0 {
+            kids.swap(0, 1);
+        }
+    } else {
+        kids.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+    }
+}
+
 /// A traversal stack that lives on the call stack for the usual depths and
 /// spills to the heap only for very deep trees: per-query allocations cost
 /// more than a ray's traversal on small trees.

@@ -16,8 +16,8 @@
 //! when that ray's slab test against it fails with its current best
 //! distance, so the hits are the single-ray hits.
 
-use super::Stack;
 use super::ray::RayHit;
+use super::{Stack, far_first};
 use crate::cursor::{MAX_CHILDREN, NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Ray, ray_triangle};
 
@@ -270,13 +270,7 @@ pub fn closest_hits_within<C: NodeCursor>(
             k += 1;
         });
         let kids = &mut kids[..k];
-        if k == 2 {
-            if kids[0].0 < kids[1].0 {
-                kids.swap(0, 1);
-            }
-        } else {
-            kids.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
-        }
+        far_first(kids);
         for (_, kid) in kids.iter() {
             if let Some((child, cb)) = kid {
                 stack.push((*child, *cb, mask));

@@ -2,6 +2,7 @@
 
 use glam::Vec3A;
 
+use super::far_first;
 use crate::cursor::{MAX_CHILDREN, NodeCursor, TraversalStats};
 use crate::geom::closest_point_on_triangle;
 
@@ -62,7 +63,7 @@ pub fn closest_point<C: NodeCursor>(
             }
         });
         let kids = &mut kids[..n];
-        kids.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+        far_first(kids);
         for (d, k) in kids.iter() {
             if let Some(k) = k {
                 stack.push((*k, *d));

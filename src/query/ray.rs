@@ -1,6 +1,6 @@
 //! Ray queries: closest hit and any hit.
 
-use super::Stack;
+use super::{Stack, far_first};
 use crate::cursor::{MAX_CHILDREN, NodeCursor, TraversalStats};
 use crate::geom::{Ray, TriHit, Triangle, ray_triangle};
 
@@ -79,13 +79,7 @@ pub fn closest_hit_with<C: NodeCursor>(
         });
         // Push far children first so the nearest is popped next.
         let kids = &mut kids[..n];
-        if n == 2 {
-            if kids[0].0 < kids[1].0 {
-                kids.swap(0, 1);
-            }
-        } else {
-            kids.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
-        }
+        far_first(kids);
         for (t, k) in kids.iter() {
             if let Some(k) = k {
                 stack.push((*k, *t));
