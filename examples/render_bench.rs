@@ -122,10 +122,7 @@ fn main() {
             cache_budget_bytes: usize::MAX,
             ..Default::default()
         };
-        let rac = CursorTarget::new(
-            RacBvh::encode(&bvh, &mesh, &rac_opts).expect("racbvh"),
-            "racbvh",
-        );
+        let rac = CursorTarget::racbvh(RacBvh::encode(&bvh, &mesh, &rac_opts).expect("racbvh"));
         let rac_build = plain_build + t0.elapsed().as_secs_f64();
         drop(bvh);
         let t0 = Instant::now();

@@ -291,7 +291,13 @@ impl Ray {
 
     /// Slab test: the entry parameter if the ray meets `b` within
     /// `[0, t_max]`, else `None`. Robust to zero direction components
-    /// (NaN from `0 * inf` is treated as "no constraint").
+    /// (NaN from `0 * inf` is treated as "no constraint"), and conservative
+    /// under rounding (Ize, "Robust BVH ray traversal", JCGT 2013): the exit
+    /// distance is enlarged by [`SLAB_EXIT_SCALE`], so a box is never
+    /// rejected for a point inside it that the triangle test hits, even when
+    /// the box is the triangle's own tight box. Without it, two trees with
+    /// the same triangles but different boxes (plain's exact ones, RACBVH's
+    /// quantized ones) could disagree on grazing and tied hits.
     #[inline]
     pub fn intersect_aabb(&self, b: &Aabb, t_max: f32) -> Option<f32> {
         let t1 = (b.min - self.origin) * self.inv_dir;
@@ -302,7 +308,7 @@ impl Ray {
         let tmin = t1.min(t2);
         let tmax = t1.max(t2);
         let t_enter = tmin.x.max(tmin.y).max(tmin.z).max(0.0);
-        let t_exit = tmax.x.min(tmax.y).min(tmax.z).min(t_max);
+        let t_exit = tmax.x.min(tmax.y).min(tmax.z).min(t_max) * SLAB_EXIT_SCALE;
         if t_enter <= t_exit {
             Some(t_enter)
         } else {
@@ -310,6 +316,10 @@ impl Ray {
         }
     }
 }
+
+/// The factor [`Ray::intersect_aabb`] applies to the exit distance:
+/// `1 + 2γ₃` of Ize's analysis (γ₃ = 3u / (1 − 3u), u = 2⁻²⁴), rounded up.
+pub const SLAB_EXIT_SCALE: f32 = 1.0 + 4.0 * f32::EPSILON;
 
 /// A ray–triangle hit.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -6,6 +6,7 @@ use std::process::Command;
 
 use cbvh::build::{BuildOptions, Layout, build};
 use cbvh::codec::plain::PlainBvh;
+use cbvh::codec::racbvh::{RacBvh, RacOptions};
 use cbvh::geom::{Aabb, Pose, Ray};
 use cbvh::render::{
     Camera, CursorTarget, Image, Instance, Light, Material, RayTarget, RenderOptions, Scene,
@@ -137,6 +138,61 @@ fn every_layout_and_leaf_size_renders_the_same_image() {
                     base_stats.rays.reflection
                 )
             );
+        }
+    }
+}
+
+/// RACBVH renders the plain codec's image from the same camera: pixel for
+/// pixel with lossless (f32) vertices (its quantized boxes are
+/// conservative, so the hits are the same), also with a cache far smaller
+/// than the tree, and within 0.5 % of the pixels with 16-bit vertices
+/// (lossy).
+#[test]
+fn racbvh_renders_the_plain_image_exactly_when_lossless_and_nearly_when_lossy() {
+    let (s, r) = (statue(), robot());
+    let normals = [VertexNormals::from_mesh(&s), VertexNormals::from_mesh(&r)];
+    let opts = RenderOptions {
+        width: 160,
+        height: 120,
+        ..small()
+    };
+    let p = [
+        plain(&s, Layout::DepthFirst, 1),
+        plain(&r, Layout::DepthFirst, 1),
+    ];
+    // One camera for all: the automatic view frames the scene's bounds, and
+    // RACBVH's root box is its quantization grid, a few ulps larger.
+    let plain_scene = scene_of([&p[0], &p[1]], [&normals[0], &normals[1]]);
+    let view = View::auto(&plain_scene, &opts);
+    let (base, _) = render_view(&plain_scene, &view, &opts, &|_, _| {}).expect("render");
+    let rac = |m: &Mesh, vertex_bits: Option<u32>, budget: usize| {
+        let tree = build(m, &BuildOptions::default(), &|_, _| {}).expect("build");
+        let o = RacOptions {
+            cluster_nodes: 256,
+            vertex_bits,
+            cache_budget_bytes: budget,
+            ..Default::default()
+        };
+        CursorTarget::racbvh(RacBvh::encode(&tree, m, &o).expect("encode"))
+    };
+    for (vertex_bits, budget, bound) in [
+        (None, usize::MAX, 0.0),
+        (None, 40_000, 0.0),
+        (Some(16), usize::MAX, 0.005),
+    ] {
+        let t = [rac(&s, vertex_bits, budget), rac(&r, vertex_bits, budget)];
+        let (img, _) = render_view(
+            &scene_of([&t[0], &t[1]], [&normals[0], &normals[1]]),
+            &view,
+            &opts,
+            &|_, _| {},
+        )
+        .expect("render");
+        let differ = img.fraction_differing(&base);
+        eprintln!("racbvh {vertex_bits:?} bits, budget {budget}: {differ}");
+        assert!(differ <= bound, "{vertex_bits:?} {budget}: {differ}");
+        if bound == 0.0 {
+            assert_eq!(img, base);
         }
     }
 }

@@ -114,7 +114,7 @@ fn make_target(
                 ..Default::default()
             };
             let rac = cbvh::codec::racbvh::RacBvh::encode(&build_tree(mesh, layout)?, mesh, &opts)?;
-            Box::new(CursorTarget::new(rac, "racbvh"))
+            Box::new(CursorTarget::racbvh(rac))
         }
     })
 }

@@ -19,7 +19,7 @@
 use super::ray::RayHit;
 use super::{Stack, far_first};
 use crate::cursor::{MAX_CHILDREN, NodeCursor, TraversalStats};
-use crate::geom::{Aabb, Ray, ray_triangle};
+use crate::geom::{Aabb, Ray, SLAB_EXIT_SCALE, ray_triangle};
 
 /// A child to push: its entry distance for the packet's first ray, the
 /// child and its box.
@@ -117,7 +117,7 @@ impl Lanes {
                 tmax[a] = if t1 > t2 { t1 } else { t2 };
             }
             let enter = tmin[0].max(tmin[1]).max(tmin[2]).max(0.0);
-            let exit = tmax[0].min(tmax[1]).min(tmax[2]).min(best_t[i]);
+            let exit = tmax[0].min(tmax[1]).min(tmax[2]).min(best_t[i]) * SLAB_EXIT_SCALE;
             enter <= exit
         };
         if mask.count_ones() <= 8 {
@@ -148,7 +148,7 @@ impl Lanes {
         }
         let mut ok = [0u8; MAX_PACKET];
         for i in 0..MAX_PACKET {
-            ok[i] = u8::from(enter[i] <= exit[i]);
+            ok[i] = u8::from(enter[i] <= exit[i] * SLAB_EXIT_SCALE);
         }
         // Eight 0/1 bytes to eight bits at a time.
         let mut out = 0u64;

@@ -2,7 +2,7 @@
 
 use super::{Stack, far_first};
 use crate::cursor::{MAX_CHILDREN, NodeCursor, TraversalStats};
-use crate::geom::{Ray, TriHit, Triangle, ray_triangle};
+use crate::geom::{Ray, SLAB_EXIT_SCALE, TriHit, Triangle, ray_triangle};
 
 /// The closest intersection of a ray with a mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -48,7 +48,7 @@ pub fn closest_hit_with<C: NodeCursor>(
     stack.push((root, t0));
     let mut kids: [(f32, Option<C::Node>); MAX_CHILDREN] = [(0.0, None); MAX_CHILDREN];
     while let Some((node, t_enter)) = stack.pop() {
-        if t_enter > best_t {
+        if t_enter > best_t * SLAB_EXIT_SCALE {
             continue;
         }
         if c.is_leaf(&node) {

@@ -7,6 +7,7 @@
 
 use crate::codec::ByteSize;
 use crate::codec::plain::PlainBvh;
+use crate::codec::racbvh::RacBvh;
 use crate::cursor::{NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Ray, Triangle};
 use crate::query::packet::closest_hits_within;
@@ -107,6 +108,14 @@ impl<C> CursorTarget<C> {
     /// The wrapped cursor.
     pub fn cursor(&self) -> &C {
         &self.cursor
+    }
+}
+
+impl CursorTarget<RacBvh> {
+    /// The RACBVH codec, with vertex indices (smooth shading, like
+    /// [`CursorTarget::plain`]).
+    pub fn racbvh(rac: RacBvh) -> Self {
+        CursorTarget::new(rac, "racbvh").with_vertex_indices(|r, id| r.triangle_indices(id))
     }
 }
 

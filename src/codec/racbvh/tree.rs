@@ -107,6 +107,18 @@ impl RacBvh {
         self.mesh.decoded()
     }
 
+    /// The vertex indices of stored triangle `t` (for smooth shading).
+    ///
+    /// # Panics
+    /// If `t` is not a triangle of the tree.
+    pub fn triangle_indices(&self, t: u32) -> [u32; 3] {
+        assert!(
+            (t as usize) < self.header.triangle_count as usize,
+            "racbvh: no triangle {t}"
+        );
+        self.mesh.indices(t)
+    }
+
     /// Compression figures.
     pub fn stats(&self) -> RacStats {
         let n = f64::from(self.header.node_count.max(1));
