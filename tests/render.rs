@@ -96,6 +96,30 @@ fn scene_of<'a>(targets: [&'a dyn RayTarget; 2], normals: [&'a VertexNormals; 2]
     )
 }
 
+/// What other targets' images are compared against: the statue and the
+/// robot, their vertex normals, plain targets (depth-first, one triangle
+/// per leaf), and a 160×120 frame.
+struct Reference {
+    meshes: [Mesh; 2],
+    normals: [VertexNormals; 2],
+    plain: [CursorTarget<PlainBvh>; 2],
+    opts: RenderOptions,
+}
+
+fn reference() -> Reference {
+    let meshes = [statue(), robot()];
+    Reference {
+        normals: meshes.each_ref().map(VertexNormals::from_mesh),
+        plain: meshes.each_ref().map(|m| plain(m, Layout::DepthFirst, 1)),
+        opts: RenderOptions {
+            width: 160,
+            height: 120,
+            ..small()
+        },
+        meshes,
+    }
+}
+
 fn empty_render(opts: &RenderOptions) -> Image {
     let scene = Scene::new(Vec::new());
     render(&scene, opts, &|_, _| {}).expect("render").0
@@ -149,17 +173,12 @@ fn every_layout_and_leaf_size_renders_the_same_image() {
 /// (lossy).
 #[test]
 fn racbvh_renders_the_plain_image_exactly_when_lossless_and_nearly_when_lossy() {
-    let (s, r) = (statue(), robot());
-    let normals = [VertexNormals::from_mesh(&s), VertexNormals::from_mesh(&r)];
-    let opts = RenderOptions {
-        width: 160,
-        height: 120,
-        ..small()
-    };
-    let p = [
-        plain(&s, Layout::DepthFirst, 1),
-        plain(&r, Layout::DepthFirst, 1),
-    ];
+    let Reference {
+        meshes: [s, r],
+        normals,
+        plain: p,
+        opts,
+    } = reference();
     // One camera for all: the automatic view frames the scene's bounds, and
     // RACBVH's root box is its quantization grid, a few ulps larger.
     let plain_scene = scene_of([&p[0], &p[1]], [&normals[0], &normals[1]]);
@@ -201,17 +220,12 @@ fn racbvh_renders_the_plain_image_exactly_when_lossless_and_nearly_when_lossy() 
 /// Möller–Trumbore's triangle tests disagree at a silhouette; bound 0.5 %.
 #[test]
 fn parry_image_matches_plain_but_for_a_few_silhouette_pixels() {
-    let (s, r) = (statue(), robot());
-    let normals = [VertexNormals::from_mesh(&s), VertexNormals::from_mesh(&r)];
-    let opts = RenderOptions {
-        width: 160,
-        height: 120,
-        ..small()
-    };
-    let p = [
-        plain(&s, Layout::DepthFirst, 1),
-        plain(&r, Layout::DepthFirst, 1),
-    ];
+    let Reference {
+        meshes: [s, r],
+        normals,
+        plain: p,
+        opts,
+    } = reference();
     let q = [
         cbvh::parry::parry_trimesh(&s).unwrap(),
         cbvh::parry::parry_trimesh(&r).unwrap(),
