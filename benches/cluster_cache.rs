@@ -45,11 +45,15 @@ use cbvh::build::{BuildOptions, build};
 use cbvh::codec::plain::PlainBvh;
 use cbvh::codec::racbvh::{RacBvh, RacOptions};
 use cbvh::cursor::NodeCursor;
-use cbvh::geom::{Aabb, Ray, Triangle};
+use cbvh::geom::{Aabb, Triangle};
 use cbvh::scene::{Kind, generate};
 use cbvh::{TraversalStats, query};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3A;
+
+/// The rays of `examples/racbvh_stats.rs`.
+#[path = "../examples/support/rays.rs"]
+mod ray_sets;
 use lru::LruCache;
 
 /// In-core bytes per node of a decoded cluster (the codec's
@@ -68,27 +72,6 @@ fn env_usize(name: &str, default: usize) -> usize {
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(default)
-}
-
-/// Random rays as in `examples/racbvh_stats.rs`.
-fn rays(lo: Vec3A, hi: Vec3A, n: usize) -> Vec<Ray> {
-    let mut s = 0x1234_5678_u64;
-    let mut f = move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 40) as f32 / (1u64 << 24) as f32
-    };
-    let c = (lo + hi) * 0.5;
-    let r = (hi - lo).length();
-    (0..n)
-        .map(|_| {
-            let d = Vec3A::new(f() - 0.5, f() - 0.5, f() - 0.5).normalize_or(Vec3A::X);
-            let origin = c + d * r;
-            let target = lo + (hi - lo) * Vec3A::new(f(), f(), f());
-            Ray::new(origin, (target - origin).normalize_or(Vec3A::Z))
-        })
-        .collect()
 }
 
 /// A plain-BVH cursor that logs the cluster of every node whose box it
@@ -325,7 +308,7 @@ fn bench(c: &mut Criterion) {
         log: Mutex::new(Vec::new()),
     };
     let (lo, hi) = mesh.bounds().expect("non-empty");
-    let per_ray: Vec<Vec<u32>> = rays(Vec3A::from(lo), Vec3A::from(hi), nrays)
+    let per_ray: Vec<Vec<u32>> = ray_sets::random_rays(Vec3A::from(lo), Vec3A::from(hi), nrays)
         .iter()
         .map(|r| {
             query::closest_hit(&rec, r, f32::INFINITY, &mut TraversalStats::default());

@@ -18,27 +18,8 @@ use cbvh::query::{self, RayHit};
 use cbvh::scene::{Kind, generate};
 use glam::Vec3A;
 
-/// The peers crate's camera: +Z side, 2.2 extents away, 30° field of view,
-/// rays in 8×8 tiles.
-fn camera(lo: Vec3A, hi: Vec3A, width: usize) -> Vec<Ray> {
-    let centre = (lo + hi) * 0.5;
-    let size = (hi - lo).max_element();
-    let eye = centre + Vec3A::new(0.0, 0.0, 2.2 * size);
-    let half = 15f32.to_radians().tan();
-    let mut rays = Vec::with_capacity(width * width);
-    for ty in (0..width).step_by(8) {
-        for tx in (0..width).step_by(8) {
-            for y in ty..ty + 8 {
-                for x in tx..tx + 8 {
-                    let u = ((x as f32 + 0.5) / width as f32 * 2.0 - 1.0) * half;
-                    let v = (1.0 - (y as f32 + 0.5) / width as f32 * 2.0) * half;
-                    rays.push(Ray::new(eye, Vec3A::new(u, v, -1.0).normalize()));
-                }
-            }
-        }
-    }
-    rays
-}
+#[path = "support/rays.rs"]
+mod ray_sets;
 
 fn bench<C: NodeCursor>(c: &C, rays: &[Ray]) {
     let single = |out: &mut Vec<Option<RayHit>>| {
@@ -101,10 +82,10 @@ fn main() {
         .unwrap_or(1_000_000);
     let width: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(512);
     let codec = args.next().unwrap_or_else(|| "plain".into());
-    assert!(width.is_multiple_of(8), "width must be a multiple of 8");
     let mesh = generate(Kind::Statue, tris, 0, &mut |_, _| {}).expect("generate");
     let (lo, hi) = mesh.bounds().expect("non-empty");
-    let rays = camera(Vec3A::from(lo), Vec3A::from(hi), width);
+    let (eye, dirs) = ray_sets::camera_tiles(Vec3A::from(lo), Vec3A::from(hi), width);
+    let rays: Vec<Ray> = dirs.iter().map(|&d| Ray::new(eye, d)).collect();
     let bvh = build(&mesh, &BuildOptions::default(), &|_, _| {}).expect("build");
     println!(
         "statue, {} triangles, {width}×{width} camera, 1 thread, {codec}",

@@ -19,25 +19,8 @@ use cbvh::scene::{Kind, generate};
 use cbvh::{TraversalStats, query};
 use glam::Vec3A;
 
-fn rays(lo: Vec3A, hi: Vec3A, n: usize) -> Vec<Ray> {
-    let mut s = 0x1234_5678_u64;
-    let mut f = move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 40) as f32 / (1u64 << 24) as f32
-    };
-    let c = (lo + hi) * 0.5;
-    let r = (hi - lo).length();
-    (0..n)
-        .map(|_| {
-            let d = Vec3A::new(f() - 0.5, f() - 0.5, f() - 0.5).normalize_or(Vec3A::X);
-            let origin = c + d * r;
-            let target = lo + (hi - lo) * Vec3A::new(f(), f(), f());
-            Ray::new(origin, (target - origin).normalize_or(Vec3A::Z))
-        })
-        .collect()
-}
+#[path = "support/rays.rs"]
+mod ray_sets;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).filter(|a| a != "--json").collect();
@@ -100,7 +83,7 @@ fn main() {
 
     // Closest-hit rays, plain vs RACBVH (warm cache, default budget), one thread.
     let (lo, hi) = mesh.bounds().expect("non-empty");
-    let rs = rays(Vec3A::from(lo), Vec3A::from(hi), 200_000);
+    let rs = ray_sets::random_rays(Vec3A::from(lo), Vec3A::from(hi), 200_000);
     let time_rays = |f: &dyn Fn(&Ray) -> Option<u32>| {
         let t = Instant::now();
         let hits = rs.iter().filter(|r| f(r).is_some()).count();

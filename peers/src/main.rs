@@ -18,6 +18,9 @@ use rayon::prelude::*;
 use cbvh::codec::ByteSize;
 
 mod whitted;
+
+#[path = "../../examples/support/rays.rs"]
+mod ray_sets;
 use cbvh::codec::plain::PlainBvh;
 
 const RUNS: usize = 5;
@@ -94,31 +97,13 @@ struct RaySet {
 }
 
 fn camera_rays(lo: Vec3A, hi: Vec3A, width: usize) -> RaySet {
-    // Pinhole camera in front of the statue (+Z side, Y up), at 2.2 times
-    // its largest extent from its centre, with a 30 degree field of view.
-    let centre = (lo + hi) * 0.5;
-    let size = (hi - lo).max_element();
-    let eye = centre + Vec3A::new(0.0, 0.0, 2.2 * size);
-    let half = (15f32).to_radians().tan();
-    let mut origins = Vec::with_capacity(width * width);
-    let mut dirs = Vec::with_capacity(width * width);
-    // In 8×8 tiles (row-major tiles, row-major pixels in a tile), so that a
-    // packet peer casts a tile per packet; a chunk is a row of tiles.
-    for ty in (0..width).step_by(8) {
-        for tx in (0..width).step_by(8) {
-            for y in ty..ty + 8 {
-                for x in tx..tx + 8 {
-                    let u = ((x as f32 + 0.5) / width as f32 * 2.0 - 1.0) * half;
-                    let v = (1.0 - (y as f32 + 0.5) / width as f32 * 2.0) * half;
-                    origins.push(eye);
-                    dirs.push(Vec3A::new(u, v, -1.0).normalize());
-                }
-            }
-        }
-    }
+    // cbvh's benchmark camera (`examples/support/rays.rs`): in front of the
+    // statue, 8×8 tiles, so that a packet peer casts a tile per packet; a
+    // chunk is a row of tiles.
+    let (eye, dirs) = ray_sets::camera_tiles(lo, hi, width);
     RaySet {
         name: "camera",
-        origins,
+        origins: vec![eye; dirs.len()],
         dirs,
         chunk: width * 8,
     }
