@@ -2,13 +2,13 @@
 //! together: each node is fetched once for the whole packet instead of once
 //! per ray, which is what bounds single-ray traversal on large meshes.
 //!
-//! The traversal is *ranged* (Wald, Boulos, Shirley: "Ray tracing deformable
-//! scenes using dynamic bounding volume hierarchies", TOG 2007): a node
-//! carries the range of rays that may still hit it; popping it narrows the
-//! range to its first and last ray whose slab test passes, and children
-//! inherit the narrowed range. Leaves test each triangle against the rays of
-//! the range whose own slab test passes. Children are pushed in the order of
-//! the range's first ray.
+//! The traversal is *masked* (after Wald, Boulos, Shirley: "Ray tracing
+//! deformable scenes using dynamic bounding volume hierarchies", TOG 2007):
+//! a node carries the set of rays (a 64-bit mask) that met its parent; an
+//! interval-arithmetic test over the whole packet may discard it at once,
+//! else popping it keeps the rays whose own slab test passes, and its
+//! children inherit that set. Leaves test each triangle against those rays.
+//! Children are pushed in the order of the set's first ray.
 //!
 //! Every ray uses the same slab test, triangle test and tie rule (nearer,
 //! or as near with the smaller triangle id) as
@@ -16,7 +16,7 @@
 //! when that ray's slab test against it fails with its current best
 //! distance, so the hits are the single-ray hits.
 
-use super::ray::RayHit;
+use super::ray::{RayHit, keep_closer};
 use super::{Stack, far_first};
 use crate::cursor::{MAX_CHILDREN, NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Ray, SLAB_EXIT_SCALE, ray_triangle};
@@ -94,8 +94,8 @@ impl Lanes {
             enter_lo = enter_lo.max(near);
             exit_hi = exit_hi.min(far);
         }
-        // A margin for the rounding of the per-ray tests.
-        enter_lo > exit_hi * (1.0 + 4.0 * f32::EPSILON) + f32::MIN_POSITIVE
+        // The per-ray tests' margin, and a little for this test's rounding.
+        enter_lo > exit_hi * SLAB_EXIT_SCALE + f32::MIN_POSITIVE
     }
 
     /// Of the rays in `mask`, those that meet `b` within `[0, best_t]`:
@@ -238,18 +238,7 @@ pub fn closest_hits_within<C: NodeCursor>(
                     m &= m - 1;
                     stats.primitive_tests += 1;
                     if let Some(h) = ray_triangle(&rays[i], tri, best_t[i]) {
-                        let closer =
-                            h.t < best_t[i] || out[i].is_none_or(|o| h.t == o.t && id < o.triangle);
-                        if closer {
-                            best_t[i] = h.t;
-                            hit_any = true;
-                            out[i] = Some(RayHit {
-                                t: h.t,
-                                triangle: id,
-                                u: h.u,
-                                v: h.v,
-                            });
-                        }
+                        hit_any |= keep_closer(&mut out[i], &mut best_t[i], id, &h);
                     }
                 }
             });
@@ -258,7 +247,7 @@ pub fn closest_hits_within<C: NodeCursor>(
             }
             continue;
         }
-        // Children, far first (as seen by the range's first ray) so the
+        // Children, far first (as seen by the set's first ray) so the
         // near one is popped next.
         let r = &rays[first];
         let mut k = 0;

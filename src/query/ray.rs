@@ -17,6 +17,30 @@ pub struct RayHit {
     pub v: f32,
 }
 
+/// Keeps hit `h` on triangle `id` if it is closer than `best` (nearer, or
+/// as near on a smaller triangle id: the tie rule that makes the result
+/// independent of the order triangles are tested in), updating `best_t`.
+/// Returns whether it was kept.
+#[inline]
+pub(crate) fn keep_closer(
+    best: &mut Option<RayHit>,
+    best_t: &mut f32,
+    id: u32,
+    h: &TriHit,
+) -> bool {
+    let closer = h.t < *best_t || best.is_none_or(|b| h.t == b.t && id < b.triangle);
+    if closer {
+        *best_t = h.t;
+        *best = Some(RayHit {
+            t: h.t,
+            triangle: id,
+            u: h.u,
+            v: h.v,
+        });
+    }
+    closer
+}
+
 /// The closest hit of `ray` within `[0, t_max]`, with the two-sided
 /// watertight triangle test ([`ray_triangle`]).
 pub fn closest_hit<C: NodeCursor>(
@@ -55,16 +79,7 @@ pub fn closest_hit_with<C: NodeCursor>(
             c.for_each_triangle(&node, |id, tri| {
                 stats.primitive_tests += 1;
                 if let Some(h) = test(id, tri, best_t) {
-                    let closer = h.t < best_t || best.is_none_or(|b| h.t == b.t && id < b.triangle);
-                    if closer {
-                        best_t = h.t;
-                        best = Some(RayHit {
-                            t: h.t,
-                            triangle: id,
-                            u: h.u,
-                            v: h.v,
-                        });
-                    }
+                    keep_closer(&mut best, &mut best_t, id, &h);
                 }
             });
             continue;
