@@ -82,8 +82,7 @@ fn decode_cluster(
         *reader = BitReader::with_limit(&bytes[at..], len);
         at += len;
     }
-    let [mut r, mut rmask, rx0, ry0, rz0, rx1, ry1, rz1] = readers;
-    let mut rres = [rx0, ry0, rz0, rx1, ry1, rz1];
+    let [mut r, mut rmask, mut rres @ ..] = readers;
     let from_oldest = r.get(1) == 1;
     let mut dec: [DictDecoder; NCTX] =
         std::array::from_fn(|ctx| DictDecoder::new(r.get(2) as u32, raw_bits(ctx, h)));
@@ -168,12 +167,7 @@ fn decode_cluster(
             }
             words[p][6 + usize::from(right)] = g;
             if got[p] == 3 {
-                // Depth-first orders close the newest entry: no memmove call.
-                if at + 1 == front.len() {
-                    front.pop();
-                } else {
-                    front.remove(at);
-                }
+                front.remove(at);
             }
             root_of[l] = root_of[p];
             if words[p][0] & INCOMPLETE == 0 {
@@ -192,8 +186,7 @@ fn decode_cluster(
             // Each component comes from a stream of its own: six
             // independent dependency chains for the processor to overlap.
             let maxb = h.bits + 2;
-            // One loop over the non-zero components rather than six
-            // branches on the mask, which the predictor cannot learn.
+            // Only the components the mask marks non-zero are coded.
             let mut nonzero = !zero & 63;
             while nonzero != 0 {
                 let k = nonzero.trailing_zeros() as usize;
