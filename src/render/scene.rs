@@ -125,6 +125,17 @@ impl<'a> Instance<'a> {
     }
 }
 
+/// Keeps instance `instance`'s hit `h` if it is nearer than `best` (or the
+/// first), updating `best_t`: the one rule of [`Scene::closest`] and
+/// [`Scene::closest_packet`].
+#[inline]
+fn keep_nearer(best: &mut Option<SceneHit>, best_t: &mut f32, instance: usize, h: RayHit) {
+    if h.t < *best_t || best.is_none() {
+        *best_t = h.t;
+        *best = Some(SceneHit { instance, hit: h });
+    }
+}
+
 /// The closest hit in a scene.
 #[derive(Clone, Copy, Debug)]
 pub struct SceneHit {
@@ -217,21 +228,14 @@ impl<'a> Scene<'a> {
                 continue;
             }
             let local = self.local_ray(i, ray);
-            if let Some(h) = inst.target.closest(&local, best_t, stats)
-                && (h.t < best_t || best.is_none())
-            {
-                best_t = h.t;
-                best = Some(SceneHit {
-                    instance: i,
-                    hit: h,
-                });
+            if let Some(h) = inst.target.closest(&local, best_t, stats) {
+                keep_nearer(&mut best, &mut best_t, i, h);
             }
         }
         best
     }
 
-    /// [`Scene::closest`] for a packet of up to
-    /// [`MAX_PACKET`] coherent rays
+    /// [`Scene::closest`] for a packet of up to [`MAX_PACKET`] coherent rays
     /// (within `[0, ∞)`), each instance traversed once for the rays that
     /// meet its box: the same hits, ray by ray.
     pub fn closest_packet(
@@ -266,16 +270,9 @@ impl<'a> Scene<'a> {
             }
             inst.target
                 .closest_packet(&local[..k], &limit[..k], &mut hits[..k], stats);
-            for (j, h) in hits[..k].iter().enumerate() {
-                let r = which[j];
-                if let Some(h) = h
-                    && (h.t < best_t[r] || out[r].is_none())
-                {
-                    best_t[r] = h.t;
-                    out[r] = Some(SceneHit {
-                        instance: i,
-                        hit: *h,
-                    });
+            for (&r, h) in which[..k].iter().zip(&hits[..k]) {
+                if let Some(h) = h {
+                    keep_nearer(&mut out[r], &mut best_t[r], i, *h);
                 }
             }
         }
