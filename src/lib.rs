@@ -20,6 +20,7 @@
 
 pub mod build;
 pub mod codec;
+pub mod contact;
 pub mod cursor;
 pub mod geom;
 mod hash;

@@ -5,8 +5,13 @@ use std::collections::BTreeMap;
 
 use cbvh::Mesh;
 use cbvh::build::BuildOptions;
-use cbvh::parry::droptest::{self, DropScene, Placement, ShapeKind};
-use cbvh::parry::{CbvhShape, Dispatcher, parry_trimesh};
+use cbvh::parry::droptest::{self, DropScene, Placement, RunSpec, ShapeKind};
+use cbvh::parry::{CbvhShape, ContactMode, Dispatcher, parry_trimesh};
+
+/// The per-triangle-pair mode: parry's own contacts, pair by pair.
+fn pairs() -> Dispatcher {
+    Dispatcher::new(ContactMode::PerTrianglePair)
+}
 use cbvh::scene::{Kind, generate};
 use parry3d::math::{Pose, Vector};
 use parry3d::query::{
@@ -107,7 +112,7 @@ fn cbvh_contacts_equal_parry_trimesh_contacts() {
     for pos12 in poses {
         for prediction in [0.0, 0.02] {
             let want = contact_points(&DefaultQueryDispatcher, &pos12, &t1, &t2, prediction);
-            let got = contact_points(&Dispatcher, &pos12, &c1, &c2, prediction);
+            let got = contact_points(&pairs(), &pos12, &c1, &c2, prediction);
             assert_same_contacts(&want, &got, &format!("{pos12:?}"));
             total += want.len();
             // The native path never built the fallback.
@@ -125,27 +130,32 @@ fn manifolds_persist_between_calls() {
     let a = mesh_of(Kind::Statue, 2000, 1);
     let c = CbvhShape::plain(&a, &BuildOptions::default()).unwrap();
     let pos12 = Pose::from_translation(Vector::new(0.05, 0.02, 0.0));
-    let mut manifolds: Vec<ContactManifold<(), u32>> = Vec::new();
-    let mut ws = None;
-    Dispatcher
-        .contact_manifolds(&pos12, &c, &c, 0.01, &mut manifolds, &mut ws)
-        .unwrap();
-    assert!(!manifolds.is_empty());
-    // Mark each contact, then update at the same pose: the data survives.
-    for m in &mut manifolds {
-        for p in &mut m.points {
-            p.data = 7;
+    for d in [pairs(), Dispatcher::default()] {
+        let mut manifolds: Vec<ContactManifold<(), u32>> = Vec::new();
+        let mut ws = None;
+        d.contact_manifolds(&pos12, &c, &c, 0.01, &mut manifolds, &mut ws)
+            .unwrap();
+        assert!(!manifolds.is_empty());
+        // Mark each contact, then update at the same pose: the data survives.
+        for m in &mut manifolds {
+            for p in &mut m.points {
+                p.data = 7;
+            }
         }
+        d.contact_manifolds(&pos12, &c, &c, 0.01, &mut manifolds, &mut ws)
+            .unwrap();
+        let marked = manifolds
+            .iter()
+            .flat_map(|m| &m.points)
+            .filter(|p| p.data == 7)
+            .count();
+        let all = manifolds.iter().map(|m| m.points.len()).sum::<usize>();
+        assert!(
+            marked == all && all > 0,
+            "{:?}: warm-start data must be carried over ({marked} of {all})",
+            d.mode
+        );
     }
-    Dispatcher
-        .contact_manifolds(&pos12, &c, &c, 0.01, &mut manifolds, &mut ws)
-        .unwrap();
-    let marked = manifolds
-        .iter()
-        .flat_map(|m| &m.points)
-        .filter(|p| p.data == 7)
-        .count();
-    assert!(marked > 0, "warm-start data must be carried over");
 }
 
 #[test]
@@ -155,7 +165,7 @@ fn intersection_and_contact_queries() {
     let t = SharedShape::new(parry_trimesh(&a).unwrap());
     let near = Pose::from_translation(Vector::new(0.01, 0.0, 0.0));
     let far = Pose::from_translation(Vector::new(100.0, 0.0, 0.0));
-    let d = Dispatcher.chain(DefaultQueryDispatcher);
+    let d = Dispatcher::default().chain(DefaultQueryDispatcher);
     assert!(d.intersection_test(&near, &c, &c).unwrap().intersecting);
     assert!(!d.intersection_test(&far, &c, &c).unwrap().intersecting);
     assert!(d.contact(&far, &c, &c, 0.1).unwrap().is_none());
@@ -288,11 +298,15 @@ fn drop_test_steps_without_the_fallback_and_agrees_with_parry() {
         contact_recycling: false,
         cluster_nodes: 4096,
     };
-    let parry = droptest::run(&scene, ShapeKind::Parry, &mut |_, _| {}).unwrap();
-    let plain = droptest::run(&scene, ShapeKind::Plain, &mut |_, _| {}).unwrap();
+    let spec = |kind| RunSpec {
+        kind,
+        mode: ContactMode::default(),
+    };
+    let parry = droptest::run(&scene, spec(ShapeKind::Parry), &mut |_, _| {}).unwrap();
+    let plain = droptest::run(&scene, spec(ShapeKind::Plain), &mut |_, _| {}).unwrap();
     // RACBVH with a cache of a tenth of its decompressed size lands the same
     // way, on its own traversals.
-    let rac = droptest::run(&scene, ShapeKind::Racbvh10, &mut |_, _| {}).unwrap();
+    let rac = droptest::run(&scene, spec(ShapeKind::Racbvh10), &mut |_, _| {}).unwrap();
     assert!(!rac.fallback_bvh_built);
     assert!(rac.bytes_per_triangle < plain.bytes_per_triangle / 3.0);
     assert!((rac.final_translation[1] - plain.final_translation[1]).abs() < 0.1 * 2.0);
@@ -348,7 +362,7 @@ fn distance_closest_points_and_casts_match_trimesh() {
         CbvhShape::plain(&b, &BuildOptions::default()).unwrap(),
     );
     let (ta, tb) = (parry_trimesh(&a).unwrap(), parry_trimesh(&b).unwrap());
-    let d = Dispatcher.chain(DefaultQueryDispatcher);
+    let d = Dispatcher::default().chain(DefaultQueryDispatcher);
     let ball = parry3d::shape::Ball::new(0.1);
     for (k, x) in [1.5f32, 2.5, 0.9, 4.0].into_iter().enumerate() {
         let pos12 = Pose::new(
@@ -436,7 +450,7 @@ fn cbvh_vs_trimesh_contacts_equal_trimesh_vs_trimesh() {
         Pose::new(Vector::new(-0.4, -1.0, 0.2), Vector::new(0.3, 0.8, -0.2)),
     ] {
         let want = contact_points(&DefaultQueryDispatcher, &pos12, &t1, &t2, 0.01);
-        let chain = Dispatcher.chain(DefaultQueryDispatcher);
+        let chain = pairs().chain(DefaultQueryDispatcher);
         for got in [
             contact_points(&chain, &pos12, &c1, &t2, 0.01),
             contact_points(&chain, &pos12, &t1, &c2, 0.01),

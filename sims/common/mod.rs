@@ -5,7 +5,8 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 
 use cbvh::Mesh;
-use cbvh::parry::droptest::{self, DropScene, Placement, RunReport, ShapeKind};
+use cbvh::parry::ContactMode;
+use cbvh::parry::droptest::{self, DropScene, Placement, RunReport, RunSpec, ShapeKind};
 use cbvh::scene::Kind;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -17,12 +18,19 @@ pub struct SimArgs {
     pub steps: usize,
     /// Comma-separated shapes to run: parry, plain, racbvh (cache holds the
     /// whole tree), racbvh-10pct (cache of 10 % of the decompressed tree).
+    /// A cbvh name may end in -pairs or -patches to fix its contact mode
+    /// (plain-pairs); bare cbvh names run in the modes of --contacts.
     #[arg(
         long,
         default_value = "parry,plain,racbvh,racbvh-10pct",
         value_delimiter = ','
     )]
-    pub shapes: Vec<ShapeKindArg>,
+    pub shapes: Vec<String>,
+    /// Contact modes of the cbvh shapes: patches (cbvh's triangle-pair
+    /// kernel reduced into contact patches), pairs (one parry manifold per
+    /// triangle pair, parry's own contacts), or both, side by side.
+    #[arg(long, default_value = "both", value_parser = ["patches", "pairs", "both"])]
+    pub contacts: String,
     /// Write the report as JSON to this file.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -56,15 +64,33 @@ pub struct SimArgs {
     pub offset: Vec<f32>,
 }
 
-/// A shape name on the command line.
-#[derive(Clone, Copy, Debug)]
-pub struct ShapeKindArg(pub ShapeKind);
-
-impl std::str::FromStr for ShapeKindArg {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        s.parse().map(ShapeKindArg)
+/// The runs `--shapes` and `--contacts` ask for, in order: a bare cbvh
+/// name runs once per mode of `--contacts` (patches first).
+pub fn run_specs(args: &SimArgs) -> Result<Vec<RunSpec>, String> {
+    let modes: Vec<ContactMode> = match args.contacts.as_str() {
+        "patches" => vec![ContactMode::default()],
+        "pairs" => vec![ContactMode::PerTrianglePair],
+        _ => vec![ContactMode::default(), ContactMode::PerTrianglePair],
+    };
+    let mut specs = Vec::new();
+    for name in &args.shapes {
+        let explicit = name.ends_with("-pairs") || name.ends_with("-patches");
+        let first = RunSpec::parse(name, modes[0])?;
+        if explicit || first.kind == ShapeKind::Parry {
+            specs.push(first);
+        } else {
+            for m in &modes {
+                specs.push(RunSpec {
+                    kind: first.kind,
+                    mode: *m,
+                });
+            }
+        }
     }
+    if specs.is_empty() {
+        return Err("--shapes names no shape".into());
+    }
+    Ok(specs)
 }
 
 /// A mesh from a file, or generated.
@@ -162,14 +188,15 @@ pub fn run_sim(
         scene.base.triangle_count(),
         scene.steps
     );
+    let specs = run_specs(args)?;
     let mut runs: Vec<RunReport> = Vec::new();
-    for ShapeKindArg(kind) in &args.shapes {
-        let pb = bar(kind.name(), scene.steps as u64);
-        let r = droptest::run(&scene, *kind, &mut |s, _| pb.set_position(s as u64))?;
+    for spec in specs {
+        let pb = bar(&spec.name(), scene.steps as u64);
+        let r = droptest::run(&scene, spec, &mut |s, _| pb.set_position(s as u64))?;
         pb.finish_and_clear();
         eprintln!(
-            "  {:<7} done: narrow phase median {:.3} ms",
-            r.shape, r.narrow_phase_ms.median
+            "  {:<13} done: narrow phase median {:.3} ms, interference median {:.3} ms",
+            r.shape, r.narrow_phase_ms.median, r.interference_ms.median
         );
         runs.push(r);
     }
@@ -226,10 +253,16 @@ pub fn run_sim(
         );
     }
     if let Some(path) = &args.plot {
-        let series: Vec<(String, Vec<f64>)> = runs
+        let mut series: Vec<(String, Vec<f64>)> = runs
             .iter()
             .map(|r| (r.shape.clone(), r.narrow_phase_ms_per_step.clone()))
             .collect();
+        series.extend(runs.iter().filter(|r| r.contact_mode != "pairs").map(|r| {
+            (
+                format!("{} interference", r.shape),
+                r.interference_ms_per_step.clone(),
+            )
+        }));
         cbvh::plot::line_plot_png(
             path,
             &format!("{title}: narrow phase per step"),
@@ -263,37 +296,47 @@ pub fn machine() -> String {
 fn print_table(runs: &[RunReport], size: f32) {
     println!();
     println!(
-        "{:<13} {:>10} {:>10} {:>10} {:>10} {:>9} {:>8} {:>7} {:>7} {:>8} {:>9} {:>9}",
+        "{:<19} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9} {:>7} {:>8} {:>9} {:>8}",
         "shape",
         "np median",
-        "np mean",
         "np p95",
         "np max",
         "step med",
+        "interf",
         "contact",
         "pairs",
+        "manifold",
         "points",
+        "interf",
+        "max pen",
         "B/tri",
+        "RSS",
         "final y",
         "fallback"
     );
     println!(
-        "{:<13} {:>10} {:>10} {:>10} {:>10} {:>9} {:>8} {:>7} {:>7}",
-        "", "ms", "ms", "ms", "ms", "ms", "steps", "max", "max"
+        "{:<19} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9} {:>7} {:>8}",
+        "", "ms", "ms", "ms", "ms", "med ms", "steps", "max", "max", "max", "pairs", "", "", "MB"
     );
     for r in runs {
         println!(
-            "{:<13} {:>10.3} {:>10.3} {:>10.3} {:>10.3} {:>9.3} {:>8} {:>7} {:>7} {:>8.1} {:>9.4} {:>9}",
+            "{:<19} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9.5} {:>7.1} {:>8} {:>9.4} {:>8}",
             r.shape,
             r.narrow_phase_ms.median,
-            r.narrow_phase_ms.mean,
             r.narrow_phase_ms.p95,
             r.narrow_phase_ms.max,
             r.step_ms.median,
+            r.interference_ms.median,
             r.steps_in_contact,
             r.max_contact_pairs,
+            r.max_manifolds,
             r.max_contact_points,
+            r.max_interference_pairs,
+            r.max_penetration,
             r.bytes_per_triangle,
+            r.peak_rss_bytes
+                .map(|b| format!("{:.0}", b as f64 / 1e6))
+                .unwrap_or_else(|| "n/a".into()),
             r.final_translation[1],
             if r.fallback_bvh_built { "BUILT" } else { "no" }
         );
@@ -302,6 +345,7 @@ fn print_table(runs: &[RunReport], size: f32) {
         println!();
         for r in runs.iter().filter(|r| r.shape != "parry") {
             let ratio = r.narrow_phase_ms.median / base.narrow_phase_ms.median.max(1e-9);
+            let step = r.step_ms.median / base.step_ms.median.max(1e-9);
             let dy = (r.final_translation[1] - base.final_translation[1]).abs();
             let speed = if ratio <= 1.0 {
                 format!("{:.1}× faster", 1.0 / ratio.max(1e-9))
@@ -309,10 +353,25 @@ fn print_table(runs: &[RunReport], size: f32) {
                 format!("{ratio:.1}× slower")
             };
             println!(
-                "{}: narrow-phase median {ratio:.3}× parry's ({speed}); {:.2}× the memory per triangle; final height differs by {:.2} % of the dropped mesh's size",
+                "{}: narrow-phase median {ratio:.3}× parry's ({speed}), whole step {step:.3}×; {:.2}× the memory per triangle; final height differs from parry's by {:.2} % of the dropped mesh's size; largest penetration {:.2}× parry's",
                 r.shape,
                 r.bytes_per_triangle / base.bytes_per_triangle,
-                100.0 * dy / size.max(1e-9)
+                100.0 * dy / size.max(1e-9),
+                r.max_penetration / base.max_penetration.max(1e-12)
+            );
+        }
+    }
+    // Patches against the per-pair mode of the same codec.
+    for r in runs.iter().filter(|r| r.contact_mode == "patches") {
+        let pairs_name = format!("{}-pairs", r.shape);
+        if let Some(p) = runs.iter().find(|q| q.shape == pairs_name) {
+            let dy = (r.final_translation[1] - p.final_translation[1]).abs();
+            println!(
+                "{}: narrow phase {:.3}× the pairs mode's; final height within {:.2} % of the dropped mesh's size of {}",
+                r.shape,
+                r.narrow_phase_ms.median / p.narrow_phase_ms.median.max(1e-9),
+                100.0 * dy / size.max(1e-9),
+                p.shape
             );
         }
     }

@@ -1,5 +1,10 @@
 //! cbvh shape vs cbvh shape: simultaneous BVH-vs-BVH traversal (BVTT) on
-//! both trees; triangle pairs go through parry's convex-convex code.
+//! both trees. In [`ContactMode::Patches`] the traversal runs on rayon's
+//! threads from a fixed front of node pairs, each task feeding cbvh's
+//! triangle-pair kernel and its own patch set; the sets are merged in front
+//! order (so the result does not depend on the thread count) and become one
+//! manifold per patch. In [`ContactMode::PerTrianglePair`] triangle pairs go
+//! through parry's convex-convex code, one persistent manifold per pair.
 
 use std::ops::ControlFlow;
 
@@ -9,11 +14,133 @@ use parry3d::query::{
     PersistentQueryDispatcher, QueryDispatcher, ShapeDistance, ShapeIntersection,
 };
 
+use super::patches::{ContactCounters, ContactMode, emit};
 use super::shape::{CbvhShape, pose_from_parry, to_parry_triangle, with_cursor};
 use super::workspace::ManifoldUpdate;
+use crate::contact::{Interference, PairKernel, PatchOptions, PatchSet};
 use crate::cursor::TraversalStats;
 use crate::geom::Triangle;
-use crate::query::{bvtt, bvtt_min};
+use crate::query::{bvtt, bvtt_min, bvtt_par};
+
+/// Node pairs the parallel traversal starts from: enough tasks to balance
+/// two to a few dozen threads, few enough that a small contact costs little.
+pub const FRONT_TASKS: usize = 64;
+
+/// The smaller of the two shapes' bounding-box diagonals (the patch gap's
+/// scale).
+pub(crate) fn smaller_size(a: &CbvhShape, b: &CbvhShape) -> f32 {
+    let d = |s: &CbvhShape| s.local_aabb().extent().length();
+    d(a).min(d(b))
+}
+
+/// Contact manifolds in the dispatcher's `mode`.
+#[allow(clippy::too_many_arguments)]
+pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy + Send + Sync>(
+    mode: &ContactMode,
+    counters: Option<&ContactCounters>,
+    pos12: &PPose,
+    s1: &CbvhShape,
+    s2: &CbvhShape,
+    prediction: Real,
+    manifolds: &mut Vec<ContactManifold<M, C>>,
+    workspace: &mut Option<ContactManifoldsWorkspace>,
+) {
+    match mode {
+        ContactMode::Patches(opts) => {
+            *workspace = None;
+            let set = patches(pos12, s1, s2, prediction, opts, false, counters);
+            emit(
+                &set,
+                &pos12.inverse(),
+                false,
+                opts.max_angle_deg.to_radians().cos(),
+                manifolds,
+            );
+        }
+        ContactMode::PerTrianglePair => {
+            contact_manifolds(pos12, s1, s2, prediction, manifolds, workspace);
+            if let Some(c) = counters {
+                let with_points = manifolds.iter().filter(|m| !m.points.is_empty()).count();
+                c.add(0, with_points as u64, 0);
+            }
+        }
+    }
+}
+
+/// The contact patches of two cbvh shapes (in `s1`'s frame): the parallel
+/// two-tree traversal feeding the triangle-pair kernel. With `record`, every
+/// patch lists its triangle pairs.
+pub fn patches(
+    pos12: &PPose,
+    s1: &CbvhShape,
+    s2: &CbvhShape,
+    prediction: Real,
+    opts: &PatchOptions,
+    record: bool,
+    counters: Option<&ContactCounters>,
+) -> PatchSet {
+    let pose = pose_from_parry(pos12);
+    let size = smaller_size(s1, s2);
+    let mut merged = PatchSet::new(opts, size, record);
+    let (mut candidates, mut contacts) = (0u64, 0u64);
+    with_cursor!(s1.codec(), |a| with_cursor!(s2.codec(), |b| {
+        let (states, _stats) = bvtt_par(
+            a,
+            b,
+            &pose,
+            prediction,
+            FRONT_TASKS,
+            || {
+                (
+                    PairKernel::new(prediction),
+                    PatchSet::new(opts, size, record),
+                )
+            },
+            |(kernel, set), i, ti, j, tj| {
+                let moved = tj.map(|p| pose.transform_point(p));
+                kernel.push(i, ti, j, &moved, &mut |c| set.add(c));
+            },
+        );
+        for (mut kernel, mut set) in states {
+            kernel.flush(&mut |c| set.add(c));
+            candidates += kernel.stats.pairs;
+            contacts += kernel.stats.contacts;
+            merged.merge(set);
+        }
+    }));
+    if let Some(c) = counters {
+        c.add(candidates, contacts, merged.patches.len() as u64);
+    }
+    merged
+}
+
+/// The papers' interference figure: the number of intersecting (or
+/// touching) triangle pairs of the two shapes, found by the parallel
+/// two-tree traversal and an exact triangle-triangle test, with no contacts.
+pub fn interference(pos12: &PPose, s1: &CbvhShape, s2: &CbvhShape) -> u64 {
+    let pose = pose_from_parry(pos12);
+    with_cursor!(s1.codec(), |a| with_cursor!(s2.codec(), |b| {
+        let (states, _) = bvtt_par(
+            a,
+            b,
+            &pose,
+            0.0,
+            FRONT_TASKS,
+            Interference::default,
+            |t, _, ti, _, tj| {
+                let moved = tj.map(|p| pose.transform_point(p));
+                t.push(ti, &moved);
+            },
+        );
+        states
+            .into_iter()
+            .map(|mut t| {
+                t.flush();
+                t.intersecting
+            })
+            .sum()
+    }))
+}
 
 /// Calls `f` with every triangle pair of `s1` and `s2` (shape 2 placed by
 /// `pos12` in shape 1's frame) whose boxes come within `prediction`.

@@ -13,8 +13,10 @@ use parry3d::query::{
 };
 use parry3d::shape::Shape;
 
+use super::patches::{ContactCounters, ContactMode, emit};
 use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle, with_cursor};
 use super::workspace::ManifoldUpdate;
+use crate::contact::{PatchOptions, PatchPoint, PatchSet};
 use crate::cursor::TraversalStats;
 use crate::geom::Triangle;
 use crate::query::overlap;
@@ -35,8 +37,115 @@ fn for_each_triangle_near(
     });
 }
 
-/// Contact manifolds between a cbvh shape and a convex shape. `flipped`
-/// says the cbvh shape is the second shape of the pair.
+/// Contact manifolds in the dispatcher's `mode`; `flipped` says the cbvh
+/// shape is the second shape of the pair.
+#[allow(clippy::too_many_arguments)]
+pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy + Send + Sync>(
+    mode: &ContactMode,
+    counters: Option<&ContactCounters>,
+    pos12: &PPose,
+    mesh: &CbvhShape,
+    convex: &dyn Shape,
+    flipped: bool,
+    prediction: Real,
+    manifolds: &mut Vec<ContactManifold<M, C>>,
+    workspace: &mut Option<ContactManifoldsWorkspace>,
+) {
+    match mode {
+        ContactMode::Patches(opts) => {
+            *workspace = None;
+            // The convex shape's pose in the mesh's frame.
+            let pose = if flipped { pos12.inverse() } else { *pos12 };
+            let set = patches(&pose, mesh, convex, prediction, opts, false, counters);
+            emit(
+                &set,
+                &pose.inverse(),
+                flipped,
+                opts.max_angle_deg.to_radians().cos(),
+                manifolds,
+            );
+        }
+        ContactMode::PerTrianglePair => {
+            contact_manifolds(
+                pos12, mesh, convex, flipped, prediction, manifolds, workspace,
+            );
+            if let Some(c) = counters {
+                let with_points = manifolds.iter().filter(|m| !m.points.is_empty()).count();
+                c.add(0, with_points as u64, 0);
+            }
+        }
+    }
+}
+
+/// The contact patches of a cbvh shape and a convex shape placed at `pose`
+/// in the mesh's frame (patches in the mesh's frame; `j` is always 0): each
+/// triangle near the convex shape goes through parry's convex-convex
+/// manifold code, and the points are reduced into patches.
+pub fn patches(
+    pose: &PPose,
+    mesh: &CbvhShape,
+    convex: &dyn Shape,
+    prediction: Real,
+    opts: &PatchOptions,
+    record: bool,
+    counters: Option<&ContactCounters>,
+) -> PatchSet {
+    let size = {
+        let own = mesh.local_aabb().extent().length();
+        let e = convex.compute_local_aabb().extents();
+        own.min(e.length())
+    };
+    let mut set = PatchSet::new(opts, size, record);
+    let mut scratch: ContactManifold<(), ()> = ContactManifold::new();
+    let (mut candidates, mut contacts) = (0u64, 0u64);
+    for_each_triangle_near(mesh, convex, pose, prediction, |i, t| {
+        candidates += 1;
+        scratch.points.clear();
+        let tri = to_parry_triangle(t);
+        let _ = DefaultQueryDispatcher.contact_manifold_convex_convex(
+            pose,
+            &tri,
+            convex,
+            None,
+            None,
+            prediction,
+            &mut scratch,
+        );
+        let n = glam::Vec3A::from(scratch.local_n1.to_array());
+        let mut first = true;
+        for (k, p) in scratch
+            .points
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.dist <= prediction)
+        {
+            let q2 = *pose * p.local_p2;
+            set.add_point(
+                n,
+                PatchPoint {
+                    p1: glam::Vec3A::from(p.local_p1.to_array()),
+                    p2: glam::Vec3A::from(q2.to_array()),
+                    dist: p.dist,
+                    i,
+                    j: 0,
+                    feature: k as u8,
+                },
+                first,
+            );
+            contacts += u64::from(first);
+            first = false;
+        }
+        ControlFlow::Continue(())
+    });
+    if let Some(c) = counters {
+        c.add(candidates, contacts, set.patches.len() as u64);
+    }
+    set
+}
+
+/// Contact manifolds between a cbvh shape and a convex shape, one per
+/// triangle (the per-triangle-pair mode). `flipped` says the cbvh shape is
+/// the second shape of the pair.
 pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + Send + Sync>(
     pos12: &PPose,
     mesh: &CbvhShape,

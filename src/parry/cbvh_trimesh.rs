@@ -16,10 +16,96 @@ use parry3d::query::{
 };
 use parry3d::shape::{CompositeShape, Shape, TriMesh};
 
+use super::patches::{ContactCounters, ContactMode, emit};
 use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle, with_cursor};
 use super::workspace::ManifoldUpdate;
+use crate::contact::{PairKernel, PatchOptions, PatchSet};
 use crate::cursor::TraversalStats;
 use crate::query::overlap;
+
+/// Contact manifolds in the dispatcher's `mode`; `flipped` says the cbvh
+/// shape is the second shape of the pair.
+#[allow(clippy::too_many_arguments)]
+pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy + Send + Sync>(
+    mode: &ContactMode,
+    counters: Option<&ContactCounters>,
+    pos12: &PPose,
+    mesh: &CbvhShape,
+    tm: &TriMesh,
+    flipped: bool,
+    prediction: Real,
+    manifolds: &mut Vec<ContactManifold<M, C>>,
+    workspace: &mut Option<ContactManifoldsWorkspace>,
+) {
+    match mode {
+        ContactMode::Patches(opts) => {
+            *workspace = None;
+            let tm_in_mesh = if flipped { pos12.inverse() } else { *pos12 };
+            let set = patches(&tm_in_mesh, mesh, tm, prediction, opts, false, counters);
+            emit(
+                &set,
+                &tm_in_mesh.inverse(),
+                flipped,
+                opts.max_angle_deg.to_radians().cos(),
+                manifolds,
+            );
+        }
+        ContactMode::PerTrianglePair => {
+            contact_manifolds(pos12, mesh, tm, flipped, prediction, manifolds, workspace);
+            if let Some(c) = counters {
+                let with_points = manifolds.iter().filter(|m| !m.points.is_empty()).count();
+                c.add(0, with_points as u64, 0);
+            }
+        }
+    }
+}
+
+/// The contact patches of a cbvh shape and a `TriMesh` placed at
+/// `tm_in_mesh` in the mesh's frame (patches in the mesh's frame): every
+/// cbvh triangle near the `TriMesh` queries its `Bvh`, and each pair goes
+/// through cbvh's triangle-pair kernel.
+pub fn patches(
+    tm_in_mesh: &PPose,
+    mesh: &CbvhShape,
+    tm: &TriMesh,
+    prediction: Real,
+    opts: &PatchOptions,
+    record: bool,
+    counters: Option<&ContactCounters>,
+) -> PatchSet {
+    let mesh_in_tm = tm_in_mesh.inverse();
+    let size = mesh
+        .local_aabb()
+        .extent()
+        .length()
+        .min(tm.local_aabb().extents().length());
+    let mut set = PatchSet::new(opts, size, record);
+    let mut kernel = PairKernel::new(prediction);
+    let query = from_parry_aabb(&tm.compute_aabb(tm_in_mesh)).loosened(prediction);
+    let mut stats = TraversalStats::default();
+    let to_mesh = |p: parry3d::math::Vector| glam::Vec3A::from((*tm_in_mesh * p).to_array());
+    with_cursor!(mesh.codec(), |c| {
+        overlap(c, &query, &mut stats, |i, tri| {
+            let ptri = to_parry_triangle(tri);
+            let b = ptri.compute_aabb(&mesh_in_tm).loosened(prediction);
+            for j in tm.bvh().intersect_aabb(&b) {
+                let t = tm.triangle(j);
+                let moved = [to_mesh(t.a), to_mesh(t.b), to_mesh(t.c)];
+                kernel.push(i, tri, j, &moved, &mut |c| set.add(c));
+            }
+            ControlFlow::Continue(())
+        });
+    });
+    kernel.flush(&mut |c| set.add(c));
+    if let Some(c) = counters {
+        c.add(
+            kernel.stats.pairs,
+            kernel.stats.contacts,
+            set.patches.len() as u64,
+        );
+    }
+    set
+}
 
 /// Contact manifolds between a cbvh shape and a `TriMesh`; `flipped` says
 /// the cbvh shape is the second shape of the pair.

@@ -9,6 +9,9 @@ use parry3d::query::{
 };
 use parry3d::shape::{Shape, TriMesh};
 
+use std::sync::Arc;
+
+use super::patches::{ContactCounters, ContactMode};
 use super::shape::CbvhShape;
 use super::{cast, cbvh_any, cbvh_cbvh, cbvh_convex, cbvh_trimesh};
 
@@ -21,9 +24,15 @@ use super::{cast, cbvh_any, cbvh_cbvh, cbvh_convex, cbvh_trimesh};
 /// | cbvh vs convex (ball, cuboid, capsule, convex polyhedron, …) | overlap query with the convex shape's box |
 /// | cbvh vs parry `TriMesh` | overlap query on the cbvh tree, then the `TriMesh`'s own `Bvh` per triangle ([`cbvh_trimesh`](super::cbvh_trimesh)) |
 ///
-/// Triangle pairs go through parry's own convex-convex code, so contacts are
-/// parry's, and manifolds persist per triangle pair so that rapier
-/// warm-starts. Contact manifolds with other composite shapes (compounds,
+/// Contacts follow the dispatcher's [`ContactMode`]: by default
+/// ([`ContactMode::Patches`]) cbvh's own triangle-pair kernel runs on the
+/// candidate pairs and the contacts are reduced into contact patches, one
+/// manifold of at most four points per patch, matched from step to step
+/// ([`patches`](super::patches)); with [`ContactMode::PerTrianglePair`]
+/// triangle pairs go through parry's own convex-convex code, so contacts
+/// are parry's, and manifolds persist per triangle pair. Against convex
+/// shapes the patch mode reduces parry's per-triangle manifolds the same
+/// way. Contact manifolds with other composite shapes (compounds,
 /// heightfields, voxels) answer `Unsupported`, so that the next dispatcher
 /// of the chain (parry's default, whose composite-shape code uses
 /// [`CbvhShape`]'s compatibility `Bvh`) handles them: no pair is dropped.
@@ -34,15 +43,40 @@ use super::{cast, cbvh_any, cbvh_cbvh, cbvh_convex, cbvh_trimesh};
 /// ([`cbvh_any`](super::cbvh_any), [`cast`](super::cast)).
 ///
 /// Install it in rapier with
-/// `NarrowPhase::with_query_dispatcher(cbvh::parry::Dispatcher.chain(DefaultQueryDispatcher))`,
+/// `NarrowPhase::with_query_dispatcher(cbvh::parry::Dispatcher::default().chain(DefaultQueryDispatcher))`,
 /// or [`Dispatcher::chained`].
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Dispatcher;
+#[derive(Clone, Debug, Default)]
+pub struct Dispatcher {
+    /// How triangle pairs become contact manifolds.
+    pub mode: ContactMode,
+    /// Work counters to add to, if any (the sims read them per step).
+    pub counters: Option<Arc<ContactCounters>>,
+}
 
 impl Dispatcher {
-    /// This dispatcher followed by parry's default one: what rapier needs.
+    /// A dispatcher with the given contact mode.
+    pub fn new(mode: ContactMode) -> Self {
+        Self {
+            mode,
+            counters: None,
+        }
+    }
+
+    /// This dispatcher adding its work to `counters`.
+    pub fn with_counters(mut self, counters: Arc<ContactCounters>) -> Self {
+        self.counters = Some(counters);
+        self
+    }
+
+    /// The default dispatcher (contact patches) followed by parry's default
+    /// one: what rapier needs.
     pub fn chained() -> QueryDispatcherChain<Dispatcher, DefaultQueryDispatcher> {
-        Dispatcher.chain(DefaultQueryDispatcher)
+        Dispatcher::default().chain(DefaultQueryDispatcher)
+    }
+
+    /// This dispatcher followed by parry's default one.
+    pub fn then_default(self) -> QueryDispatcherChain<Dispatcher, DefaultQueryDispatcher> {
+        self.chain(DefaultQueryDispatcher)
     }
 }
 
@@ -89,7 +123,7 @@ impl QueryDispatcher for Dispatcher {
         g1: &dyn Shape,
         g2: &dyn Shape,
     ) -> Result<ShapeDistance, Unsupported> {
-        let chain = Dispatcher.chain(DefaultQueryDispatcher);
+        let chain = self.clone().then_default();
         match (g1.as_shape::<CbvhShape>(), g2.as_shape::<CbvhShape>()) {
             (Some(a), Some(b)) => Ok(cbvh_cbvh::distance(pos12, a, b)),
             (Some(a), None) => Ok(cbvh_any::distance(&chain, pos12, a, g2, true)),
@@ -119,7 +153,7 @@ impl QueryDispatcher for Dispatcher {
         g2: &dyn Shape,
         max_dist: Real,
     ) -> Result<ClosestPoints, Unsupported> {
-        let chain = Dispatcher.chain(DefaultQueryDispatcher);
+        let chain = self.clone().then_default();
         match (g1.as_shape::<CbvhShape>(), g2.as_shape::<CbvhShape>()) {
             (Some(a), Some(b)) => Ok(cbvh_cbvh::closest_points(pos12, a, b, max_dist)),
             (Some(a), None) => Ok(cbvh_any::closest_points(
@@ -142,7 +176,7 @@ impl QueryDispatcher for Dispatcher {
     ) -> Result<Option<ShapeCastHit>, Unsupported> {
         // With two cbvh shapes, each triangle of the first is cast against
         // the second through the chain, which searches the second's tree.
-        let chain = Dispatcher.chain(DefaultQueryDispatcher);
+        let chain = self.clone().then_default();
         if let Some(a) = g1.as_shape::<CbvhShape>() {
             Ok(cbvh_any::cast_shapes(
                 &chain,
@@ -180,7 +214,7 @@ impl QueryDispatcher for Dispatcher {
     ) -> Result<Option<ShapeCastHit>, Unsupported> {
         // Leaves dispatch triangle-vs-other-shape back through `self`, which
         // hands convex pairs on to parry's default dispatcher.
-        let chain = Dispatcher.chain(DefaultQueryDispatcher);
+        let chain = self.clone().then_default();
         if let Some(m) = g1.as_shape::<CbvhShape>() {
             Ok(cast::cast_nonlinear(
                 &chain,
@@ -223,21 +257,25 @@ impl<M: Default + Clone + Send + Sync, C: Default + Copy + Send + Sync>
         manifolds: &mut Vec<ContactManifold<M, C>>,
         workspace: &mut Option<ContactManifoldsWorkspace>,
     ) -> Result<(), Unsupported> {
+        let mode = &self.mode;
+        let counters = self.counters.as_deref();
         match classify(g1, g2) {
             Pair::Both(a, b) => {
-                cbvh_cbvh::contact_manifolds(pos12, a, b, prediction, manifolds, workspace);
+                cbvh_cbvh::contact_manifolds_in(
+                    mode, counters, pos12, a, b, prediction, manifolds, workspace,
+                );
                 Ok(())
             }
             Pair::One(m, c, flipped) if is_convex(c) => {
-                cbvh_convex::contact_manifolds(
-                    pos12, m, c, flipped, prediction, manifolds, workspace,
+                cbvh_convex::contact_manifolds_in(
+                    mode, counters, pos12, m, c, flipped, prediction, manifolds, workspace,
                 );
                 Ok(())
             }
             Pair::One(m, other, flipped) => match other.as_shape::<TriMesh>() {
                 Some(tm) => {
-                    cbvh_trimesh::contact_manifolds(
-                        pos12, m, tm, flipped, prediction, manifolds, workspace,
+                    cbvh_trimesh::contact_manifolds_in(
+                        mode, counters, pos12, m, tm, flipped, prediction, manifolds, workspace,
                     );
                     Ok(())
                 }

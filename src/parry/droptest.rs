@@ -7,16 +7,17 @@ use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use parry3d::math::Vector;
-use parry3d::query::{DefaultQueryDispatcher, QueryDispatcher};
+use parry3d::query::DefaultQueryDispatcher;
 use parry3d::shape::SharedShape;
 use rapier3d::prelude::{
     ColliderBuilder, ColliderHandle, NarrowPhase, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle,
 };
 
 use super::Dispatcher;
+use super::patches::{ContactCounters, ContactMode};
 use super::shape::{CbvhShape, Codec};
 use super::timed::Timed;
-use super::trimesh::{parry_trimesh, trimesh_bytes_by_part};
+use super::trimesh::{parry_trimesh, trimesh_bytes_by_part, trimesh_interference};
 use crate::build::BuildOptions;
 use crate::codec::racbvh::{RacBvh, RacOptions};
 use crate::mesh::Mesh;
@@ -167,11 +168,74 @@ impl TimeStats {
     }
 }
 
+/// One run of the drop test: a shape kind and, for cbvh shapes, the
+/// dispatcher's contact mode.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunSpec {
+    /// The shape kind.
+    pub kind: ShapeKind,
+    /// The contact mode (ignored for parry's `TriMesh`).
+    pub mode: ContactMode,
+}
+
+impl RunSpec {
+    /// The name in reports: the shape's, with `-pairs` for cbvh shapes in
+    /// the per-triangle-pair mode (`plain`, `plain-pairs`, `racbvh`, ...).
+    pub fn name(&self) -> String {
+        match (self.kind, self.mode) {
+            (ShapeKind::Parry, _) | (_, ContactMode::Patches(_)) => self.kind.name().to_string(),
+            (_, ContactMode::PerTrianglePair) => format!("{}-pairs", self.kind.name()),
+        }
+    }
+
+    /// Parses a run name: a shape name, optionally followed by `-pairs` or
+    /// `-patches`; a bare cbvh name takes `default` as its mode.
+    pub fn parse(s: &str, default: ContactMode) -> Result<RunSpec, String> {
+        let s = s.trim();
+        let (base, mode) = if let Some(b) = s.strip_suffix("-pairs") {
+            (b, Some(ContactMode::PerTrianglePair))
+        } else if let Some(b) = s.strip_suffix("-patches") {
+            (b, Some(ContactMode::default()))
+        } else {
+            (s, None)
+        };
+        let kind: ShapeKind = base
+            .parse()
+            .map_err(|e: String| format!("{e} (optionally followed by -pairs or -patches)"))?;
+        if kind == ShapeKind::Parry && mode.is_some() {
+            return Err(format!(
+                "{s:?}: parry's TriMesh has no contact modes; use \"parry\""
+            ));
+        }
+        Ok(RunSpec {
+            kind,
+            mode: mode.unwrap_or(default),
+        })
+    }
+}
+
+/// The peak resident memory of this process since the last
+/// [`reset_peak_rss`], in bytes (Linux; `None` elsewhere).
+pub fn peak_rss_bytes() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// Resets the peak resident memory counter (Linux: writes 5 to
+/// `/proc/self/clear_refs`). Returns whether it could.
+pub fn reset_peak_rss() -> bool {
+    std::fs::write("/proc/self/clear_refs", "5").is_ok()
+}
+
 /// What one run measured.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct RunReport {
-    /// The shape kind's name.
+    /// The run's name (see [`RunSpec::name`]).
     pub shape: String,
+    /// `patches`, `pairs`, or `parry` for parry's own `TriMesh`.
+    pub contact_mode: String,
     /// Seconds to build both shapes.
     pub build_seconds: f64,
     /// Narrow-phase (contact manifold) time over the steps in contact.
@@ -180,8 +244,23 @@ pub struct RunReport {
     pub step_ms: TimeStats,
     /// Steps with at least one contact point.
     pub steps_in_contact: usize,
-    /// Most contact pairs (manifolds with points) in one step.
+    /// Most triangle pairs in contact (within the prediction distance) in
+    /// one step.
     pub max_contact_pairs: usize,
+    /// Most manifolds with points handed to rapier in one step (one per
+    /// triangle pair for parry and the pairs mode, one per patch).
+    pub max_manifolds: usize,
+    /// Time per step to find every intersecting triangle pair (two-tree
+    /// traversal and exact triangle-triangle test, no contacts), over the
+    /// steps in contact: the RACBVH and HCCMesh papers' collision figure.
+    pub interference_ms: TimeStats,
+    /// Most intersecting triangle pairs in one step.
+    pub max_interference_pairs: u64,
+    /// The largest penetration depth of any contact point during the run.
+    pub max_penetration: f32,
+    /// Peak resident memory of the process during this run (building the
+    /// shapes and simulating), in bytes, if the platform tells.
+    pub peak_rss_bytes: Option<u64>,
     /// Most contact points in one step.
     pub max_contact_points: usize,
     /// Bytes per triangle of the two shapes together.
@@ -198,8 +277,14 @@ pub struct RunReport {
     pub fallback_bvh_built: bool,
     /// Narrow-phase milliseconds of every step.
     pub narrow_phase_ms_per_step: Vec<f64>,
-    /// Contact pairs of every step.
+    /// Triangle pairs in contact in every step.
     pub contact_pairs_per_step: Vec<usize>,
+    /// Manifolds with points in every step.
+    pub manifolds_per_step: Vec<usize>,
+    /// Interference milliseconds of every step.
+    pub interference_ms_per_step: Vec<f64>,
+    /// Intersecting triangle pairs of every step.
+    pub interference_pairs_per_step: Vec<u64>,
     /// Contact points of every step.
     pub contact_points_per_step: Vec<usize>,
     /// Height (y translation) of the dropped body after every step.
@@ -259,13 +344,15 @@ fn make_shapes(kind: ShapeKind, scene: &DropScene) -> Result<Shapes, String> {
     })
 }
 
-/// Runs the drop test with `kind` shapes. `progress(step, steps)` is called
-/// after every step.
+/// Runs the drop test with `spec`'s shapes and contact mode.
+/// `progress(step, steps)` is called after every step.
 pub fn run(
     scene: &DropScene,
-    kind: ShapeKind,
+    spec: RunSpec,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<RunReport, String> {
+    let kind = spec.kind;
+    let rss_reset = reset_peak_rss();
     let t0 = Instant::now();
     let shapes = make_shapes(kind, scene)?;
     let build_seconds = t0.elapsed().as_secs_f64();
@@ -278,9 +365,14 @@ pub fn run(
             Some((a.clone(), b.clone())),
         ),
     };
+    let counters = ContactCounters::shared();
     let timed = match kind {
         ShapeKind::Parry => None,
-        _ => Some(Timed::new(Dispatcher.chain(DefaultQueryDispatcher))),
+        _ => Some(Timed::new(
+            Dispatcher::new(spec.mode)
+                .with_counters(counters.clone())
+                .then_default(),
+        )),
     };
     let parry_timed = Timed::new(DefaultQueryDispatcher);
     let counter = match &timed {
@@ -306,12 +398,14 @@ pub fn run(
         .bodies
         .insert(RigidBodyBuilder::dynamic().can_sleep(false));
     let _base: ColliderHandle = world.colliders.insert_with_parent(
-        ColliderBuilder::new(s_base).friction(0.6),
+        ColliderBuilder::new(s_base.clone()).friction(0.6),
         base_body,
         &mut world.bodies,
     );
     world.colliders.insert_with_parent(
-        ColliderBuilder::new(s_drop).density(1.0).friction(0.6),
+        ColliderBuilder::new(s_drop.clone())
+            .density(1.0)
+            .friction(0.6),
         drop_body,
         &mut world.bodies,
     );
@@ -319,46 +413,91 @@ pub fn run(
     let mut narrow = Vec::with_capacity(scene.steps);
     let mut step_ms = Vec::with_capacity(scene.steps);
     let mut pairs_per_step = Vec::with_capacity(scene.steps);
+    let mut manifolds_per_step = Vec::with_capacity(scene.steps);
     let mut points_per_step = Vec::with_capacity(scene.steps);
     let mut heights = Vec::with_capacity(scene.steps);
+    let mut inter_ms = Vec::with_capacity(scene.steps);
+    let mut inter_pairs = Vec::with_capacity(scene.steps);
+    let mut max_penetration = 0.0f32;
     for step in 0..scene.steps {
         let before = counter.load(Ordering::Relaxed);
+        counters.take();
         let t = Instant::now();
         world.step();
         step_ms.push(t.elapsed().as_secs_f64() * 1e3);
         narrow.push((counter.load(Ordering::Relaxed) - before) as f64 / 1e6);
-        let (mut pairs, mut points) = (0, 0);
+        let [_, tri_contacts, _] = counters.take();
+        let (mut manifolds, mut points) = (0, 0);
         for pair in world.narrow_phase.contact_pairs() {
             for m in pair.manifolds() {
                 if !m.points.is_empty() {
-                    pairs += 1;
+                    manifolds += 1;
                     points += m.points.len();
+                }
+                for p in &m.points {
+                    max_penetration = max_penetration.max(-p.dist);
                 }
             }
         }
+        let contact_pairs = match spec.mode {
+            ContactMode::Patches(_) if kind != ShapeKind::Parry => tri_contacts as usize,
+            _ => manifolds,
+        };
+        // The papers' interference figure at this step's pose.
+        let pos12 = world.bodies[drop_body]
+            .position()
+            .inv_mul(world.bodies[base_body].position());
+        let ti = Instant::now();
+        let n_inter = match &shapes {
+            Shapes::Cbvh(a, b) => super::cbvh_cbvh::interference(&pos12, a, b),
+            Shapes::Parry(a, b, _) => {
+                let (Some(ta), Some(tb)) = (
+                    a.as_shape::<parry3d::shape::TriMesh>(),
+                    b.as_shape::<parry3d::shape::TriMesh>(),
+                ) else {
+                    unreachable!("parry runs use TriMesh shapes")
+                };
+                trimesh_interference(&pos12, ta, tb)
+            }
+        };
+        inter_ms.push(ti.elapsed().as_secs_f64() * 1e3);
+        inter_pairs.push(n_inter);
         heights.push(world.bodies[drop_body].translation().y);
-        pairs_per_step.push(pairs);
+        pairs_per_step.push(contact_pairs);
+        manifolds_per_step.push(manifolds);
         points_per_step.push(points);
         progress(step + 1, scene.steps);
     }
-    let in_contact: Vec<f64> = narrow
-        .iter()
-        .zip(&points_per_step)
-        .filter(|(_, p)| **p > 0)
-        .map(|(t, _)| *t)
-        .collect();
+    let in_contact = |v: &[f64]| -> Vec<f64> {
+        v.iter()
+            .zip(&points_per_step)
+            .filter(|(_, p)| **p > 0)
+            .map(|(t, _)| *t)
+            .collect()
+    };
+    let narrow_in_contact = in_contact(&narrow);
     let body = &world.bodies[drop_body];
     let tr = body.translation();
     let rot = body.rotation();
     let tris = scene.dropped.triangles.len() + scene.base.triangles.len();
     Ok(RunReport {
-        shape: kind.name().to_string(),
+        shape: spec.name(),
+        contact_mode: if kind == ShapeKind::Parry {
+            "parry".into()
+        } else {
+            spec.mode.name().into()
+        },
         build_seconds,
-        narrow_phase_ms: TimeStats::of(&in_contact),
+        narrow_phase_ms: TimeStats::of(&narrow_in_contact),
         step_ms: TimeStats::of(&step_ms),
-        steps_in_contact: in_contact.len(),
+        steps_in_contact: narrow_in_contact.len(),
         max_contact_pairs: pairs_per_step.iter().copied().max().unwrap_or(0),
+        max_manifolds: manifolds_per_step.iter().copied().max().unwrap_or(0),
         max_contact_points: points_per_step.iter().copied().max().unwrap_or(0),
+        interference_ms: TimeStats::of(&in_contact(&inter_ms)),
+        max_interference_pairs: inter_pairs.iter().copied().max().unwrap_or(0),
+        max_penetration,
+        peak_rss_bytes: if rss_reset { peak_rss_bytes() } else { None },
         bytes_per_triangle: (bytes[0] + bytes[1]) as f64 / tris.max(1) as f64,
         bytes,
         final_translation: [tr.x, tr.y, tr.z],
@@ -368,6 +507,9 @@ pub fn run(
             .is_some_and(|(a, b)| a.fallback_bvh_built() || b.fallback_bvh_built()),
         narrow_phase_ms_per_step: narrow,
         contact_pairs_per_step: pairs_per_step,
+        manifolds_per_step,
+        interference_ms_per_step: inter_ms,
+        interference_pairs_per_step: inter_pairs,
         contact_points_per_step: points_per_step,
         height_per_step: heights,
     })

@@ -21,6 +21,7 @@ pub mod cbvh_convex;
 pub mod cbvh_trimesh;
 mod dispatcher;
 pub mod droptest;
+pub mod patches;
 pub mod raycast_target;
 pub mod shape;
 pub mod timed;
@@ -28,6 +29,7 @@ pub mod trimesh;
 mod workspace;
 
 pub use dispatcher::Dispatcher;
+pub use patches::{ContactCounters, ContactMode};
 pub use shape::{CbvhShape, Codec, pose_from_parry};
 pub use trimesh::{parry_trimesh, trimesh_bytes_by_part};
 pub use workspace::CbvhWorkspace;

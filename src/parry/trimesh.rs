@@ -34,3 +34,26 @@ pub fn trimesh_bytes_by_part(t: &TriMesh) -> Vec<(&'static str, usize)> {
         ("other", other),
     ]
 }
+
+/// The papers' interference figure for two parry `TriMesh`es (`b` placed by
+/// `pos12` in `a`'s frame): parry's own two-tree traversal
+/// (`Bvh::leaf_pairs`) and cbvh's exact triangle-triangle test, so that the
+/// traversal is what differs from cbvh's [`interference`](super::cbvh_cbvh::interference).
+pub fn trimesh_interference(pos12: &parry3d::math::Pose, a: &TriMesh, b: &TriMesh) -> u64 {
+    use parry3d::bounding_volume::BoundingVolume;
+    let mut t = crate::contact::Interference::default();
+    let pairs = a.bvh().leaf_pairs(b.bvh(), |n1, n2| {
+        n1.aabb().intersects(&n2.aabb().transform_by(pos12))
+    });
+    let g = |p: Vector| glam::Vec3A::from(p.to_array());
+    for (i, j) in pairs {
+        let ta = a.triangle(i);
+        let tb = b.triangle(j);
+        t.push(
+            &[g(ta.a), g(ta.b), g(ta.c)],
+            &[g(*pos12 * tb.a), g(*pos12 * tb.b), g(*pos12 * tb.c)],
+        );
+    }
+    t.flush();
+    t.intersecting
+}

@@ -15,6 +15,65 @@ use std::ops::ControlFlow;
 use crate::cursor::{NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Pose, Triangle};
 
+/// A node pair of the traversal: `A`'s node and box, `B`'s node and its
+/// box in `A`'s frame.
+pub type NodePair<NA, NB> = (NA, Aabb, NB, Aabb);
+
+/// The root pair, if the roots' boxes come within `prediction`.
+fn root_pair<A: NodeCursor, B: NodeCursor>(
+    a: &A,
+    b: &B,
+    b_to_a: &Pose,
+    prediction: f32,
+    stats: &mut TraversalStats,
+) -> Option<NodePair<A::Node, B::Node>> {
+    let (ra, ba) = a.root();
+    let (rb, bb) = b.root();
+    let bb = bb.transformed(b_to_a);
+    stats.nodes_visited += 1;
+    if ba.is_empty() || bb.is_empty() || !ba.loosened(prediction).intersects(&bb) {
+        return None;
+    }
+    Some((ra, ba, rb, bb))
+}
+
+/// One descent step from a pair that is not two leaves: the larger box (by
+/// half area, never a leaf) is split and the child pairs that still come
+/// within `prediction` are pushed.
+#[inline]
+fn descend<A: NodeCursor, B: NodeCursor>(
+    a: &A,
+    b: &B,
+    b_to_a: &Pose,
+    prediction: f32,
+    (na, box_a, nb, box_b): NodePair<A::Node, B::Node>,
+    leaf_a: bool,
+    leaf_b: bool,
+    stats: &mut TraversalStats,
+    mut push: impl FnMut(NodePair<A::Node, B::Node>),
+) {
+    let descend_a = leaf_b || (!leaf_a && box_a.half_area() >= box_b.half_area());
+    if descend_a {
+        a.for_each_child(&na, |ca, cb| {
+            stats.nodes_visited += 1;
+            // Loosen A's side, as the leaf test does, so that rounding
+            // cannot prune a pair the leaf test would report.
+            if cb.loosened(prediction).intersects(&box_b) {
+                push((ca, cb, nb, box_b));
+            }
+        });
+    } else {
+        let grown_a = box_a.loosened(prediction);
+        b.for_each_child(&nb, |cb_node, cb| {
+            stats.nodes_visited += 1;
+            let moved = cb.transformed(b_to_a);
+            if moved.intersects(&grown_a) {
+                push((na, box_a, cb_node, moved));
+            }
+        });
+    }
+}
+
 /// Calls `f(i, tri_i, j, tri_j_local)` for each triangle pair whose boxes
 /// come within `prediction` (see the module docs). `tri_i` is in `A`'s
 /// frame, `tri_j_local` in `B`'s own frame. `f` may stop early; returns
@@ -25,26 +84,36 @@ pub fn bvtt<A: NodeCursor, B: NodeCursor>(
     b_to_a: &Pose,
     prediction: f32,
     stats: &mut TraversalStats,
+    f: impl FnMut(u32, &Triangle, u32, &Triangle) -> ControlFlow<()>,
+) -> bool {
+    match root_pair(a, b, b_to_a, prediction, stats) {
+        Some(root) => bvtt_from(a, b, b_to_a, prediction, root, stats, f),
+        None => false,
+    }
+}
+
+/// [`bvtt`] from one node pair of the traversal (see [`bvtt_front`]).
+pub fn bvtt_from<A: NodeCursor, B: NodeCursor>(
+    a: &A,
+    b: &B,
+    b_to_a: &Pose,
+    prediction: f32,
+    start: NodePair<A::Node, B::Node>,
+    stats: &mut TraversalStats,
     mut f: impl FnMut(u32, &Triangle, u32, &Triangle) -> ControlFlow<()>,
 ) -> bool {
-    let (ra, ba) = a.root();
-    let (rb, bb) = b.root();
-    let bb = bb.transformed(b_to_a);
-    stats.nodes_visited += 1;
-    if ba.is_empty() || bb.is_empty() || !ba.loosened(prediction).intersects(&bb) {
-        return false;
-    }
-    let mut stack: Vec<(A::Node, Aabb, B::Node, Aabb)> = Vec::with_capacity(128);
-    stack.push((ra, ba, rb, bb));
-    let mut b_tris: Vec<(u32, Triangle, Triangle, Aabb)> = Vec::new();
-    while let Some((na, box_a, nb, box_b)) = stack.pop() {
+    let mut stack: Vec<NodePair<A::Node, B::Node>> = Vec::with_capacity(128);
+    stack.push(start);
+    let mut b_tris: Vec<(u32, Triangle, Aabb)> = Vec::new();
+    while let Some(pair) = stack.pop() {
+        let (na, _, nb, _) = pair;
         let leaf_a = a.is_leaf(&na);
         let leaf_b = b.is_leaf(&nb);
         if leaf_a && leaf_b {
             b_tris.clear();
             b.for_each_triangle(&nb, |j, tj| {
                 let moved = tj.map(|p| b_to_a.transform_point(p));
-                b_tris.push((j, *tj, moved, Aabb::of_triangle(&moved)));
+                b_tris.push((j, *tj, Aabb::of_triangle(&moved)));
             });
             let mut stop = false;
             a.for_each_triangle(&na, |i, ti| {
@@ -52,7 +121,7 @@ pub fn bvtt<A: NodeCursor, B: NodeCursor>(
                     return;
                 }
                 let bi = Aabb::of_triangle(ti).loosened(prediction);
-                for (j, tj, _, bj) in &b_tris {
+                for (j, tj, bj) in &b_tris {
                     stats.primitive_tests += 1;
                     if bi.intersects(bj) && f(i, ti, *j, tj).is_break() {
                         stop = true;
@@ -65,29 +134,89 @@ pub fn bvtt<A: NodeCursor, B: NodeCursor>(
             }
             continue;
         }
-        // Descend the larger box (by half area); never a leaf.
-        let descend_a = leaf_b || (!leaf_a && box_a.half_area() >= box_b.half_area());
-        if descend_a {
-            a.for_each_child(&na, |ca, cb| {
-                stats.nodes_visited += 1;
-                // Loosen A's side, as the leaf test does, so that rounding
-                // cannot prune a pair the leaf test would report.
-                if cb.loosened(prediction).intersects(&box_b) {
-                    stack.push((ca, cb, nb, box_b));
-                }
-            });
-        } else {
-            let grown_a = box_a.loosened(prediction);
-            b.for_each_child(&nb, |cb_node, cb| {
-                stats.nodes_visited += 1;
-                let moved = cb.transformed(b_to_a);
-                if moved.intersects(&grown_a) {
-                    stack.push((na, box_a, cb_node, moved));
-                }
-            });
-        }
+        descend(a, b, b_to_a, prediction, pair, leaf_a, leaf_b, stats, |p| {
+            stack.push(p)
+        });
     }
     false
+}
+
+/// The traversal's front expanded breadth-first until it holds at least
+/// `target` node pairs (or nothing is left to expand): independent starting
+/// points for [`bvtt_from`] whose pairs together are exactly [`bvtt`]'s.
+/// The front depends only on the trees, the pose and `target`, never on the
+/// thread count.
+pub fn bvtt_front<A: NodeCursor, B: NodeCursor>(
+    a: &A,
+    b: &B,
+    b_to_a: &Pose,
+    prediction: f32,
+    target: usize,
+    stats: &mut TraversalStats,
+) -> Vec<NodePair<A::Node, B::Node>> {
+    let Some(root) = root_pair(a, b, b_to_a, prediction, stats) else {
+        return Vec::new();
+    };
+    let mut front = vec![root];
+    let mut next = Vec::new();
+    while front.len() < target {
+        let mut expanded = false;
+        next.clear();
+        for &pair in &front {
+            let leaf_a = a.is_leaf(&pair.0);
+            let leaf_b = b.is_leaf(&pair.2);
+            if leaf_a && leaf_b {
+                next.push(pair);
+            } else {
+                expanded = true;
+                descend(a, b, b_to_a, prediction, pair, leaf_a, leaf_b, stats, |p| {
+                    next.push(p)
+                });
+            }
+        }
+        std::mem::swap(&mut front, &mut next);
+        if !expanded {
+            break;
+        }
+    }
+    front
+}
+
+/// [`bvtt`] on rayon's threads: the front ([`bvtt_front`] with `target`
+/// pairs) is traversed task by task, each task with its own state from
+/// `init` and calling `leaf(state, i, tri_i, j, tri_j_local)` for its pairs.
+/// Returns the states in front order (so that combining them in order gives
+/// a result independent of the thread count) and the summed counters.
+pub fn bvtt_par<A: NodeCursor, B: NodeCursor, S: Send>(
+    a: &A,
+    b: &B,
+    b_to_a: &Pose,
+    prediction: f32,
+    target: usize,
+    init: impl Fn() -> S + Sync,
+    leaf: impl Fn(&mut S, u32, &Triangle, u32, &Triangle) + Sync,
+) -> (Vec<S>, TraversalStats) {
+    use rayon::prelude::*;
+    let mut stats = TraversalStats::default();
+    let front = bvtt_front(a, b, b_to_a, prediction, target, &mut stats);
+    let results: Vec<(S, TraversalStats)> = front
+        .into_par_iter()
+        .map(|start| {
+            let mut s = init();
+            let mut st = TraversalStats::default();
+            bvtt_from(a, b, b_to_a, prediction, start, &mut st, |i, ti, j, tj| {
+                leaf(&mut s, i, ti, j, tj);
+                ControlFlow::Continue(())
+            });
+            (s, st)
+        })
+        .collect();
+    let mut states = Vec::with_capacity(results.len());
+    for (s, st) in results {
+        stats.add(&st);
+        states.push(s);
+    }
+    (states, stats)
 }
 
 /// All pairs `(i, j)` that [`bvtt`] reports, sorted.

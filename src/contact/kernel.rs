@@ -1,0 +1,819 @@
+//! The triangle-pair contact kernel: separation or penetration of two
+//! triangles by the separating axis theorem, exactly, and the contact points
+//! of a pair within a prediction distance.
+//!
+//! # Axes
+//!
+//! Two triangles are convex polytopes; the faces of their Minkowski
+//! difference have normals among the two face normals, the nine cross
+//! products of an edge of each, and (when the triangles are coplanar and the
+//! difference is flat) the six in-plane edge normals `n × e`. The kernel
+//! tests all 17. Along an axis `L` the signed separation is
+//! `max(min_B − max_A, min_A − max_B) / |L|`; the largest over the axes is
+//!
+//! - the penetration depth, negated, when every axis overlaps (the support
+//!   function of the difference is smallest at one of its face normals, and
+//!   extra axes can only overlap more), with that axis as the normal;
+//! - a lower bound of the distance when some axis separates. Then the exact
+//!   distance comes from the closest features (six vertex–triangle and nine
+//!   edge–edge distances), but only for pairs whose bound is within the
+//!   prediction distance: the rest are rejected on the bound alone.
+//!
+//! # Batches
+//!
+//! Pairs are queued in a [`PairKernel`] in structure-of-arrays form,
+//! [`LANES`] at a time; the 17-axis test runs over a whole batch with every
+//! arithmetic step a loop over the lanes, which the compiler vectorizes (with
+//! AVX2 when the processor has it, detected at run time, and SSE2 or the
+//! target's baseline otherwise). Only pairs within the prediction distance
+//! go on to the scalar part: the exact distance of separated pairs and the
+//! contact points. Nothing is allocated per pair.
+//!
+//! # Contact points
+//!
+//! The normal points from triangle A to triangle B, in A's frame. Every
+//! contact carries its *witness*: the deepest (or closest) point pair, whose
+//! distance is the pair's exact separation. When the normal is a face normal
+//! (within 1°), the other triangle is clipped to that face's prism
+//! (Sutherland–Hodgman) and each clipped corner within the prediction
+//! distance is a further point, with its distance to the face's plane, so
+//! that a face resting on a face yields its whole support polygon.
+
+use glam::Vec3A;
+
+use crate::geom::{Triangle, closest_point_on_triangle};
+
+/// Pairs tested together by the batched separating-axis test.
+pub const LANES: usize = 8;
+
+/// Number of candidate axes per pair (2 faces, 9 edge-edge, 6 in-plane).
+pub const AXES: usize = 17;
+
+/// The most points one pair contact holds: its witness and a clipped
+/// hexagon.
+pub const MAX_PAIR_POINTS: usize = 7;
+
+/// One contact point of a triangle pair, in triangle A's frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PairPoint {
+    /// The point on triangle A (or on its plane, for clipped face contacts).
+    pub p1: Vec3A,
+    /// The point on triangle B.
+    pub p2: Vec3A,
+    /// Signed distance along the pair's normal: negative when penetrating.
+    pub dist: f32,
+    /// Which point of the pair this is: 0 for the witness, 1.. for clipped
+    /// corners. Stable for a pair whose configuration does not change.
+    pub feature: u8,
+}
+
+/// Which feature gives a pair's normal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NormalFeature {
+    /// Triangle A's face normal.
+    FaceA,
+    /// Triangle B's face normal.
+    FaceB,
+    /// An edge of each (or the closest features of a separated pair).
+    Other,
+}
+
+/// The contact of one triangle pair within the prediction distance.
+#[derive(Clone, Copy, Debug)]
+pub struct PairContact {
+    /// Triangle id in A.
+    pub i: u32,
+    /// Triangle id in B.
+    pub j: u32,
+    /// Unit normal from A to B, in A's frame.
+    pub normal: Vec3A,
+    /// Exact signed separation: the distance when apart, minus the
+    /// penetration depth when overlapping.
+    pub dist: f32,
+    /// Where the normal comes from.
+    pub feature: NormalFeature,
+    points: [PairPoint; MAX_PAIR_POINTS],
+    len: u8,
+}
+
+impl PairContact {
+    /// The contact points: the witness first, then clipped corners.
+    pub fn points(&self) -> &[PairPoint] {
+        &self.points[..self.len as usize]
+    }
+
+    fn push(&mut self, p: PairPoint) {
+        if (self.len as usize) < MAX_PAIR_POINTS {
+            self.points[self.len as usize] = p;
+            self.len += 1;
+        }
+    }
+}
+
+type Lanes = [f32; LANES];
+
+/// Triangle corners of a batch: `[corner][coordinate][lane]`.
+type Corners = [[Lanes; 3]; 3];
+
+/// Up to [`LANES`] queued pairs in structure-of-arrays form.
+#[derive(Clone)]
+struct Batch {
+    a: Corners,
+    b: Corners,
+    ids: [(u32, u32); LANES],
+    len: usize,
+}
+
+impl Default for Batch {
+    fn default() -> Self {
+        Self {
+            a: [[[0.0; LANES]; 3]; 3],
+            b: [[[0.0; LANES]; 3]; 3],
+            ids: [(0, 0); LANES],
+            len: 0,
+        }
+    }
+}
+
+/// The result of the separating-axis test of each lane.
+#[derive(Clone, Copy, Debug, Default)]
+struct SatOut {
+    /// The largest signed separation over the axes.
+    sep: Lanes,
+    /// The axis that gave it.
+    axis: [u8; LANES],
+    /// Whether B lies on the axis's positive side.
+    up: [bool; LANES],
+}
+
+/// Counters of a kernel's work.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct KernelStats {
+    /// Pairs tested.
+    pub pairs: u64,
+    /// Pairs within the prediction distance (contacts produced).
+    pub contacts: u64,
+    /// Separated pairs whose exact distance was computed.
+    pub exact_distances: u64,
+}
+
+impl KernelStats {
+    /// Adds another set of counters to this one.
+    pub fn add(&mut self, o: &KernelStats) {
+        self.pairs += o.pairs;
+        self.contacts += o.contacts;
+        self.exact_distances += o.exact_distances;
+    }
+}
+
+/// Which implementation of the batched test runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Simd {
+    /// Whatever the processor supports (AVX2 when detected).
+    Auto,
+    /// The portable path (the target's baseline vector width).
+    Scalar,
+}
+
+/// Queues triangle pairs and hands each pair within the prediction distance
+/// to a sink as a [`PairContact`]. See the module docs.
+#[derive(Clone)]
+pub struct PairKernel {
+    batch: Batch,
+    prediction: f32,
+    simd: Simd,
+    /// Work counters since creation.
+    pub stats: KernelStats,
+}
+
+impl PairKernel {
+    /// A kernel reporting pairs closer than `prediction` (0 reports touching
+    /// and overlapping pairs only).
+    pub fn new(prediction: f32) -> Self {
+        Self::with_simd(prediction, Simd::Auto)
+    }
+
+    /// A kernel with the batched test's implementation chosen (for tests
+    /// that compare the paths).
+    pub fn with_simd(prediction: f32, simd: Simd) -> Self {
+        Self {
+            batch: Batch::default(),
+            prediction: prediction.max(0.0),
+            simd,
+            stats: KernelStats::default(),
+        }
+    }
+
+    /// The prediction distance.
+    pub fn prediction(&self) -> f32 {
+        self.prediction
+    }
+
+    /// Queues the pair `(i, a)`, `(j, b)`, both in A's frame; runs the batch
+    /// when it is full.
+    #[inline]
+    pub fn push(
+        &mut self,
+        i: u32,
+        a: &Triangle,
+        j: u32,
+        b: &Triangle,
+        sink: &mut impl FnMut(&PairContact),
+    ) {
+        let l = self.batch.len;
+        for c in 0..3 {
+            for k in 0..3 {
+                self.batch.a[c][k][l] = a[c][k];
+                self.batch.b[c][k][l] = b[c][k];
+            }
+        }
+        self.batch.ids[l] = (i, j);
+        self.batch.len += 1;
+        if self.batch.len == LANES {
+            self.flush(sink);
+        }
+    }
+
+    /// Runs the queued pairs.
+    pub fn flush(&mut self, sink: &mut impl FnMut(&PairContact)) {
+        let n = self.batch.len;
+        if n == 0 {
+            return;
+        }
+        // Unused lanes repeat lane 0, so that they compute nothing odd.
+        for l in n..LANES {
+            for c in 0..3 {
+                for k in 0..3 {
+                    self.batch.a[c][k][l] = self.batch.a[c][k][0];
+                    self.batch.b[c][k][l] = self.batch.b[c][k][0];
+                }
+            }
+        }
+        let out = sat_dispatch(&self.batch, self.simd);
+        self.stats.pairs += n as u64;
+        for l in 0..n {
+            if out.sep[l] > self.prediction || out.sep[l].is_nan() {
+                continue;
+            }
+            let lane = |c: &Corners| -> Triangle {
+                [0, 1, 2].map(|v| Vec3A::new(c[v][0][l], c[v][1][l], c[v][2][l]))
+            };
+            let (a, b) = (lane(&self.batch.a), lane(&self.batch.b));
+            let (i, j) = self.batch.ids[l];
+            if let Some(c) = self.finish(i, &a, j, &b, out.sep[l], out.axis[l], out.up[l]) {
+                self.stats.contacts += 1;
+                sink(&c);
+            }
+        }
+        self.batch.len = 0;
+    }
+
+    /// The contact of one pair from its test result (scalar part).
+    #[allow(clippy::too_many_arguments)]
+    fn finish(
+        &mut self,
+        i: u32,
+        a: &Triangle,
+        j: u32,
+        b: &Triangle,
+        sep: f32,
+        axis: u8,
+        up: bool,
+    ) -> Option<PairContact> {
+        let mut c = PairContact {
+            i,
+            j,
+            normal: Vec3A::ZERO,
+            dist: sep,
+            feature: NormalFeature::Other,
+            points: [PairPoint::default(); MAX_PAIR_POINTS],
+            len: 0,
+        };
+        let na = face_normal(a);
+        let nb = face_normal(b);
+        if sep > 0.0 {
+            // Separated: the exact distance from the closest features.
+            self.stats.exact_distances += 1;
+            let (p1, p2, d) = closest_points(a, b);
+            if d > self.prediction {
+                return None;
+            }
+            let n = if d > 0.0 {
+                (p2 - p1) / d
+            } else {
+                axis_direction(a, b, axis, up)
+            };
+            c.normal = n;
+            c.dist = d;
+            c.push(PairPoint {
+                p1,
+                p2,
+                dist: d,
+                feature: 0,
+            });
+        } else {
+            let n = axis_direction(a, b, axis, up);
+            c.normal = n;
+            let (p1, p2) = witness(a, b, axis, n, sep);
+            c.push(PairPoint {
+                p1,
+                p2,
+                dist: sep,
+                feature: 0,
+            });
+        }
+        if !c.normal.is_finite() || c.normal == Vec3A::ZERO {
+            return None;
+        }
+        // A face normal within 1°: clip the other triangle to the face.
+        const COS_1_DEG: f32 = 0.999_847_7;
+        if na.is_finite() && c.normal.dot(na).abs() >= COS_1_DEG {
+            c.feature = NormalFeature::FaceA;
+            let n = c.normal;
+            let poly = clip_to_prism(b, a, na);
+            for (k, v) in poly.iter().enumerate() {
+                let d = n.dot(*v - a[0]);
+                if d <= self.prediction {
+                    c.push(PairPoint {
+                        p1: *v - n * d,
+                        p2: *v,
+                        dist: d,
+                        feature: k as u8 + 1,
+                    });
+                }
+            }
+        } else if nb.is_finite() && c.normal.dot(nb).abs() >= COS_1_DEG {
+            c.feature = NormalFeature::FaceB;
+            let n = c.normal;
+            let poly = clip_to_prism(a, b, nb);
+            for (k, v) in poly.iter().enumerate() {
+                let d = n.dot(b[0] - *v);
+                if d <= self.prediction {
+                    c.push(PairPoint {
+                        p1: *v,
+                        p2: *v + n * d,
+                        dist: d,
+                        feature: k as u8 + 1,
+                    });
+                }
+            }
+        }
+        Some(c)
+    }
+}
+
+/// The contact of one pair, unbatched (tests, one-off queries).
+pub fn pair_contact(a: &Triangle, b: &Triangle, prediction: f32) -> Option<PairContact> {
+    let mut k = PairKernel::new(prediction);
+    let mut out = None;
+    k.push(0, a, 0, b, &mut |c| out = Some(*c));
+    k.flush(&mut |c| out = Some(*c));
+    out
+}
+
+/// Whether two triangles intersect or touch (the papers' interference test):
+/// no separating axis among the 17.
+pub fn triangles_intersect(a: &Triangle, b: &Triangle) -> bool {
+    let mut batch = Batch::default();
+    for c in 0..3 {
+        for k in 0..3 {
+            for l in 0..LANES {
+                batch.a[c][k][l] = a[c][k];
+                batch.b[c][k][l] = b[c][k];
+            }
+        }
+    }
+    batch.len = 1;
+    sat_dispatch(&batch, Simd::Auto).sep[0] <= 0.0
+}
+
+/// Counts intersecting pairs in batches: queue pairs with
+/// [`Interference::push`]; the count is in [`Interference::intersecting`].
+#[derive(Clone, Default)]
+pub struct Interference {
+    batch: Batch,
+    /// Pairs tested.
+    pub tested: u64,
+    /// Pairs that intersect or touch.
+    pub intersecting: u64,
+}
+
+impl Interference {
+    /// Queues one pair (both triangles in the same frame).
+    #[inline]
+    pub fn push(&mut self, a: &Triangle, b: &Triangle) {
+        let l = self.batch.len;
+        for c in 0..3 {
+            for k in 0..3 {
+                self.batch.a[c][k][l] = a[c][k];
+                self.batch.b[c][k][l] = b[c][k];
+            }
+        }
+        self.batch.len += 1;
+        if self.batch.len == LANES {
+            self.flush();
+        }
+    }
+
+    /// Tests the queued pairs.
+    pub fn flush(&mut self) {
+        let n = self.batch.len;
+        if n == 0 {
+            return;
+        }
+        let out = sat_dispatch(&self.batch, Simd::Auto);
+        self.tested += n as u64;
+        self.intersecting += out.sep[..n].iter().filter(|s| **s <= 0.0).count() as u64;
+        self.batch.len = 0;
+    }
+}
+
+fn face_normal(t: &Triangle) -> Vec3A {
+    (t[1] - t[0]).cross(t[2] - t[0]).normalize_or(Vec3A::NAN)
+}
+
+fn edges(t: &Triangle) -> [Vec3A; 3] {
+    [t[1] - t[0], t[2] - t[1], t[0] - t[2]]
+}
+
+/// The unnormalized axis `axis` of the pair (see [`sat_lanes`] for the order).
+fn axis_vector(a: &Triangle, b: &Triangle, axis: u8) -> Vec3A {
+    let ea = edges(a);
+    let eb = edges(b);
+    let na = ea[0].cross(-ea[2]);
+    let nb = eb[0].cross(-eb[2]);
+    match axis {
+        0 => na,
+        1 => nb,
+        2..=10 => {
+            let k = (axis - 2) as usize;
+            ea[k / 3].cross(eb[k % 3])
+        }
+        11..=13 => na.cross(ea[(axis - 11) as usize]),
+        _ => nb.cross(eb[(axis - 14) as usize]),
+    }
+}
+
+/// The unit normal from A to B along `axis`.
+fn axis_direction(a: &Triangle, b: &Triangle, axis: u8, up: bool) -> Vec3A {
+    let l = axis_vector(a, b, axis).normalize_or_zero();
+    if up { l } else { -l }
+}
+
+/// The witness point pair of an overlapping pair along the unit normal `n`
+/// (from A to B) with separation `sep` (≤ 0).
+fn witness(a: &Triangle, b: &Triangle, axis: u8, n: Vec3A, sep: f32) -> (Vec3A, Vec3A) {
+    match axis {
+        2..=10 => {
+            let k = (axis - 2) as usize;
+            let (ia, ib) = (k / 3, k % 3);
+            let (c1, c2) = closest_on_segments(a[ia], a[(ia + 1) % 3], b[ib], b[(ib + 1) % 3]);
+            (c1, c2)
+        }
+        1 | 14..=16 => {
+            // B's feature: A's deepest corner along n.
+            let u = *a
+                .iter()
+                .max_by(|x, y| n.dot(**x).total_cmp(&n.dot(**y)))
+                .expect("three corners");
+            (u, u + n * sep)
+        }
+        _ => {
+            // A's feature: B's deepest corner against n.
+            let v = *b
+                .iter()
+                .min_by(|x, y| n.dot(**x).total_cmp(&n.dot(**y)))
+                .expect("three corners");
+            (v - n * sep, v)
+        }
+    }
+}
+
+/// Clips triangle `t` to the prism over triangle `f` with unit normal `n`
+/// (Sutherland–Hodgman): at most six corners.
+fn clip_to_prism(t: &Triangle, f: &Triangle, n: Vec3A) -> Poly {
+    let mut poly = Poly::from(t);
+    for k in 0..3 {
+        let (p, q) = (f[k], f[(k + 1) % 3]);
+        let inward = n.cross(q - p);
+        poly = poly.clip(p, inward);
+        if poly.len == 0 {
+            break;
+        }
+    }
+    poly
+}
+
+/// A convex polygon of at most six corners (a triangle clipped by three
+/// planes), on the stack.
+#[derive(Clone, Copy)]
+struct Poly {
+    v: [Vec3A; 9],
+    len: usize,
+}
+
+impl Poly {
+    fn from(t: &Triangle) -> Self {
+        let mut v = [Vec3A::ZERO; 9];
+        v[..3].copy_from_slice(t);
+        Self { v, len: 3 }
+    }
+
+    fn iter(&self) -> impl Iterator<Item = &Vec3A> {
+        self.v[..self.len].iter()
+    }
+
+    /// Keeps the part where `inward · (x − p) ≥ 0`.
+    fn clip(&self, p: Vec3A, inward: Vec3A) -> Poly {
+        let mut out = Poly {
+            v: [Vec3A::ZERO; 9],
+            len: 0,
+        };
+        // A tolerance relative to the plane's scale keeps corners lying on
+        // the plane (shared edges) on both sides.
+        let eps = 1e-6 * inward.length() * (self.v[0] - p).length().max(1.0);
+        for k in 0..self.len {
+            let x = self.v[k];
+            let y = self.v[(k + 1) % self.len];
+            let dx = inward.dot(x - p);
+            let dy = inward.dot(y - p);
+            let x_in = dx >= -eps;
+            let y_in = dy >= -eps;
+            if x_in && out.len < 9 {
+                out.v[out.len] = x;
+                out.len += 1;
+            }
+            if x_in != y_in && out.len < 9 {
+                let t = dx / (dx - dy);
+                if t.is_finite() {
+                    out.v[out.len] = x + (y - x) * t.clamp(0.0, 1.0);
+                    out.len += 1;
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The closest points of segments `p0 q0` and `p1 q1` (Ericson §5.1.9).
+pub fn closest_on_segments(p0: Vec3A, q0: Vec3A, p1: Vec3A, q1: Vec3A) -> (Vec3A, Vec3A) {
+    let d1 = q0 - p0;
+    let d2 = q1 - p1;
+    let r = p0 - p1;
+    let a = d1.dot(d1);
+    let e = d2.dot(d2);
+    let f = d2.dot(r);
+    const EPS: f32 = 1e-30;
+    let (s, t);
+    if a <= EPS && e <= EPS {
+        return (p0, p1);
+    }
+    if a <= EPS {
+        s = 0.0;
+        t = (f / e).clamp(0.0, 1.0);
+    } else {
+        let c = d1.dot(r);
+        if e <= EPS {
+            t = 0.0;
+            s = (-c / a).clamp(0.0, 1.0);
+        } else {
+            let b = d1.dot(d2);
+            let denom = a * e - b * b;
+            let mut s0 = if denom > 0.0 {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut t0 = (b * s0 + f) / e;
+            if t0 < 0.0 {
+                t0 = 0.0;
+                s0 = (-c / a).clamp(0.0, 1.0);
+            } else if t0 > 1.0 {
+                t0 = 1.0;
+                s0 = ((b - c) / a).clamp(0.0, 1.0);
+            }
+            s = s0;
+            t = t0;
+        }
+    }
+    (p0 + d1 * s, p1 + d2 * t)
+}
+
+/// The closest points of two triangles that do not intersect, and their
+/// distance: the best of the six corner–triangle and nine edge–edge pairs.
+pub fn closest_points(a: &Triangle, b: &Triangle) -> (Vec3A, Vec3A, f32) {
+    let mut best = (a[0], b[0], f32::INFINITY);
+    let mut consider = |p: Vec3A, q: Vec3A| {
+        let d2 = (q - p).length_squared();
+        if d2 < best.2 {
+            best = (p, q, d2);
+        }
+    };
+    for v in a {
+        consider(*v, closest_point_on_triangle(*v, b).0);
+    }
+    for v in b {
+        consider(closest_point_on_triangle(*v, a).0, *v);
+    }
+    for ia in 0..3 {
+        for ib in 0..3 {
+            let (p, q) = closest_on_segments(a[ia], a[(ia + 1) % 3], b[ib], b[(ib + 1) % 3]);
+            consider(p, q);
+        }
+    }
+    (best.0, best.1, best.2.sqrt())
+}
+
+fn sat_dispatch(batch: &Batch, simd: Simd) -> SatOut {
+    #[cfg(target_arch = "x86_64")]
+    if simd == Simd::Auto && std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor supports AVX2, checked just above; the
+        // function has no other requirement.
+        return unsafe { sat_avx2(batch) };
+    }
+    let _ = simd;
+    sat_lanes(batch)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn sat_avx2(batch: &Batch) -> SatOut {
+    sat_lanes(batch)
+}
+
+#[inline(always)]
+fn sub(x: &Lanes, y: &Lanes) -> Lanes {
+    std::array::from_fn(|l| x[l] - y[l])
+}
+
+#[inline(always)]
+fn sub3(x: &[Lanes; 3], y: &[Lanes; 3]) -> [Lanes; 3] {
+    [sub(&x[0], &y[0]), sub(&x[1], &y[1]), sub(&x[2], &y[2])]
+}
+
+#[inline(always)]
+fn cross(x: &[Lanes; 3], y: &[Lanes; 3]) -> [Lanes; 3] {
+    [
+        std::array::from_fn(|l| x[1][l] * y[2][l] - x[2][l] * y[1][l]),
+        std::array::from_fn(|l| x[2][l] * y[0][l] - x[0][l] * y[2][l]),
+        std::array::from_fn(|l| x[0][l] * y[1][l] - x[1][l] * y[0][l]),
+    ]
+}
+
+#[inline(always)]
+fn dot(x: &[Lanes; 3], y: &[Lanes; 3]) -> Lanes {
+    std::array::from_fn(|l| x[0][l] * y[0][l] + x[1][l] * y[1][l] + x[2][l] * y[2][l])
+}
+
+/// The 17-axis test over a batch, written lane-wise so that it vectorizes.
+/// Axis order: 0 A's face normal, 1 B's, 2..=10 `edge_A(k/3) × edge_B(k%3)`,
+/// 11..=13 `n_A × edge_A`, 14..=16 `n_B × edge_B`. Axes shorter than a tiny
+/// fraction of their edges' product (parallel edges) are skipped. Ties keep
+/// the earlier axis, so face normals win over edge axes.
+#[inline(always)]
+fn sat_lanes(batch: &Batch) -> SatOut {
+    let a = &batch.a;
+    let b = &batch.b;
+    let ea = [sub3(&a[1], &a[0]), sub3(&a[2], &a[1]), sub3(&a[0], &a[2])];
+    let eb = [sub3(&b[1], &b[0]), sub3(&b[2], &b[1]), sub3(&b[0], &b[2])];
+    let la: [Lanes; 3] = [0, 1, 2].map(|k| dot(&ea[k], &ea[k]));
+    let lb: [Lanes; 3] = [0, 1, 2].map(|k| dot(&eb[k], &eb[k]));
+    let na = cross(&ea[0], &ea[1]);
+    let nb = cross(&eb[0], &eb[1]);
+    let mut out = SatOut {
+        sep: [f32::NEG_INFINITY; LANES],
+        axis: [0; LANES],
+        up: [true; LANES],
+    };
+    let mut test = |axis: u8, l3: &[Lanes; 3], reference: &Lanes| {
+        let len2 = dot(l3, l3);
+        let pa = [dot(l3, &a[0]), dot(l3, &a[1]), dot(l3, &a[2])];
+        let pb = [dot(l3, &b[0]), dot(l3, &b[1]), dot(l3, &b[2])];
+        for l in 0..LANES {
+            let min_a = pa[0][l].min(pa[1][l]).min(pa[2][l]);
+            let max_a = pa[0][l].max(pa[1][l]).max(pa[2][l]);
+            let min_b = pb[0][l].min(pb[1][l]).min(pb[2][l]);
+            let max_b = pb[0][l].max(pb[1][l]).max(pb[2][l]);
+            let s_up = min_b - max_a;
+            let s_dn = min_a - max_b;
+            let up = s_up >= s_dn;
+            let s = s_up.max(s_dn) / len2[l].sqrt();
+            let valid = len2[l] > 1e-12 * reference[l];
+            let better = valid && s > out.sep[l];
+            out.sep[l] = if better { s } else { out.sep[l] };
+            out.axis[l] = if better { axis } else { out.axis[l] };
+            out.up[l] = if better { up } else { out.up[l] };
+        }
+    };
+    // The reference scale of a face normal: the product of two edges' squares.
+    let ra: Lanes = std::array::from_fn(|l| la[0][l] * la[1][l]);
+    let rb: Lanes = std::array::from_fn(|l| lb[0][l] * lb[1][l]);
+    test(0, &na, &ra);
+    test(1, &nb, &rb);
+    for i in 0..3 {
+        for j in 0..3 {
+            let axis = cross(&ea[i], &eb[j]);
+            let r: Lanes = std::array::from_fn(|l| la[i][l] * lb[j][l]);
+            test(2 + (3 * i + j) as u8, &axis, &r);
+        }
+    }
+    for i in 0..3 {
+        let axis = cross(&na, &ea[i]);
+        let r: Lanes = std::array::from_fn(|l| ra[l] * la[i][l]);
+        test(11 + i as u8, &axis, &r);
+    }
+    for j in 0..3 {
+        let axis = cross(&nb, &eb[j]);
+        let r: Lanes = std::array::from_fn(|l| rb[l] * lb[j][l]);
+        test(14 + j as u8, &axis, &r);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tri(p: [[f32; 3]; 3]) -> Triangle {
+        p.map(Vec3A::from)
+    }
+
+    #[test]
+    fn face_on_face_gives_the_support_polygon() {
+        let floor = tri([[-2.0, 0.0, -2.0], [-2.0, 0.0, 2.0], [2.0, 0.0, 0.0]]);
+        // A small triangle 0.01 below the floor's plane: apart, but within
+        // a prediction of 0.02.
+        let t = tri([[0.0, -0.01, 0.0], [0.5, -0.01, 0.0], [0.0, -0.01, 0.5]]);
+        assert!(pair_contact(&floor, &t, 0.0).is_none());
+        let c = pair_contact(&floor, &t, 0.02).expect("within the prediction");
+        assert!((c.dist - 0.01).abs() < 1e-6, "{}", c.dist);
+        assert!((c.normal - Vec3A::NEG_Y).length() < 1e-6, "{}", c.normal);
+        assert_eq!(c.feature, NormalFeature::FaceA);
+        // Witness plus the three corners.
+        assert_eq!(c.points().len(), 4);
+        for p in c.points() {
+            assert!((p.dist - 0.01).abs() < 1e-6);
+            assert!((p.p1.y).abs() < 1e-6 && (p.p2.y + 0.01).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn separated_pairs_report_the_exact_distance() {
+        let a = tri([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+        // An edge-edge configuration: B crosses above A's hypotenuse.
+        let b = tri([[1.0, 1.0, 0.5], [0.0, 0.0, 0.6], [1.0, 1.0, 2.0]]);
+        let (_, _, d) = closest_points(&a, &b);
+        let c = pair_contact(&a, &b, 1.0).expect("within prediction");
+        assert!((c.dist - d).abs() < 1e-6);
+        assert!(pair_contact(&a, &b, d * 0.99).is_none());
+        assert!(!triangles_intersect(&a, &b));
+    }
+
+    #[test]
+    fn crossing_triangles_intersect() {
+        let a = tri([[-1.0, 0.0, -1.0], [1.0, 0.0, -1.0], [0.0, 0.0, 1.0]]);
+        let b = tri([[0.0, -1.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.5]]);
+        assert!(triangles_intersect(&a, &b));
+        let c = pair_contact(&a, &b, 0.0).expect("crossing");
+        assert!(c.dist < 0.0);
+    }
+
+    /// The vectorized (AVX2 where detected) and portable paths agree bit
+    /// for bit: no fused operations, the same lane-wise arithmetic.
+    #[test]
+    fn simd_and_scalar_paths_agree() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        };
+        for _ in 0..2000 {
+            let mut batch = Batch::default();
+            for l in 0..LANES {
+                for c in 0..3 {
+                    for k in 0..3 {
+                        batch.a[c][k][l] = rnd();
+                        batch.b[c][k][l] = rnd() * 0.5 + 0.3;
+                    }
+                }
+            }
+            batch.len = LANES;
+            let x = sat_dispatch(&batch, Simd::Auto);
+            let y = sat_dispatch(&batch, Simd::Scalar);
+            assert_eq!(x.sep.map(f32::to_bits), y.sep.map(f32::to_bits));
+            assert_eq!(x.axis, y.axis);
+            assert_eq!(x.up, y.up);
+        }
+    }
+
+    #[test]
+    fn coplanar_disjoint_triangles_are_separated() {
+        let a = tri([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]);
+        let b = tri([[2.0, 0.0, 0.0], [3.0, 0.0, 0.0], [2.0, 0.0, 1.0]]);
+        assert!(!triangles_intersect(&a, &b));
+        let c = pair_contact(&a, &b, 2.0).expect("within 2");
+        assert!((c.dist - 1.0).abs() < 1e-6);
+    }
+}

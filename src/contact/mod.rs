@@ -1,0 +1,24 @@
+//! cbvh's own contact generation for triangle meshes, independent of parry:
+//!
+//! - [`kernel`]: the triangle-pair contact kernel (separating axes over a
+//!   batch of pairs in structure-of-arrays form, the exact distance of
+//!   separated pairs, clipped contact points) and the papers' interference
+//!   test (does a triangle pair intersect);
+//! - [`patch`]: the reduction of many pair contacts into contact patches
+//!   (normals within a few degrees, near each other), each at most four
+//!   points that keep the patch's support area.
+//!
+//! The parry integration ([`crate::parry`]) turns patches into parry
+//! `ContactManifold`s, one per patch, matched from step to step. This
+//! replaces the design's earlier rule that every triangle pair goes through
+//! parry's convex-convex code: that path stays available as the
+//! per-triangle-pair contact mode.
+
+pub mod kernel;
+pub mod patch;
+
+pub use kernel::{
+    Interference, KernelStats, PairContact, PairKernel, PairPoint, pair_contact,
+    triangles_intersect,
+};
+pub use patch::{Patch, PatchOptions, PatchPoint, PatchSet};

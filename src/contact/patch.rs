@@ -1,0 +1,340 @@
+//! Patch reduction: the contacts of many triangle pairs grouped into a few
+//! contact patches, each reduced to at most four points.
+//!
+//! A pair contact joins the first patch whose normal is within
+//! [`PatchOptions::max_angle_deg`] of its own and whose points come within
+//! the patch gap of its witness point; otherwise it starts a patch. The
+//! patch keeps, streaming and without storing points:
+//!
+//! - its seed normal (the first pair's), so every member's normal is within
+//!   the angle of the patch normal;
+//! - the deepest point (smallest signed distance) and the representative
+//!   triangle pair it came from;
+//! - the extreme points along eight directions of the contact plane (an
+//!   octagon around the support area) and the bounds of all points.
+//!
+//! [`Patch::reduced`] then picks at most four of those candidates as Jolt
+//! and PhysX do: the deepest point, the point farthest from it, and the two
+//! points spanning the largest triangle areas on either side of that
+//! segment. The last pair consulted is tried first, since a traversal meets
+//! neighbouring pairs one after another: finding a patch is O(1) in the
+//! usual case.
+//!
+//! Sets built separately (one per traversal task, in a fixed task order)
+//! are merged with [`PatchSet::merge`]; the result depends on the order of
+//! the tasks, never on the number of threads.
+
+use glam::Vec3A;
+
+use super::kernel::PairContact;
+use crate::geom::Aabb;
+
+/// How contacts are grouped into patches.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct PatchOptions {
+    /// Largest angle between a pair's normal and its patch's, in degrees.
+    pub max_angle_deg: f32,
+    /// Largest gap between a pair's witness point and the points already in
+    /// a patch for the pair to join it, as a fraction of the smaller shape's
+    /// bounding-box diagonal.
+    pub gap_fraction: f32,
+}
+
+impl Default for PatchOptions {
+    fn default() -> Self {
+        Self {
+            max_angle_deg: 5.0,
+            gap_fraction: 0.1,
+        }
+    }
+}
+
+/// A contact point with the triangle pair and point it came from.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PatchPoint {
+    /// The point on shape 1, in shape 1's frame.
+    pub p1: Vec3A,
+    /// The point on shape 2, in shape 1's frame.
+    pub p2: Vec3A,
+    /// Signed distance along the patch normal's pair normal (negative:
+    /// penetration).
+    pub dist: f32,
+    /// Triangle of shape 1.
+    pub i: u32,
+    /// Triangle of shape 2.
+    pub j: u32,
+    /// Which point of the pair (see [`PairPoint::feature`](super::kernel::PairPoint::feature)).
+    pub feature: u8,
+}
+
+const DIRS: usize = 8;
+
+/// One contact patch. See the module docs.
+#[derive(Clone, Debug)]
+pub struct Patch {
+    /// Unit normal from shape 1 to shape 2, in shape 1's frame.
+    pub normal: Vec3A,
+    basis: [Vec3A; 2],
+    /// Bounds of the patch's points on shape 1.
+    pub bounds: Aabb,
+    /// The deepest point.
+    pub deepest: PatchPoint,
+    extremes: [(f32, PatchPoint); DIRS],
+    /// The smallest cosine between a member pair's normal and the patch
+    /// normal (the cone the members' normals lie in).
+    pub min_cos: f32,
+    /// Triangle pairs in the patch.
+    pub pairs: u32,
+    /// Contact points offered to the patch.
+    pub points: u32,
+    /// The member pairs, when the set records them.
+    pub members: Vec<(u32, u32)>,
+}
+
+fn basis(n: Vec3A) -> [Vec3A; 2] {
+    let t = if n.x.abs() > 0.57 {
+        Vec3A::new(n.y, -n.x, 0.0)
+    } else {
+        Vec3A::new(0.0, n.z, -n.y)
+    }
+    .normalize_or(Vec3A::X);
+    [t, n.cross(t)]
+}
+
+fn directions(b: &[Vec3A; 2]) -> [Vec3A; DIRS] {
+    std::array::from_fn(|k| {
+        let a = k as f32 * std::f32::consts::FRAC_PI_4;
+        b[0] * a.cos() + b[1] * a.sin()
+    })
+}
+
+impl Patch {
+    fn new(normal: Vec3A, first: PatchPoint) -> Self {
+        let basis = basis(normal);
+        let dirs = directions(&basis);
+        Self {
+            normal,
+            basis,
+            bounds: Aabb::new(first.p1, first.p1),
+            deepest: first,
+            extremes: std::array::from_fn(|k| (dirs[k].dot(first.p1), first)),
+            min_cos: 1.0,
+            pairs: 0,
+            points: 0,
+            members: Vec::new(),
+        }
+    }
+
+    #[inline]
+    fn offer(&mut self, p: PatchPoint) {
+        self.points += 1;
+        if p.dist < self.deepest.dist {
+            self.deepest = p;
+        }
+        self.bounds.grow(p.p1);
+        let b = &self.basis;
+        let (u, v) = (b[0].dot(p.p1), b[1].dot(p.p1));
+        const H: f32 = std::f32::consts::FRAC_1_SQRT_2;
+        let proj = [
+            u,
+            H * (u + v),
+            v,
+            H * (v - u),
+            -u,
+            -H * (u + v),
+            -v,
+            H * (u - v),
+        ];
+        for (e, s) in self.extremes.iter_mut().zip(proj) {
+            if s > e.0 {
+                *e = (s, p);
+            }
+        }
+    }
+
+    /// The candidates the reduction chooses from: the deepest point and the
+    /// extremes.
+    pub fn candidates(&self) -> impl Iterator<Item = PatchPoint> + '_ {
+        std::iter::once(self.deepest).chain(self.extremes.iter().map(|e| e.1))
+    }
+
+    /// At most four points that keep the patch's support area: the deepest,
+    /// the farthest from it, and the two spanning the largest areas on each
+    /// side of that segment. Deterministic.
+    pub fn reduced(&self) -> ([PatchPoint; 4], usize) {
+        let mut out = [self.deepest; 4];
+        let mut n = 1;
+        let a = self.deepest.p1;
+        let far = self
+            .candidates()
+            .max_by(|x, y| {
+                (x.p1 - a)
+                    .length_squared()
+                    .total_cmp(&(y.p1 - a).length_squared())
+            })
+            .expect("candidates are never empty");
+        let span = (far.p1 - a).length_squared();
+        let tiny = 1e-12 * (1.0 + a.length_squared());
+        if span <= tiny {
+            return (out, n);
+        }
+        out[n] = far;
+        n += 1;
+        let tangent = (far.p1 - a).cross(self.normal);
+        let side = |p: &PatchPoint| tangent.dot(p.p1 - a);
+        let plus = self
+            .candidates()
+            .max_by(|x, y| side(x).total_cmp(&side(y)))
+            .expect("non-empty");
+        let minus = self
+            .candidates()
+            .min_by(|x, y| side(x).total_cmp(&side(y)))
+            .expect("non-empty");
+        let eps = tiny.sqrt() * tangent.length();
+        if side(&plus) > eps {
+            out[n] = plus;
+            n += 1;
+        }
+        if side(&minus) < -eps {
+            out[n] = minus;
+            n += 1;
+        }
+        (out, n)
+    }
+}
+
+/// The patches of one body pair (or of one traversal task). See the module
+/// docs.
+#[derive(Clone, Debug)]
+pub struct PatchSet {
+    cos_angle: f32,
+    max_angle: f32,
+    gap: f32,
+    record: bool,
+    last: usize,
+    /// The patches, in order of creation.
+    pub patches: Vec<Patch>,
+}
+
+impl PatchSet {
+    /// An empty set; `size` is the smaller shape's bounding-box diagonal
+    /// (the gap is `options.gap_fraction × size`); with `record` every
+    /// patch lists its member pairs (tests and analysis).
+    pub fn new(options: &PatchOptions, size: f32, record: bool) -> Self {
+        Self {
+            cos_angle: options.max_angle_deg.to_radians().cos(),
+            max_angle: options.max_angle_deg.to_radians(),
+            gap: (options.gap_fraction * size).max(0.0),
+            record,
+            last: 0,
+            patches: Vec::new(),
+        }
+    }
+
+    /// Empties the set, keeping its allocation.
+    pub fn clear(&mut self) {
+        self.patches.clear();
+        self.last = 0;
+    }
+
+    fn accepts(&self, k: usize, normal: Vec3A, at: Vec3A) -> bool {
+        let p = &self.patches[k];
+        p.normal.dot(normal) >= self.cos_angle && p.bounds.loosened(self.gap).contains_point(at)
+    }
+
+    /// Adds one pair contact (its points and its pair) to the patch it
+    /// belongs to.
+    pub fn add(&mut self, c: &PairContact) {
+        let pts = c.points();
+        let Some(w) = pts.first() else {
+            return;
+        };
+        let point = |p: &super::kernel::PairPoint| PatchPoint {
+            p1: p.p1,
+            p2: p.p2,
+            dist: p.dist,
+            i: c.i,
+            j: c.j,
+            feature: p.feature,
+        };
+        let k = if self.last < self.patches.len() && self.accepts(self.last, c.normal, w.p1) {
+            self.last
+        } else if let Some(k) = (0..self.patches.len()).find(|&k| self.accepts(k, c.normal, w.p1)) {
+            k
+        } else {
+            self.patches.push(Patch::new(c.normal, point(w)));
+            self.patches.len() - 1
+        };
+        self.last = k;
+        let patch = &mut self.patches[k];
+        patch.pairs += 1;
+        patch.min_cos = patch.min_cos.min(patch.normal.dot(c.normal));
+        if self.record {
+            patch.members.push((c.i, c.j));
+        }
+        for p in pts {
+            patch.offer(point(p));
+        }
+    }
+
+    /// Adds a contact point that did not come from the triangle kernel (a
+    /// convex shape against a triangle), with its pair's normal.
+    pub fn add_point(&mut self, normal: Vec3A, p: PatchPoint, new_pair: bool) {
+        let k = if self.last < self.patches.len() && self.accepts(self.last, normal, p.p1) {
+            self.last
+        } else if let Some(k) = (0..self.patches.len()).find(|&k| self.accepts(k, normal, p.p1)) {
+            k
+        } else {
+            self.patches.push(Patch::new(normal, p));
+            self.patches.len() - 1
+        };
+        self.last = k;
+        let patch = &mut self.patches[k];
+        if new_pair {
+            patch.pairs += 1;
+            patch.min_cos = patch.min_cos.min(patch.normal.dot(normal));
+            if self.record {
+                patch.members.push((p.i, p.j));
+            }
+        }
+        patch.offer(p);
+    }
+
+    /// Merges another set's patches into this one, in order. A patch joins
+    /// one of this set's only if all its members' normals stay within the
+    /// angle of the joined patch's normal (the angle between the two
+    /// normals plus the joining patch's own cone).
+    pub fn merge(&mut self, other: PatchSet) {
+        let acos = |c: f32| c.clamp(-1.0, 1.0).acos();
+        for p in other.patches {
+            let cone = acos(p.min_cos);
+            let k = (0..self.patches.len()).find(|&k| {
+                let q = &self.patches[k];
+                q.normal.dot(p.normal) >= self.cos_angle
+                    && acos(q.normal.dot(p.normal)) + cone <= self.max_angle
+                    && q.bounds.loosened(self.gap).intersects(&p.bounds)
+            });
+            match k {
+                Some(k) => {
+                    let q = &mut self.patches[k];
+                    let before = q.points;
+                    for c in p.candidates() {
+                        q.offer(c);
+                    }
+                    q.points = before + p.points;
+                    q.bounds = q.bounds.union(&p.bounds);
+                    q.pairs += p.pairs;
+                    q.min_cos = q.min_cos.min((acos(q.normal.dot(p.normal)) + cone).cos());
+                    q.members.extend(p.members);
+                }
+                None => self.patches.push(p),
+            }
+        }
+        self.last = 0;
+    }
+
+    /// Triangle pairs in all patches.
+    pub fn pair_count(&self) -> usize {
+        self.patches.iter().map(|p| p.pairs as usize).sum()
+    }
+}

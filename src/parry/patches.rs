@@ -1,0 +1,173 @@
+//! Contact patches as parry manifolds: the [`ContactMode`] of the
+//! dispatcher, and the conversion of a [`PatchSet`] into one parry
+//! `ContactManifold` per patch, matched to last step's manifolds so that
+//! rapier warm-starts.
+//!
+//! Patches are computed in the frame of one side, "A" (the cbvh shape, or
+//! the first of two cbvh shapes); [`emit`] maps them to parry's order
+//! (shape 1, shape 2) whichever side A is.
+//!
+//! # Step-to-step matching
+//!
+//! Each new patch takes the unused manifold of last step whose normal is
+//! closest to its own (within the patch angle); it keeps that manifold's
+//! data and transfers each point's solver data (impulses) from the old point
+//! with the same feature ids. A point's ids are its triangle pair and which
+//! point of the pair it is (`fid1` = face(triangle of shape 1), `fid2` =
+//! vertex(triangle of shape 2 × 8 + point)), so a point that persists keeps
+//! its warm-start impulse.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use glam::Vec3A;
+use parry3d::math::{Pose as PPose, Vector};
+use parry3d::query::{ContactManifold, TrackedContact};
+use parry3d::shape::PackedFeatureId;
+
+use crate::contact::{PatchOptions, PatchPoint, PatchSet};
+
+/// How the dispatcher turns triangle pairs into contact manifolds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ContactMode {
+    /// cbvh's own triangle-pair kernel, reduced into contact patches: one
+    /// manifold of at most four points per patch (the default).
+    Patches(PatchOptions),
+    /// One manifold per triangle pair through parry's convex-convex code:
+    /// parry's exact contacts, for parity tests and users who want them.
+    PerTrianglePair,
+}
+
+impl Default for ContactMode {
+    fn default() -> Self {
+        ContactMode::Patches(PatchOptions::default())
+    }
+}
+
+impl ContactMode {
+    /// The name used on command lines and in reports: `patches` or `pairs`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            ContactMode::Patches(_) => "patches",
+            ContactMode::PerTrianglePair => "pairs",
+        }
+    }
+}
+
+/// Work counters a dispatcher adds to (shared by its clones), for reports:
+/// read and reset them around a step.
+#[derive(Debug, Default)]
+pub struct ContactCounters {
+    /// Triangle pairs whose boxes came within the prediction distance.
+    pub candidate_pairs: AtomicU64,
+    /// Triangle pairs within the prediction distance (contacts).
+    pub contact_pairs: AtomicU64,
+    /// Patches (manifolds) produced in patch mode.
+    pub patches: AtomicU64,
+}
+
+impl ContactCounters {
+    /// A new shared set of counters.
+    pub fn shared() -> Arc<Self> {
+        Arc::new(Self::default())
+    }
+
+    /// The three counters, reset to zero.
+    pub fn take(&self) -> [u64; 3] {
+        [
+            self.candidate_pairs.swap(0, Ordering::Relaxed),
+            self.contact_pairs.swap(0, Ordering::Relaxed),
+            self.patches.swap(0, Ordering::Relaxed),
+        ]
+    }
+
+    pub(crate) fn add(&self, candidates: u64, contacts: u64, patches: u64) {
+        self.candidate_pairs
+            .fetch_add(candidates, Ordering::Relaxed);
+        self.contact_pairs.fetch_add(contacts, Ordering::Relaxed);
+        self.patches.fetch_add(patches, Ordering::Relaxed);
+    }
+}
+
+const CODE_MASK: u32 = (1 << 30) - 1;
+
+fn ids(i1: u32, i2: u32, feature: u8) -> (PackedFeatureId, PackedFeatureId) {
+    (
+        PackedFeatureId::face(i1 & CODE_MASK),
+        PackedFeatureId::vertex(i2.wrapping_mul(8).wrapping_add(feature as u32) & CODE_MASK),
+    )
+}
+
+fn v(p: Vec3A) -> Vector {
+    Vector::new(p.x, p.y, p.z)
+}
+
+/// Replaces `manifolds` with one manifold per patch of `set`. The patches
+/// are in A's frame; `a_to_b` maps A's frame to the other side's; `flipped`
+/// says A is parry's shape 2. `cos_angle` bounds the normal change for a
+/// patch to inherit an old manifold.
+pub fn emit<M: Default + Clone, C: Default + Copy>(
+    set: &PatchSet,
+    a_to_b: &PPose,
+    flipped: bool,
+    cos_angle: f32,
+    manifolds: &mut Vec<ContactManifold<M, C>>,
+) {
+    let mut old = std::mem::take(manifolds);
+    let mut used = vec![false; old.len()];
+    for patch in &set.patches {
+        let (pts, n) = patch.reduced();
+        if n == 0 {
+            continue;
+        }
+        let n_a = v(patch.normal);
+        let n_b = a_to_b.rotation * -n_a;
+        let (local_n1, local_n2) = if flipped { (n_b, n_a) } else { (n_a, n_b) };
+        // The old manifold with the closest normal, within the angle.
+        let mut best: Option<(usize, f32)> = None;
+        for (k, m) in old.iter().enumerate() {
+            let d = m.local_n1.dot(local_n1);
+            if !used[k] && d >= cos_angle && best.is_none_or(|b| d > b.1) {
+                best = Some((k, d));
+            }
+        }
+        let point = |p: &PatchPoint| {
+            let q1 = v(p.p1);
+            let q2 = a_to_b * v(p.p2);
+            if flipped {
+                let (f2, f1) = ids(p.i, p.j, p.feature);
+                TrackedContact::new(q2, q1, f1, f2, p.dist)
+            } else {
+                let (f1, f2) = ids(p.i, p.j, p.feature);
+                TrackedContact::new(q1, q2, f1, f2, p.dist)
+            }
+        };
+        let rep = patch.deepest;
+        let (sub1, sub2) = if flipped {
+            (rep.j, rep.i)
+        } else {
+            (rep.i, rep.j)
+        };
+        let mut m = match best {
+            Some((k, _)) => {
+                used[k] = true;
+                let mut m = old[k].take();
+                let prev = std::mem::take(&mut m.points);
+                m.points = pts[..n].iter().map(point).collect();
+                m.match_contacts(&prev);
+                m
+            }
+            None => {
+                let mut m = ContactManifold::with_data(sub1, sub2, M::default());
+                m.points = pts[..n].iter().map(point).collect();
+                m
+            }
+        };
+        m.subshape1 = sub1;
+        m.subshape2 = sub2;
+        m.local_n1 = local_n1;
+        m.local_n2 = local_n2;
+        manifolds.push(m);
+    }
+    old.clear();
+}

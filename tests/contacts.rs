@@ -1,0 +1,585 @@
+//! cbvh's own contacts: the triangle-pair kernel against parry's
+//! triangle-triangle queries, patch fidelity on static poses against parry's
+//! per-pair contacts, both argument orders of every native pair, and bodies
+//! that must come to rest in rapier with contact patches.
+
+use std::collections::BTreeSet;
+
+use cbvh::build::BuildOptions;
+use cbvh::contact::{PatchOptions, pair_contact, triangles_intersect};
+use cbvh::geom::Triangle;
+use cbvh::mesh::Mesh;
+use cbvh::parry::{CbvhShape, ContactMode, Dispatcher, cbvh_cbvh, parry_trimesh};
+use cbvh::scene::{Kind, generate};
+use glam::Vec3A;
+use parry3d::math::{Pose, Vector};
+use parry3d::query::{
+    ClosestPoints, ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher,
+};
+use parry3d::shape::{Cuboid, Shape, SharedShape, TriMesh};
+use proptest::prelude::*;
+use rapier3d::prelude::{ColliderBuilder, NarrowPhase, PhysicsWorld, RigidBodyBuilder};
+
+fn ptri(t: &Triangle) -> parry3d::shape::Triangle {
+    let v = |p: Vec3A| Vector::new(p.x, p.y, p.z);
+    parry3d::shape::Triangle::new(v(t[0]), v(t[1]), v(t[2]))
+}
+
+fn vec3(v: Vector) -> Vec3A {
+    Vec3A::new(v.x, v.y, v.z)
+}
+
+/// The signed separation of two triangles along the unit axis `n` (from A
+/// to B): how far B's projection starts past A's.
+fn separation_along(a: &Triangle, b: &Triangle, n: Vec3A) -> f32 {
+    let max_a = a.iter().map(|p| n.dot(*p)).fold(f32::MIN, f32::max);
+    let min_b = b.iter().map(|p| n.dot(*p)).fold(f32::MAX, f32::min);
+    min_b - max_a
+}
+
+/// Compares the kernel with parry on one pair. Returns whether the pair was
+/// in contact.
+fn check_pair(a: &Triangle, b: &Triangle, prediction: f32) -> Result<bool, TestCaseError> {
+    let ours = pair_contact(a, b, prediction);
+    let (ta, tb) = (ptri(a), ptri(b));
+    let parry =
+        parry3d::query::contact(&Pose::IDENTITY, &ta, &Pose::IDENTITY, &tb, prediction).unwrap();
+    let size = a.iter().chain(b).map(|p| p.length()).fold(1.0f32, f32::max);
+    let tol = 2e-4 * size;
+    // Pairs within rounding of the prediction boundary may go either way.
+    let exact = cbvh::contact::kernel::closest_points(a, b).2;
+    let boundary =
+        triangles_intersect(a, b) && prediction.abs() <= tol || (exact - prediction).abs() <= tol;
+    match (&ours, &parry) {
+        (Some(o), Some(p)) => {
+            prop_assert!(
+                (o.dist - p.dist).abs() <= tol,
+                "distance {} vs parry's {}",
+                o.dist,
+                p.dist
+            );
+            let pn = vec3(p.normal1);
+            let angle = o.normal.dot(pn).clamp(-1.0, 1.0).acos().to_degrees();
+            // Where two axes give the same depth the normal is ambiguous:
+            // then parry's normal must give our depth too.
+            let ambiguous = (separation_along(a, b, pn) - o.dist).abs() <= tol;
+            prop_assert!(
+                angle <= 1.0 || ambiguous || o.dist > 0.0 && (o.dist - p.dist).abs() <= tol,
+                "normal {} vs parry's {} ({angle}°), dist {}",
+                o.normal,
+                pn,
+                o.dist
+            );
+            if o.dist > 0.0 {
+                // Separated: the closest points agree in distance.
+                if let ClosestPoints::WithinMargin(p1, p2) = parry3d::query::closest_points(
+                    &Pose::IDENTITY,
+                    &ta,
+                    &Pose::IDENTITY,
+                    &tb,
+                    prediction,
+                )
+                .unwrap()
+                {
+                    let d = (vec3(p2) - vec3(p1)).length();
+                    prop_assert!((d - o.dist).abs() <= tol, "closest {d} vs {}", o.dist);
+                }
+            }
+            Ok(true)
+        }
+        (None, None) => Ok(false),
+        _ => {
+            prop_assert!(
+                boundary,
+                "verdicts differ: ours {:?}, parry {:?}",
+                ours.map(|o| o.dist),
+                parry.map(|p| p.dist)
+            );
+            Ok(false)
+        }
+    }
+}
+
+fn triangle() -> impl Strategy<Value = Triangle> {
+    prop::array::uniform9(-1.0f32..1.0).prop_map(|c| {
+        [
+            Vec3A::new(c[0], c[1], c[2]),
+            Vec3A::new(c[3], c[4], c[5]),
+            Vec3A::new(c[6], c[7], c[8]),
+        ]
+    })
+}
+
+fn area(t: &Triangle) -> f32 {
+    (t[1] - t[0]).cross(t[2] - t[0]).length()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(600))]
+
+    /// Random pairs, overlapping or apart.
+    #[test]
+    fn kernel_agrees_with_parry_on_random_pairs(
+        a in triangle(),
+        b in triangle(),
+        shift in prop::array::uniform3(-1.5f32..1.5),
+        prediction in 0.0f32..0.3,
+    ) {
+        prop_assume!(area(&a) > 1e-2 && area(&b) > 1e-2);
+        let b = b.map(|p| p + Vec3A::from(shift));
+        check_pair(&a, &b, prediction)?;
+    }
+
+    /// Near-touching pairs: B moved along the pair's normal to within ±2 %
+    /// of contact, from either side.
+    #[test]
+    fn kernel_agrees_with_parry_on_near_touching_pairs(
+        a in triangle(),
+        b in triangle(),
+        gap in -0.02f32..0.02,
+        prediction in 0.0f32..0.05,
+    ) {
+        prop_assume!(area(&a) > 1e-2 && area(&b) > 1e-2);
+        let Some(c) = pair_contact(&a, &b, 10.0) else {
+            return Ok(());
+        };
+        let b = b.map(|p| p + c.normal * (gap - c.dist));
+        check_pair(&a, &b, prediction)?;
+    }
+}
+
+fn mesh_of(kind: Kind, tris: usize, seed: u64) -> Mesh {
+    generate(kind, tris, seed, &mut |_, _| {}).expect("generate")
+}
+
+fn tri_of(m: &Mesh, i: u32) -> Triangle {
+    m.triangle_vertices(i as usize).map(Vec3A::from)
+}
+
+fn moved(t: &Triangle, pose: &Pose) -> Triangle {
+    t.map(|p| vec3(*pose * Vector::new(p.x, p.y, p.z)))
+}
+
+/// Static poses of a statue against a turbine: resting, sliding,
+/// interpenetrating. Every pair parry reports within the prediction lies in
+/// a patch; the deepest penetration matches parry's; patch normals stand
+/// for their pairs; no manifold has more than four points.
+#[test]
+fn patches_cover_every_pair_parry_reports() {
+    let statue = mesh_of(Kind::Statue, 3000, 3);
+    let turbine = mesh_of(Kind::Turbine, 3000, 4);
+    let (t1, t2) = (
+        parry_trimesh(&statue).unwrap(),
+        parry_trimesh(&turbine).unwrap(),
+    );
+    let c1 = CbvhShape::plain(&statue, &BuildOptions::default()).unwrap();
+    let c2 = CbvhShape::plain(&turbine, &BuildOptions::default()).unwrap();
+    let poses = [
+        Pose::from_translation(Vector::new(0.0, -1.2, 0.0)),
+        Pose::from_translation(Vector::new(0.7, -0.9, 0.3)),
+        Pose::new(Vector::new(-0.4, -1.0, 0.2), Vector::new(0.3, 0.8, -0.2)),
+        Pose::new(Vector::new(0.2, -0.5, -0.6), Vector::new(-1.0, 0.1, 0.5)),
+    ];
+    let opts = PatchOptions::default();
+    let cos = opts.max_angle_deg.to_radians().cos();
+    let mut covered = 0;
+    for pos12 in poses {
+        for prediction in [0.0, 0.02] {
+            // parry's per-pair manifolds, and its exact deepest contact.
+            let mut pm: Vec<ContactManifold<(), ()>> = Vec::new();
+            DefaultQueryDispatcher
+                .contact_manifolds(&pos12, &t1, &t2, prediction, &mut pm, &mut None)
+                .unwrap();
+            let parry_pairs: BTreeSet<(u32, u32)> = pm
+                .iter()
+                .filter(|m| m.points.iter().any(|p| p.dist <= prediction))
+                .map(|m| (m.subshape1, m.subshape2))
+                .collect();
+            let parry_deepest = parry_pairs
+                .iter()
+                .filter_map(|&(i, j)| {
+                    parry3d::query::contact(
+                        &Pose::IDENTITY,
+                        &t1.triangle(i),
+                        &pos12,
+                        &t2.triangle(j),
+                        prediction,
+                    )
+                    .unwrap()
+                    .map(|c| c.dist)
+                })
+                .fold(f32::INFINITY, f32::min);
+
+            let set = cbvh_cbvh::patches(&pos12, &c1, &c2, prediction, &opts, true, None);
+            let members: BTreeSet<(u32, u32)> = set
+                .patches
+                .iter()
+                .flat_map(|p| p.members.iter().copied())
+                .collect();
+            let missing: Vec<_> = parry_pairs.difference(&members).collect();
+            assert!(
+                missing.is_empty(),
+                "{} of {} parry pairs in no patch at {pos12:?}, e.g. {:?}",
+                missing.len(),
+                parry_pairs.len(),
+                &missing[..missing.len().min(5)]
+            );
+            covered += parry_pairs.len();
+            if parry_pairs.is_empty() {
+                continue;
+            }
+            let ours = set
+                .patches
+                .iter()
+                .map(|p| p.deepest.dist)
+                .fold(f32::INFINITY, f32::min);
+            assert!(
+                (ours - parry_deepest).abs() <= 1e-4 * parry_deepest.abs().max(1e-2),
+                "deepest {ours} vs parry's {parry_deepest} at {pos12:?}"
+            );
+            for p in &set.patches {
+                for &(i, j) in &p.members {
+                    let b = moved(&tri_of(&turbine, j), &pos12);
+                    let c = pair_contact(&tri_of(&statue, i), &b, prediction).unwrap();
+                    assert!(
+                        c.normal.dot(p.normal) >= cos - 1e-6,
+                        "pair ({i}, {j}) normal {} vs patch {}",
+                        c.normal,
+                        p.normal
+                    );
+                }
+            }
+            // The manifolds rapier gets: one per patch, at most 4 points.
+            let mut ms: Vec<ContactManifold<(), ()>> = Vec::new();
+            Dispatcher::default()
+                .contact_manifolds(&pos12, &c1, &c2, prediction, &mut ms, &mut None)
+                .unwrap();
+            assert_eq!(ms.len(), set.patches.len());
+            assert!(
+                ms.iter()
+                    .all(|m| !m.points.is_empty() && m.points.len() <= 4)
+            );
+            assert!(
+                ms.len() <= parry_pairs.len(),
+                "{} manifolds for {} pairs",
+                ms.len(),
+                parry_pairs.len()
+            );
+        }
+    }
+    assert!(covered > 50, "the poses must produce contacts: {covered}");
+    assert!(!c1.fallback_bvh_built() && !c2.fallback_bvh_built());
+}
+
+/// The patch set does not depend on the thread count.
+#[test]
+fn patches_do_not_depend_on_the_thread_count() {
+    let statue = mesh_of(Kind::Statue, 4000, 5);
+    let turbine = mesh_of(Kind::Turbine, 4000, 6);
+    let c1 = CbvhShape::plain(&statue, &BuildOptions::default()).unwrap();
+    let c2 = CbvhShape::plain(&turbine, &BuildOptions::default()).unwrap();
+    let pos12 = Pose::from_translation(Vector::new(0.1, -1.1, 0.05));
+    let run = |threads| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let s =
+                cbvh_cbvh::patches(&pos12, &c1, &c2, 0.01, &PatchOptions::default(), true, None);
+            s.patches
+                .iter()
+                .map(|p| {
+                    let (pts, n) = p.reduced();
+                    (
+                        p.normal.to_array(),
+                        p.members.clone(),
+                        pts[..n]
+                            .iter()
+                            .map(|q| (q.p1.to_array(), q.dist))
+                            .collect::<Vec<_>>(),
+                    )
+                })
+                .collect::<Vec<_>>()
+        })
+    };
+    let one = run(1);
+    assert!(!one.is_empty());
+    assert_eq!(one, run(2));
+    assert_eq!(one, run(3));
+}
+
+type Flat = Vec<(u32, u32, [f32; 3], [f32; 3], f32)>;
+
+fn flat(ms: &[ContactManifold<(), ()>], swap: bool) -> Flat {
+    let mut v: Flat = ms
+        .iter()
+        .flat_map(|m| {
+            m.points.iter().map(move |p| {
+                let (a, b) = (p.local_p1.to_array(), p.local_p2.to_array());
+                if swap {
+                    (m.subshape2, m.subshape1, b, a, p.dist)
+                } else {
+                    (m.subshape1, m.subshape2, a, b, p.dist)
+                }
+            })
+        })
+        .collect();
+    v.sort_by(|x, y| x.partial_cmp(y).unwrap());
+    v
+}
+
+fn manifolds(
+    d: &Dispatcher,
+    pos12: &Pose,
+    g1: &dyn Shape,
+    g2: &dyn Shape,
+) -> Vec<ContactManifold<(), ()>> {
+    let mut ms = Vec::new();
+    d.clone()
+        .then_default()
+        .contact_manifolds(pos12, g1, g2, 0.01, &mut ms, &mut None)
+        .unwrap();
+    ms
+}
+
+fn deepest(ms: &[ContactManifold<(), ()>]) -> f32 {
+    ms.iter()
+        .flat_map(|m| &m.points)
+        .map(|p| p.dist)
+        .fold(f32::INFINITY, f32::min)
+}
+
+/// Manifolds of `(g1, g2)` and of `(g2, g1)` describe the same patches: the
+/// same deepest distance, and every normal of one order (in shape 1's
+/// frame) has an opposite counterpart in the other within a degree.
+fn assert_same_patches(
+    ab: &[ContactManifold<(), ()>],
+    ba: &[ContactManifold<(), ()>],
+    pos12: &Pose,
+    what: &str,
+) {
+    assert!(
+        (deepest(ab) - deepest(ba)).abs() < 1e-5,
+        "{what}: deepest {} vs {}",
+        deepest(ab),
+        deepest(ba)
+    );
+    assert!(
+        ab.len().abs_diff(ba.len()) <= 1,
+        "{what}: {} vs {} patches",
+        ab.len(),
+        ba.len()
+    );
+    let cos1 = 1f32.to_radians().cos();
+    for m in ab {
+        assert!(
+            ba.iter()
+                .any(|n| (pos12.rotation * n.local_n1).dot(-m.local_n1) >= cos1),
+            "{what}: normal {:?} has no counterpart",
+            m.local_n1
+        );
+        assert!(m.points.len() <= 4);
+    }
+}
+
+/// Every native pair in both argument orders, in both modes: the same
+/// contacts with the roles swapped (for cbvh against cbvh, where the two
+/// orders run the kernel from different sides, the same deepest point and
+/// normals opposite).
+#[test]
+fn both_argument_orders_give_the_same_contacts() {
+    let floor = grid(16, 2.0);
+    let cf = CbvhShape::plain(&floor, &BuildOptions::default()).unwrap();
+    let tf: TriMesh = parry_trimesh(&floor).unwrap();
+    let boxm = box_mesh([0.3, 0.2, 0.25]);
+    let cb = CbvhShape::plain(&boxm, &BuildOptions::default()).unwrap();
+    let cuboid = Cuboid::new(Vector::new(0.3, 0.2, 0.25));
+    // Shape 2 sunk 0.01 into the floor, turned and moved off the origin.
+    let pos12 = Pose::new(Vector::new(0.13, 0.19, -0.07), Vector::new(0.0, 0.4, 0.0));
+    let inv = pos12.inverse();
+    for d in [
+        Dispatcher::default(),
+        Dispatcher::new(ContactMode::PerTrianglePair),
+    ] {
+        for (name, other) in [
+            ("cuboid", &cuboid as &dyn Shape),
+            ("trimesh", &tf as &dyn Shape),
+        ] {
+            let g2: &dyn Shape = if name == "cuboid" { other } else { &cb };
+            let g1: &dyn Shape = if name == "cuboid" { &cf } else { other };
+            let ab = manifolds(&d, &pos12, g1, g2);
+            let ba = manifolds(&d, &inv, g2, g1);
+            assert!(!ab.is_empty(), "{name} {:?}: no contact", d.mode);
+            if d.mode != ContactMode::PerTrianglePair {
+                // Patches: the inverse pose rounds differently, which may
+                // move a pair across a patch boundary; the deepest point and
+                // the patch normals agree.
+                assert_same_patches(&ab, &ba, &pos12, name);
+                continue;
+            }
+            // One manifold per pair: the same pairs and the same deepest
+            // point (parry's clipping picks its reference face by argument
+            // order, so the other points may differ).
+            let keys = |v: &Flat| v.iter().map(|p| (p.0, p.1)).collect::<BTreeSet<_>>();
+            let (x, y) = (flat(&ab, false), flat(&ba, true));
+            assert_eq!(keys(&x), keys(&y), "{name}");
+            assert!((deepest(&ab) - deepest(&ba)).abs() < 1e-5, "{name}");
+        }
+        // cbvh against cbvh.
+        let ab = manifolds(&d, &pos12, &cf, &cb);
+        let ba = manifolds(&d, &inv, &cb, &cf);
+        assert!(!ab.is_empty() && !ba.is_empty());
+        assert!(
+            (deepest(&ab) - deepest(&ba)).abs() < 1e-5,
+            "{} vs {}",
+            deepest(&ab),
+            deepest(&ba)
+        );
+        // The deepest contact's normal is the floor's, pointing up at the
+        // box, in both orders (pairs at the rim of the contact region may
+        // have sideways normals: their least overlap is sideways).
+        let deepest_normal = |ms: &[ContactManifold<(), ()>]| {
+            ms.iter()
+                .min_by(|x, y| {
+                    deepest(std::slice::from_ref(*x)).total_cmp(&deepest(std::slice::from_ref(*y)))
+                })
+                .map(|m| m.local_n1)
+                .unwrap()
+        };
+        assert!(deepest_normal(&ab).y > 0.99, "{:?}", deepest_normal(&ab));
+        assert!((pos12.rotation * deepest_normal(&ba)).y < -0.99);
+    }
+}
+
+/// A flat `n × n` grid of `2n²` triangles over `[-w/2, w/2]²` at y = 0,
+/// facing up.
+fn grid(n: u32, w: f32) -> Mesh {
+    let mut v = Vec::new();
+    for z in 0..=n {
+        for x in 0..=n {
+            v.push([
+                w * (x as f32 / n as f32 - 0.5),
+                0.0,
+                w * (z as f32 / n as f32 - 0.5),
+            ]);
+        }
+    }
+    let mut t = Vec::new();
+    let at = |x: u32, z: u32| z * (n + 1) + x;
+    for z in 0..n {
+        for x in 0..n {
+            t.push([at(x, z), at(x, z + 1), at(x + 1, z)]);
+            t.push([at(x + 1, z), at(x, z + 1), at(x + 1, z + 1)]);
+        }
+    }
+    Mesh::new(v, t)
+}
+
+/// A closed box mesh (12 triangles, outward) with half extents `h`,
+/// centred at the origin.
+fn box_mesh(h: [f32; 3]) -> Mesh {
+    let mut v = Vec::new();
+    for i in 0..8u32 {
+        v.push([
+            if i & 1 == 0 { -h[0] } else { h[0] },
+            if i & 2 == 0 { -h[1] } else { h[1] },
+            if i & 4 == 0 { -h[2] } else { h[2] },
+        ]);
+    }
+    let t = vec![
+        [0, 2, 1],
+        [1, 2, 3],
+        [4, 5, 6],
+        [5, 7, 6],
+        [0, 1, 4],
+        [1, 5, 4],
+        [2, 6, 3],
+        [3, 6, 7],
+        [0, 4, 2],
+        [2, 4, 6],
+        [1, 3, 5],
+        [3, 7, 5],
+    ];
+    Mesh::new(v, t)
+}
+
+/// Drops `body` (a collider builder for a dynamic body) flat from 0.05
+/// above `floor` (top at y = 0) and steps 300 times at 60 Hz with the
+/// default (patch) dispatcher. Returns (tilt in degrees, horizontal drift,
+/// final speed, final height, the floor's fallback flag).
+fn drop_flat(floor: SharedShape, body: ColliderBuilder, half_height: f32) -> (f32, f32, f32, f32) {
+    let mut world = PhysicsWorld {
+        narrow_phase: NarrowPhase::with_query_dispatcher(Dispatcher::chained()),
+        ..Default::default()
+    };
+    world.colliders.insert(ColliderBuilder::new(floor));
+    let h = world.bodies.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, half_height + 0.05, 0.0))
+            .can_sleep(false),
+    );
+    world
+        .colliders
+        .insert_with_parent(body, h, &mut world.bodies);
+    for _ in 0..300 {
+        world.step();
+    }
+    let b = &world.bodies[h];
+    let up = b.rotation() * Vector::Y;
+    let tilt = up.y.clamp(-1.0, 1.0).acos().to_degrees();
+    let t = b.translation();
+    let drift = (t.x * t.x + t.z * t.z).sqrt();
+    (tilt, drift, b.linvel().length(), t.y)
+}
+
+fn assert_rests_flat(what: &str, r: (f32, f32, f32, f32), size: f32, half_height: f32) {
+    let (tilt, drift, speed, y) = r;
+    assert!(tilt < 1.0, "{what}: tilted {tilt}°");
+    assert!(drift < 0.01 * size, "{what}: drifted {drift}");
+    assert!(speed < 1e-3, "{what}: still moving at {speed}");
+    assert!(
+        (y - half_height).abs() < 0.02 * size,
+        "{what}: rests at {y}, expected {half_height}"
+    );
+}
+
+#[test]
+fn a_box_mesh_rests_flat_on_a_fine_flat_mesh() {
+    let floor = CbvhShape::plain(&grid(48, 3.0), &BuildOptions::default()).unwrap();
+    let boxm = CbvhShape::plain(&box_mesh([0.4, 0.15, 0.3]), &BuildOptions::default()).unwrap();
+    let r = drop_flat(
+        SharedShape::new(floor.clone()),
+        ColliderBuilder::new(SharedShape::new(boxm.clone())),
+        0.15,
+    );
+    assert_rests_flat("box mesh on a fine mesh", r, 0.8, 0.15);
+    assert!(!floor.fallback_bvh_built() && !boxm.fallback_bvh_built());
+}
+
+#[test]
+fn a_box_mesh_rests_flat_on_a_box_mesh() {
+    let mut base = box_mesh([1.5, 0.1, 1.5]);
+    for v in &mut base.vertices {
+        v[1] -= 0.1;
+    }
+    let floor = CbvhShape::plain(&base, &BuildOptions::default()).unwrap();
+    let boxm = CbvhShape::plain(&box_mesh([0.4, 0.15, 0.3]), &BuildOptions::default()).unwrap();
+    let r = drop_flat(
+        SharedShape::new(floor),
+        ColliderBuilder::new(SharedShape::new(boxm)),
+        0.15,
+    );
+    assert_rests_flat("box mesh on a box mesh", r, 0.8, 0.15);
+}
+
+#[test]
+fn a_convex_cuboid_rests_flat_on_a_fine_flat_mesh() {
+    let floor = CbvhShape::plain(&grid(48, 3.0), &BuildOptions::default()).unwrap();
+    let r = drop_flat(
+        SharedShape::new(floor),
+        ColliderBuilder::cuboid(0.4, 0.15, 0.3),
+        0.15,
+    );
+    assert_rests_flat("cuboid on a fine mesh", r, 0.8, 0.15);
+}
