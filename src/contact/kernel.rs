@@ -292,9 +292,16 @@ impl PairKernel {
         let na = face_normal(a);
         let nb = face_normal(b);
         if sep > 0.0 {
-            // Separated: the exact distance from the closest features.
-            self.stats.exact_distances += 1;
-            let (p1, p2, d) = closest_points(a, b);
+            // Separated: the exact distance from the closest features,
+            // unless a face axis's witness corner lies over the face (then
+            // the bound is the distance).
+            let (p1, p2, d) = match face_witness(a, b, axis, up, sep) {
+                Some(w) => w,
+                None => {
+                    self.stats.exact_distances += 1;
+                    closest_points(a, b)
+                }
+            };
             if d > self.prediction {
                 return None;
             }
@@ -489,6 +496,42 @@ fn witness(a: &Triangle, b: &Triangle, axis: u8, n: Vec3A, sep: f32) -> (Vec3A, 
     }
 }
 
+/// For a separated pair whose best axis is a face normal: the other
+/// triangle's nearest corner and its projection, when the projection lies
+/// inside the face. Then no feature is closer than that corner (the face
+/// separates by exactly `sep` and the corner attains it), so the pair's
+/// distance is `sep`.
+fn face_witness(
+    a: &Triangle,
+    b: &Triangle,
+    axis: u8,
+    up: bool,
+    sep: f32,
+) -> Option<(Vec3A, Vec3A, f32)> {
+    let (face, other, from_a) = match axis {
+        0 => (a, b, true),
+        1 => (b, a, false),
+        _ => return None,
+    };
+    let n = axis_direction(a, b, axis, up);
+    // The corner of `other` nearest the face along the axis.
+    let toward = if from_a { -n } else { n };
+    let v = *other
+        .iter()
+        .max_by(|x, y| toward.dot(**x).total_cmp(&toward.dot(**y)))
+        .expect("three corners");
+    let q = if from_a { v - n * sep } else { v + n * sep };
+    let fnorm = (face[1] - face[0]).cross(face[2] - face[0]);
+    let inside = (0..3).all(|k| {
+        let e = face[(k + 1) % 3] - face[k];
+        fnorm.dot(e.cross(q - face[k])) >= 0.0
+    });
+    if !inside {
+        return None;
+    }
+    Some(if from_a { (q, v, sep) } else { (v, q, sep) })
+}
+
 /// Clips triangle `t` to the prism over triangle `f` with unit normal `n`
 /// (Sutherland–Hodgman): at most six corners.
 fn clip_to_prism(t: &Triangle, f: &Triangle, n: Vec3A) -> Poly {
@@ -665,6 +708,37 @@ fn dot(x: &[Lanes; 3], y: &[Lanes; 3]) -> Lanes {
     std::array::from_fn(|l| x[0][l] * y[0][l] + x[1][l] * y[1][l] + x[2][l] * y[2][l])
 }
 
+/// One axis of the batched test: the signed separation of every lane along
+/// `l3`, kept where it beats the best so far.
+#[inline(always)]
+fn test_axis(
+    out: &mut SatOut,
+    a: &Corners,
+    b: &Corners,
+    axis: u8,
+    l3: &[Lanes; 3],
+    reference: &Lanes,
+) {
+    let len2 = dot(l3, l3);
+    let pa = [dot(l3, &a[0]), dot(l3, &a[1]), dot(l3, &a[2])];
+    let pb = [dot(l3, &b[0]), dot(l3, &b[1]), dot(l3, &b[2])];
+    for l in 0..LANES {
+        let min_a = pa[0][l].min(pa[1][l]).min(pa[2][l]);
+        let max_a = pa[0][l].max(pa[1][l]).max(pa[2][l]);
+        let min_b = pb[0][l].min(pb[1][l]).min(pb[2][l]);
+        let max_b = pb[0][l].max(pb[1][l]).max(pb[2][l]);
+        let s_up = min_b - max_a;
+        let s_dn = min_a - max_b;
+        let up = s_up >= s_dn;
+        let s = s_up.max(s_dn) / len2[l].sqrt();
+        let valid = len2[l] > 1e-12 * reference[l];
+        let better = valid && s > out.sep[l];
+        out.sep[l] = if better { s } else { out.sep[l] };
+        out.axis[l] = if better { axis } else { out.axis[l] };
+        out.up[l] = if better { up } else { out.up[l] };
+    }
+}
+
 /// The 17-axis test over a batch, written lane-wise so that it vectorizes.
 /// Axis order: 0 A's face normal, 1 B's, 2..=10 `edge_A(k/3) × edge_B(k%3)`,
 /// 11..=13 `n_A × edge_A`, 14..=16 `n_B × edge_B`. Axes shorter than a tiny
@@ -686,24 +760,7 @@ fn sat_lanes(batch: &Batch) -> SatOut {
         up: [true; LANES],
     };
     let mut test = |axis: u8, l3: &[Lanes; 3], reference: &Lanes| {
-        let len2 = dot(l3, l3);
-        let pa = [dot(l3, &a[0]), dot(l3, &a[1]), dot(l3, &a[2])];
-        let pb = [dot(l3, &b[0]), dot(l3, &b[1]), dot(l3, &b[2])];
-        for l in 0..LANES {
-            let min_a = pa[0][l].min(pa[1][l]).min(pa[2][l]);
-            let max_a = pa[0][l].max(pa[1][l]).max(pa[2][l]);
-            let min_b = pb[0][l].min(pb[1][l]).min(pb[2][l]);
-            let max_b = pb[0][l].max(pb[1][l]).max(pb[2][l]);
-            let s_up = min_b - max_a;
-            let s_dn = min_a - max_b;
-            let up = s_up >= s_dn;
-            let s = s_up.max(s_dn) / len2[l].sqrt();
-            let valid = len2[l] > 1e-12 * reference[l];
-            let better = valid && s > out.sep[l];
-            out.sep[l] = if better { s } else { out.sep[l] };
-            out.axis[l] = if better { axis } else { out.axis[l] };
-            out.up[l] = if better { up } else { out.up[l] };
-        }
+        test_axis(&mut out, a, b, axis, l3, reference)
     };
     // The reference scale of a face normal: the product of two edges' squares.
     let ra: Lanes = std::array::from_fn(|l| la[0][l] * la[1][l]);

@@ -28,6 +28,11 @@ use glam::Vec3A;
 
 use super::kernel::PairContact;
 use crate::geom::Aabb;
+use crate::hash::FastMap;
+
+/// A cell of the normal index: the normal's coordinates divided by the
+/// cell size and rounded.
+type NormalKey = (i32, i32, i32);
 
 /// How contacts are grouped into patches.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -212,6 +217,11 @@ pub struct PatchSet {
     gap: f32,
     record: bool,
     last: usize,
+    /// Cell size of the normal index: the chord of the patch angle, so that
+    /// normals within the angle fall in neighbouring cells.
+    cell: f32,
+    /// Patch indices by the cell of their normal, in creation order.
+    index: FastMap<NormalKey, Vec<u32>>,
     /// The patches, in order of creation.
     pub patches: Vec<Patch>,
 }
@@ -227,13 +237,64 @@ impl PatchSet {
             gap: (options.gap_fraction * size).max(0.0),
             record,
             last: 0,
+            cell: (2.0 * (options.max_angle_deg.to_radians() * 0.5).sin()).max(1e-3),
+            index: FastMap::default(),
             patches: Vec::new(),
         }
+    }
+
+    fn key(&self, n: Vec3A) -> NormalKey {
+        let q = n / self.cell;
+        (q.x.round() as i32, q.y.round() as i32, q.z.round() as i32)
+    }
+
+    /// The first patch (in creation order) that accepts a contact with
+    /// `normal` at `at`: the last one used, else the candidates of the 27
+    /// normal cells around the normal's (every normal within the angle lies
+    /// in one of them), so finding a patch does not grow with the number of
+    /// patches.
+    fn find(&self, normal: Vec3A, at: Vec3A) -> Option<usize> {
+        if self.last < self.patches.len() && self.accepts(self.last, normal, at) {
+            // The last patch may not be the first accepting one; the result
+            // still depends only on the order of the contacts.
+            return Some(self.last);
+        }
+        let (x, y, z) = self.key(normal);
+        let mut best: Option<usize> = None;
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let Some(list) = self.index.get(&(x + dx, y + dy, z + dz)) else {
+                        continue;
+                    };
+                    for &k in list {
+                        let k = k as usize;
+                        if best.is_some_and(|b| b < k) {
+                            break;
+                        }
+                        if self.accepts(k, normal, at) {
+                            best = Some(k);
+                            break;
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    fn create(&mut self, normal: Vec3A, first: PatchPoint) -> usize {
+        let k = self.patches.len();
+        self.patches.push(Patch::new(normal, first));
+        let key = self.key(normal);
+        self.index.entry(key).or_default().push(k as u32);
+        k
     }
 
     /// Empties the set, keeping its allocation.
     pub fn clear(&mut self) {
         self.patches.clear();
+        self.index.clear();
         self.last = 0;
     }
 
@@ -280,13 +341,9 @@ impl PatchSet {
     /// Adds a contact point that did not come from the triangle kernel (a
     /// convex shape against a triangle), with its pair's normal.
     pub fn add_point(&mut self, normal: Vec3A, p: PatchPoint, new_pair: bool) {
-        let k = if self.last < self.patches.len() && self.accepts(self.last, normal, p.p1) {
-            self.last
-        } else if let Some(k) = (0..self.patches.len()).find(|&k| self.accepts(k, normal, p.p1)) {
-            k
-        } else {
-            self.patches.push(Patch::new(normal, p));
-            self.patches.len() - 1
+        let k = match self.find(normal, p.p1) {
+            Some(k) => k,
+            None => self.create(normal, p),
         };
         self.last = k;
         let patch = &mut self.patches[k];
@@ -308,12 +365,26 @@ impl PatchSet {
         let acos = |c: f32| c.clamp(-1.0, 1.0).acos();
         for p in other.patches {
             let cone = acos(p.min_cos);
-            let k = (0..self.patches.len()).find(|&k| {
-                let q = &self.patches[k];
+            let fits = |q: &Patch| {
                 q.normal.dot(p.normal) >= self.cos_angle
                     && acos(q.normal.dot(p.normal)) + cone <= self.max_angle
                     && q.bounds.loosened(self.gap).intersects(&p.bounds)
-            });
+            };
+            let (x, y, z) = self.key(p.normal);
+            let mut k: Option<usize> = None;
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        if let Some(list) = self.index.get(&(x + dx, y + dy, z + dz))
+                            && let Some(&c) =
+                                list.iter().find(|&&c| fits(&self.patches[c as usize]))
+                            && k.is_none_or(|k| (c as usize) < k)
+                        {
+                            k = Some(c as usize);
+                        }
+                    }
+                }
+            }
             match k {
                 Some(k) => {
                     let q = &mut self.patches[k];
@@ -327,7 +398,14 @@ impl PatchSet {
                     q.min_cos = q.min_cos.min((acos(q.normal.dot(p.normal)) + cone).cos());
                     q.members.extend(p.members);
                 }
-                None => self.patches.push(p),
+                None => {
+                    let key = self.key(p.normal);
+                    self.index
+                        .entry(key)
+                        .or_default()
+                        .push(self.patches.len() as u32);
+                    self.patches.push(p);
+                }
             }
         }
         self.last = 0;

@@ -14,7 +14,7 @@ use parry3d::query::{
     PersistentQueryDispatcher, QueryDispatcher, ShapeDistance, ShapeIntersection,
 };
 
-use super::patches::{ContactCounters, ContactMode, emit};
+use super::patches::{ContactCounters, ContactMode, emit, patch_workspace};
 use super::shape::{CbvhShape, pose_from_parry, to_parry_triangle, with_cursor};
 use super::workspace::ManifoldUpdate;
 use crate::contact::{Interference, PairKernel, PatchOptions, PatchSet};
@@ -24,7 +24,7 @@ use crate::query::{bvtt, bvtt_min, bvtt_par};
 
 /// Node pairs the parallel traversal starts from: enough tasks to balance
 /// two to a few dozen threads, few enough that a small contact costs little.
-pub const FRONT_TASKS: usize = 64;
+pub const FRONT_TASKS: usize = 32;
 
 /// The smaller of the two shapes' bounding-box diagonals (the patch gap's
 /// scale).
@@ -47,7 +47,7 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
 ) {
     match mode {
         ContactMode::Patches(opts) => {
-            *workspace = None;
+            patch_workspace(workspace);
             let set = patches(pos12, s1, s2, prediction, opts, false, counters);
             emit(
                 &set,

@@ -13,7 +13,7 @@ use parry3d::query::{
 };
 use parry3d::shape::Shape;
 
-use super::patches::{ContactCounters, ContactMode, emit};
+use super::patches::{ContactCounters, ContactMode, emit, patch_workspace};
 use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle, with_cursor};
 use super::workspace::ManifoldUpdate;
 use crate::contact::{PatchOptions, PatchPoint, PatchSet};
@@ -53,7 +53,7 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
 ) {
     match mode {
         ContactMode::Patches(opts) => {
-            *workspace = None;
+            patch_workspace(workspace);
             // The convex shape's pose in the mesh's frame.
             let pose = if flipped { pos12.inverse() } else { *pos12 };
             let set = patches(&pose, mesh, convex, prediction, opts, false, counters);

@@ -16,7 +16,7 @@ use parry3d::query::{
 };
 use parry3d::shape::{CompositeShape, Shape, TriMesh};
 
-use super::patches::{ContactCounters, ContactMode, emit};
+use super::patches::{ContactCounters, ContactMode, emit, patch_workspace};
 use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle, with_cursor};
 use super::workspace::ManifoldUpdate;
 use crate::contact::{PairKernel, PatchOptions, PatchSet};
@@ -39,7 +39,7 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
 ) {
     match mode {
         ContactMode::Patches(opts) => {
-            *workspace = None;
+            patch_workspace(workspace);
             let tm_in_mesh = if flipped { pos12.inverse() } else { *pos12 };
             let set = patches(&tm_in_mesh, mesh, tm, prediction, opts, false, counters);
             emit(

@@ -22,7 +22,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::Vec3A;
 use parry3d::math::{Pose as PPose, Vector};
-use parry3d::query::{ContactManifold, TrackedContact};
+use parry3d::query::{
+    ContactManifold, ContactManifoldsWorkspace, TrackedContact, TypedWorkspaceData, WorkspaceData,
+};
 use parry3d::shape::PackedFeatureId;
 
 use crate::contact::{PatchOptions, PatchPoint, PatchSet};
@@ -89,6 +91,35 @@ impl ContactCounters {
     }
 }
 
+/// The workspace of a pair in patch mode. It holds nothing between steps
+/// (the manifolds themselves carry what matching needs), but its presence
+/// matters: rapier treats a pair with a workspace as composite, whose
+/// manifold ordinals change from step to step, and rebuilds its solver
+/// graph entries instead of trusting them (without it, rapier 0.36 panics
+/// with "stale ContactRef manifold ordinal" when the patch count shrinks).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PatchWorkspace;
+
+impl WorkspaceData for PatchWorkspace {
+    fn as_typed_workspace_data(&self) -> TypedWorkspaceData<'_> {
+        TypedWorkspaceData::Custom
+    }
+
+    fn clone_dyn(&self) -> Box<dyn WorkspaceData> {
+        Box::new(*self)
+    }
+}
+
+/// Sets `workspace` to a [`PatchWorkspace`] (see there why it must exist).
+pub fn patch_workspace(workspace: &mut Option<ContactManifoldsWorkspace>) {
+    let ok = workspace
+        .as_ref()
+        .is_some_and(|w| w.0.downcast_ref::<PatchWorkspace>().is_some());
+    if !ok {
+        *workspace = Some(ContactManifoldsWorkspace(Box::new(PatchWorkspace)));
+    }
+}
+
 const CODE_MASK: u32 = (1 << 30) - 1;
 
 fn ids(i1: u32, i2: u32, feature: u8) -> (PackedFeatureId, PackedFeatureId) {
@@ -115,6 +146,18 @@ pub fn emit<M: Default + Clone, C: Default + Copy>(
 ) {
     let mut old = std::mem::take(manifolds);
     let mut used = vec![false; old.len()];
+    // Old manifolds by the cell of their normal, as the patch set indexes
+    // its patches: a normal within the angle lies in one of the 27 cells
+    // around another's.
+    let cell = (2.0 * (cos_angle.clamp(-1.0, 1.0).acos() * 0.5).sin()).max(1e-3);
+    let key = |n: Vector| {
+        let q = n / cell;
+        (q.x.round() as i32, q.y.round() as i32, q.z.round() as i32)
+    };
+    let mut by_cell: crate::hash::FastMap<(i32, i32, i32), Vec<u32>> = Default::default();
+    for (k, m) in old.iter().enumerate() {
+        by_cell.entry(key(m.local_n1)).or_default().push(k as u32);
+    }
     for patch in &set.patches {
         let (pts, n) = patch.reduced();
         if n == 0 {
@@ -125,10 +168,21 @@ pub fn emit<M: Default + Clone, C: Default + Copy>(
         let (local_n1, local_n2) = if flipped { (n_b, n_a) } else { (n_a, n_b) };
         // The old manifold with the closest normal, within the angle.
         let mut best: Option<(usize, f32)> = None;
-        for (k, m) in old.iter().enumerate() {
-            let d = m.local_n1.dot(local_n1);
-            if !used[k] && d >= cos_angle && best.is_none_or(|b| d > b.1) {
-                best = Some((k, d));
+        let (x, y, z) = key(local_n1);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    for &k in by_cell.get(&(x + dx, y + dy, z + dz)).into_iter().flatten() {
+                        let k = k as usize;
+                        let d = old[k].local_n1.dot(local_n1);
+                        if !used[k]
+                            && d >= cos_angle
+                            && best.is_none_or(|b| d > b.1 || (d == b.1 && k < b.0))
+                        {
+                            best = Some((k, d));
+                        }
+                    }
+                }
             }
         }
         let point = |p: &PatchPoint| {
