@@ -1,5 +1,6 @@
 //! `CbvhShape`'s own queries against parry's `TriMesh` of the same mesh:
-//! point projection (point, inside flag, triangle and feature).
+//! point projection (point, inside flag, triangle and feature) and mass
+//! properties (mass, centre of mass and the full inertia tensor).
 
 use cbvh::Mesh;
 use cbvh::build::BuildOptions;
@@ -8,7 +9,7 @@ use cbvh::parry::{CbvhShape, parry_trimesh};
 use cbvh::scene::{Kind, generate};
 use parry3d::math::Vector;
 use parry3d::query::{PointProjection, PointQuery};
-use parry3d::shape::{FeatureId, TriMesh};
+use parry3d::shape::{FeatureId, Shape, TriMesh};
 
 fn mesh_of(kind: Kind, tris: usize, seed: u64) -> Mesh {
     generate(kind, tris, seed, &mut |_, _| {}).expect("generate")
@@ -141,6 +142,104 @@ fn point_projection_subshape_feature_and_is_inside_match_trimesh() {
             // and the points on the surface count as inside, as parry's do.
             assert!(same_triangle >= 64, "{:?}: {same_triangle}", c.codec());
             assert!(inside >= 2 * 3 * 24, "{:?}: {inside} inside", c.codec());
+        }
+    }
+}
+
+/// The inertia tensor of `m` about its centre of mass, in the local frame,
+/// and its size (largest entry) for tolerances.
+fn inertia(m: &parry3d::mass_properties::MassProperties) -> ([f32; 9], f32) {
+    let t = m.reconstruct_inertia_matrix().to_cols_array();
+    let size = t.iter().fold(0.0f32, |a, x| a.max(x.abs()));
+    (t, size)
+}
+
+/// Mass, centre of mass and the full inertia tensor (principal inertia and
+/// frame together) equal parry's `TriMesh`'s at density 1 and another
+/// density. parry computes a `TriMesh`'s mass properties from its vertices
+/// and triangles whatever its flags (`MassProperties::from_trimesh`, a
+/// solid by signed volume), so the default flags are the right comparison.
+#[test]
+fn mass_properties_equal_trimesh() {
+    for (kind, seed) in [(Kind::Statue, 2), (Kind::Robot, 3)] {
+        let mesh = mesh_of(kind, 1500, seed);
+        let t = parry_trimesh(&mesh).unwrap();
+        for c in cbvh_shapes(&mesh) {
+            for density in [1.0, 2.5, 0.3] {
+                let at = format!("{kind:?}, {:?}, density {density}", c.codec());
+                let (want, got) = (t.mass_properties(density), c.mass_properties(density));
+                assert!(want.mass() > 0.0, "{at}: a solid");
+                let rel = |a: f32, b: f32| (a - b).abs() <= 1e-4 * a.abs().max(b.abs());
+                assert!(
+                    rel(want.mass(), got.mass()),
+                    "mass, {at}: {want:?} vs {got:?}"
+                );
+                assert!(
+                    (want.local_com - got.local_com).length() <= 1e-5,
+                    "centre of mass, {at}: {want:?} vs {got:?}"
+                );
+                let ((wt, size), (gt, _)) = (inertia(&want), inertia(&got));
+                assert!(
+                    wt.iter()
+                        .zip(&gt)
+                        .all(|(a, b)| (a - b).abs() <= 1e-4 * size),
+                    "inertia tensor, {at}: parry {wt:?} vs cbvh {gt:?}"
+                );
+            }
+        }
+    }
+}
+
+/// A 2 × 1 × 0.5 box at density 3 against the closed-form solid box:
+/// mass `ρ·a·b·c`, inertia `m(b² + c²)/12` and so on about the centre.
+#[test]
+fn mass_properties_of_a_box_are_a_solid_box() {
+    let (a, b, c) = (2.0f32, 1.0f32, 0.5f32);
+    let vertices: Vec<[f32; 3]> = (0..8)
+        .map(|k| {
+            [
+                if k & 1 == 0 { 0.0 } else { a },
+                if k & 2 == 0 { 0.0 } else { b },
+                if k & 4 == 0 { 0.0 } else { c },
+            ]
+        })
+        .map(|[x, y, z]| [x + 1.0, y - 3.0, z + 0.25])
+        .collect();
+    // Counter-clockwise seen from outside.
+    let quads = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let triangles = quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
+    let mesh = Mesh::new(vertices, triangles);
+    for shape in cbvh_shapes(&mesh) {
+        let density = 3.0;
+        let m = shape.mass_properties(density);
+        let mass = density * a * b * c;
+        assert!((m.mass() - mass).abs() <= 1e-4 * mass, "{m:?}");
+        let centre = Vector::new(1.0 + a / 2.0, -3.0 + b / 2.0, 0.25 + c / 2.0);
+        assert!((m.local_com - centre).length() <= 1e-5, "{m:?}");
+        let want = [
+            mass * (b * b + c * c) / 12.0,
+            mass * (a * a + c * c) / 12.0,
+            mass * (a * a + b * b) / 12.0,
+        ];
+        let (got, _) = inertia(&m);
+        for (i, row) in got.chunks(3).enumerate() {
+            for (j, &x) in row.iter().enumerate() {
+                let w = if i == j { want[i] } else { 0.0 };
+                assert!(
+                    (x - w).abs() <= 1e-4 * want[0],
+                    "inertia [{i}][{j}] {x} vs {w}: {m:?}"
+                );
+            }
         }
     }
 }
