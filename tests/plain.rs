@@ -17,14 +17,31 @@ fn plain(mesh: &Mesh, layout: Layout, leaf: usize) -> PlainBvh {
     };
     let bvh = build(mesh, &opts, &|_, _| {}).expect("build");
     assert_eq!(bvh.layout, layout);
+    // A binary tree, every inner node with two children: one node fewer
+    // inner nodes than leaves. Every leaf holds 1 to `leaf` triangles (the
+    // empty mesh: one empty leaf), and together they hold every triangle.
+    let n = mesh.triangles.len();
+    let sizes: Vec<usize> = bvh
+        .nodes
+        .iter()
+        .filter(|node| node.is_leaf())
+        .map(|node| node.leaf_range().len())
+        .collect();
     assert_eq!(
         bvh.nodes.len(),
-        if leaf == 1 {
-            (2 * mesh.triangles.len()).max(2) - 1
-        } else {
-            bvh.nodes.len()
-        }
+        2 * sizes.len() - 1,
+        "nodes for {} leaves",
+        sizes.len()
     );
+    assert_eq!(sizes.iter().sum::<usize>(), n, "triangles in the leaves");
+    assert!(
+        sizes.iter().all(|&s| s <= leaf && (s >= 1 || n == 0)),
+        "leaf sizes {sizes:?} with at most {leaf} a leaf"
+    );
+    assert!(sizes.len() >= n.div_ceil(leaf).max(1));
+    if leaf == 1 {
+        assert_eq!(bvh.nodes.len(), (2 * n).max(2) - 1);
+    }
     // Parents agree with children.
     for (i, n) in bvh.nodes.iter().enumerate() {
         if !n.is_leaf() {

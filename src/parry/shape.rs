@@ -9,10 +9,12 @@ use parry3d::mass_properties::MassProperties;
 use parry3d::math::{Pose as PPose, Real, Vector};
 use parry3d::partitioning::{Bvh, BvhBuildStrategy};
 use parry3d::query::details::NormalConstraints;
-use parry3d::query::{PointProjection, PointQuery, Ray as PRay, RayCast, RayIntersection};
+use parry3d::query::{
+    PointProjection, PointQuery, PointQueryWithLocation, Ray as PRay, RayCast, RayIntersection,
+};
 use parry3d::shape::{
-    CompositeShape, FeatureId, Shape, ShapeType, Triangle as PTriangle, TrianglePseudoNormals,
-    TypedCompositeShape, TypedShape,
+    CompositeShape, FeatureId, Shape, ShapeType, Triangle as PTriangle, TrianglePointLocation,
+    TrianglePseudoNormals, TypedCompositeShape, TypedShape,
 };
 
 use crate::build::{BuildError, BuildOptions, build};
@@ -243,39 +245,54 @@ impl RayCast for CbvhShape {
     }
 }
 
-impl PointQuery for CbvhShape {
-    fn project_local_point(&self, pt: Vector, solid: bool) -> PointProjection {
-        self.project_local_point_and_get_feature(pt)
-            .0
-            .with_solid(solid)
-    }
-
-    fn project_local_point_and_get_feature(&self, pt: Vector) -> (PointProjection, FeatureId) {
+impl CbvhShape {
+    /// The triangle closest to `pt` (ties to the lower id), found on the
+    /// cbvh tree, with its id.
+    fn closest_triangle(&self, pt: Vector) -> Option<(u32, PTriangle)> {
         let mut stats = TraversalStats::default();
         let hit = with_cursor!(&self.inner.codec, |c| query::closest_point(
             c,
             pt.into(),
             f32::INFINITY,
             &mut stats
-        ));
-        match hit {
-            Some(h) => (
-                PointProjection::new(false, h.point.into()),
-                FeatureId::Face(h.triangle),
-            ),
-            None => (PointProjection::new(false, pt), FeatureId::Unknown),
-        }
+        ))?;
+        Some((hit.triangle, self.parry_triangle(hit.triangle)))
     }
 }
 
-trait WithSolid {
-    fn with_solid(self, solid: bool) -> Self;
+/// The feature of a triangle a point projects on, as parry's `TriMesh`
+/// reports it (parry's own mapping is private).
+fn triangle_feature(location: TrianglePointLocation) -> FeatureId {
+    match location {
+        TrianglePointLocation::OnVertex(i) => FeatureId::Vertex(i),
+        TrianglePointLocation::OnEdge(i, _) => FeatureId::Edge(i),
+        TrianglePointLocation::OnFace(i, _) => FeatureId::Face(i),
+        TrianglePointLocation::OnSolid => FeatureId::Face(0),
+    }
 }
-impl WithSolid for PointProjection {
-    /// A triangle mesh is a surface: parry's TriMesh without pseudo-normals
-    /// reports every point as outside, solid or not. cbvh does the same.
-    fn with_solid(self, _solid: bool) -> Self {
-        self
+
+/// Projections answer as parry's `TriMesh` (without pseudo-normals) does:
+/// the closest triangle is found on the cbvh tree, then projected on with
+/// parry's own triangle code, so the point, `is_inside` (true only for a
+/// point on the surface: a triangle mesh is a surface) and the feature (the
+/// triangle's own vertex, edge or face) are parry's, and
+/// `PointProjection::subshape` names the triangle.
+impl PointQuery for CbvhShape {
+    fn project_local_point(&self, pt: Vector, solid: bool) -> PointProjection {
+        match self.closest_triangle(pt) {
+            Some((id, tri)) => tri.project_local_point(pt, solid).with_subshape(id),
+            None => PointProjection::new(false, pt),
+        }
+    }
+
+    fn project_local_point_and_get_feature(&self, pt: Vector) -> (PointProjection, FeatureId) {
+        match self.closest_triangle(pt) {
+            Some((id, tri)) => {
+                let (proj, location) = tri.project_local_point_and_get_location(pt, false);
+                (proj.with_subshape(id), triangle_feature(location))
+            }
+            None => (PointProjection::new(false, pt), FeatureId::Unknown),
+        }
     }
 }
 

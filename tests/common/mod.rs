@@ -215,30 +215,74 @@ pub fn check_queries<C: NodeCursor>(c: &C, mesh: &Mesh, seed: u64) {
             .collect();
         assert_eq!(got, want, "overlap set differs for {qbox:?}");
 
-        let got = query::closest_point(c, p, f32::INFINITY, &mut stats);
-        let want = (0..mesh.triangles.len() as u32)
-            .map(|id| {
-                (
-                    (closest_point_on_triangle(p, &tri(mesh, id)).0 - p).length_squared(),
-                    id,
-                )
-            })
-            .min_by(|a, b| a.0.total_cmp(&b.0));
-        match (got, want) {
-            (None, None) => {}
-            (Some(g), Some((d2, _))) => {
-                assert!(
-                    g.distance == d2.sqrt()
-                        || (g.distance - d2.sqrt()).abs() <= 1e-5 * d2.sqrt().max(1.0),
-                    "{g:?} vs {} {:?}",
-                    d2.sqrt(),
-                    want
-                );
-            }
-            (g, w) => panic!("closest point {g:?} vs brute force {w:?}"),
+        check_closest_point(c, mesh, p, &mut stats);
+    }
+    // Points on the surface: inside a face, on an edge, on a vertex.
+    for k in 0..mesh.triangles.len().min(16) {
+        let t = tri(mesh, rng.below(mesh.triangles.len()) as u32);
+        let on = [
+            0.2 * t[0] + 0.3 * t[1] + 0.5 * t[2],
+            0.6 * t[0] + 0.4 * t[1],
+            t[k % 3],
+        ];
+        for p in on {
+            check_closest_point(c, mesh, p, &mut stats);
         }
     }
     assert!(stats.nodes_visited > 0);
+}
+
+/// The closest point to `p` equals brute force: the distance, the point
+/// (the named triangle's own closest point, not a corner of it) and the
+/// triangle (the lowest id among the closest, or one equally close).
+pub fn check_closest_point<C: NodeCursor>(
+    c: &C,
+    mesh: &Mesh,
+    p: Vec3A,
+    stats: &mut TraversalStats,
+) {
+    let got = query::closest_point(c, p, f32::INFINITY, stats);
+    let want = (0..mesh.triangles.len() as u32)
+        .map(|id| {
+            let q = closest_point_on_triangle(p, &tri(mesh, id)).0;
+            ((q - p).length_squared(), id)
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0));
+    match (got, want) {
+        (None, None) => {}
+        (Some(g), Some((d2, id))) => {
+            let d = d2.sqrt();
+            let tol = 1e-5 * d.max(1.0);
+            assert!(
+                g.distance == d || (g.distance - d).abs() <= tol,
+                "closest point {g:?} vs brute force {d} on triangle {id}"
+            );
+            assert!(
+                (g.triangle as usize) < mesh.triangles.len(),
+                "closest point {g:?}: no such triangle"
+            );
+            let own = closest_point_on_triangle(p, &tri(mesh, g.triangle)).0;
+            let scale = p.abs().max_element().max(1.0);
+            assert!(
+                (g.point - own).length() <= 1e-6 * scale,
+                "closest point {g:?} to {p:?} is not triangle {}'s closest point {own:?}",
+                g.triangle
+            );
+            assert!(
+                ((g.point - p).length() - g.distance).abs() <= tol,
+                "closest point {g:?} to {p:?}: the distance is not the point's"
+            );
+            if g.triangle != id {
+                // A tie: both triangles are equally close.
+                assert!(
+                    ((own - p).length() - d).abs() <= tol,
+                    "closest point {g:?} to {p:?} names triangle {}, brute force {id} at {d}",
+                    g.triangle
+                );
+            }
+        }
+        (g, w) => panic!("closest point {g:?} vs brute force {w:?}"),
+    }
 }
 
 /// Packets give the single-ray hits, ray for ray: incoherent packets of
