@@ -155,8 +155,10 @@ pub fn emit<M: Default + Clone, C: Default + Copy>(
         (q.x.round() as i32, q.y.round() as i32, q.z.round() as i32)
     };
     let mut by_cell: crate::hash::FastMap<(i32, i32, i32), Vec<u32>> = Default::default();
+    let mut by_pair: crate::hash::FastMap<(u32, u32), u32> = Default::default();
     for (k, m) in old.iter().enumerate() {
         by_cell.entry(key(m.local_n1)).or_default().push(k as u32);
+        by_pair.insert((m.subshape1, m.subshape2), k as u32);
     }
     for patch in &set.patches {
         let (pts, n) = patch.reduced();
@@ -167,7 +169,19 @@ pub fn emit<M: Default + Clone, C: Default + Copy>(
         let n_b = a_to_b.rotation * -n_a;
         let (local_n1, local_n2) = if flipped { (n_b, n_a) } else { (n_a, n_b) };
         // The old manifold with the closest normal, within the angle.
-        let mut best: Option<(usize, f32)> = None;
+        let rep = patch.deepest;
+        let (sub1, sub2) = if flipped {
+            (rep.j, rep.i)
+        } else {
+            (rep.i, rep.j)
+        };
+        // Last step's manifold of the same representative pair, else the
+        // one with the closest normal.
+        let mut best: Option<(usize, f32)> = by_pair
+            .get(&(sub1, sub2))
+            .map(|&k| k as usize)
+            .filter(|&k| !used[k] && old[k].local_n1.dot(local_n1) >= cos_angle)
+            .map(|k| (k, 2.0));
         let (x, y, z) = key(local_n1);
         for dx in -1..=1 {
             for dy in -1..=1 {
@@ -195,12 +209,6 @@ pub fn emit<M: Default + Clone, C: Default + Copy>(
                 let (f1, f2) = ids(p.i, p.j, p.feature);
                 TrackedContact::new(q1, q2, f1, f2, p.dist)
             }
-        };
-        let rep = patch.deepest;
-        let (sub1, sub2) = if flipped {
-            (rep.j, rep.i)
-        } else {
-            (rep.i, rep.j)
         };
         let mut m = match best {
             Some((k, _)) => {

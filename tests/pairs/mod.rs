@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 
 use cbvh::Mesh;
 use cbvh::build::BuildOptions;
-use cbvh::parry::{CbvhShape, Dispatcher, parry_trimesh};
+use cbvh::parry::{CbvhShape, ContactMode, Dispatcher, parry_trimesh};
 use cbvh::scene::{Kind, generate};
 use glam::DVec3;
 use parry3d::math::{Pose, Vector};
@@ -259,7 +259,7 @@ fn close(a: Vector, b: Vector, tol: f32) -> bool {
 /// prediction but a separating axis (checked here in f64) proves the
 /// triangles further apart than that.
 fn check_manifolds(case: &Case, strict: bool, tally: &mut Tally) {
-    let chain = Dispatcher::chained();
+    let chain = Dispatcher::new(ContactMode::PerTrianglePair).then_default();
     let tol = case.tol();
     for prediction in [0.0, case.prediction] {
         let kept = |mut p: Points| {
@@ -336,7 +336,7 @@ fn is_a_contact(case: &Case, c: &Contact) -> bool {
 }
 
 fn check_contact(case: &Case, tally: &mut Tally) {
-    let chain = Dispatcher::chained();
+    let chain = Dispatcher::new(ContactMode::PerTrianglePair).then_default();
     let (p, c) = (case.s1, case.s2);
     let want = DefaultQueryDispatcher
         .contact(&case.pos12, p.parry(), c.parry(), case.prediction)
@@ -370,7 +370,7 @@ fn check_contact(case: &Case, tally: &mut Tally) {
 }
 
 fn check_intersection(case: &Case, tally: &mut Tally) {
-    let chain = Dispatcher::chained();
+    let chain = Dispatcher::new(ContactMode::PerTrianglePair).then_default();
     let want = DefaultQueryDispatcher
         .intersection_test(&case.pos12, case.s1.parry(), case.s2.parry())
         .unwrap();
@@ -387,7 +387,7 @@ fn check_intersection(case: &Case, tally: &mut Tally) {
 }
 
 fn check_distance(case: &Case) {
-    let chain = Dispatcher::chained();
+    let chain = Dispatcher::new(ContactMode::PerTrianglePair).then_default();
     let want = DefaultQueryDispatcher
         .distance(&case.pos12, case.s1.parry(), case.s2.parry())
         .unwrap();
@@ -419,7 +419,7 @@ fn check_distance(case: &Case) {
 }
 
 fn check_closest_points(case: &Case, max_dist: f32, tally: &mut Tally) {
-    let chain = Dispatcher::chained();
+    let chain = Dispatcher::new(ContactMode::PerTrianglePair).then_default();
     let want = DefaultQueryDispatcher
         .closest_points(&case.pos12, case.s1.parry(), case.s2.parry(), max_dist)
         .unwrap();
@@ -486,7 +486,8 @@ pub fn check_both_orders(cases: &[Case], strict: bool) -> [Tally; 2] {
 /// The sub-shapes an intersection test names intersect. Returns how many
 /// intersections were checked.
 pub fn check_intersection_parts(case: &Case) -> usize {
-    let got = Dispatcher::chained()
+    let got = Dispatcher::new(ContactMode::PerTrianglePair)
+        .then_default()
         .intersection_test(&case.pos12, case.s1.cbvh(), case.s2.cbvh())
         .unwrap();
     if !got.intersecting {
@@ -513,7 +514,8 @@ pub fn check_intersection_parts(case: &Case) -> usize {
 /// The sub-shapes a contact names have that contact. Returns how many
 /// contacts were checked.
 pub fn check_contact_parts(case: &Case) -> usize {
-    let Some(got) = Dispatcher::chained()
+    let Some(got) = Dispatcher::new(ContactMode::PerTrianglePair)
+        .then_default()
         .contact(&case.pos12, case.s1.cbvh(), case.s2.cbvh(), case.prediction)
         .unwrap()
     else {
