@@ -39,6 +39,8 @@ fn main() -> ExitCode {
     let a = Args::parse();
     let run = || -> Result<(), String> {
         common::init_threads(&a.sim)?;
+        // Reject bad shape names before generating meshes.
+        common::run_specs(&a.sim)?;
         let (statue, sn) =
             common::mesh_from(&a.statue, Kind::Statue, a.statue_tris, a.sim.seed, "statue")?;
         let (mut turbine, tn) = common::mesh_from(

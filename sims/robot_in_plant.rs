@@ -39,6 +39,8 @@ fn main() -> ExitCode {
     }
     let run = || -> Result<(), String> {
         common::init_threads(&a.sim)?;
+        // Reject bad shape names before generating meshes.
+        common::run_specs(&a.sim)?;
         let (robot, rn) =
             common::mesh_from(&a.robot, Kind::Robot, a.robot_tris, a.sim.seed, "robot")?;
         let (plant, pn) =

@@ -46,16 +46,101 @@ fn lucy_on_turbine_runs_with_threads_and_cluster_size_and_writes_json() {
     assert_eq!(v["scene"]["racbvh_cluster_nodes"], 256);
     let runs = v["runs"].as_array().unwrap();
     let shapes: Vec<&str> = runs.iter().map(|r| r["shape"].as_str().unwrap()).collect();
-    assert_eq!(shapes, ["plain", "racbvh"]);
+    // Bare cbvh names run in both contact modes by default.
+    assert_eq!(shapes, ["plain", "plain-pairs", "racbvh", "racbvh-pairs"]);
+    let size = v["scene"]["dropped_size"].as_f64().unwrap();
+    let get = |name: &str| runs.iter().find(|r| r["shape"] == name).unwrap();
+    let y = |name: &str| get(name)["final_translation"][1].as_f64().unwrap();
+    let u = |r: &serde_json::Value, k: &str| r[k].as_u64().unwrap();
     for r in runs {
         for key in ["median", "mean", "p95", "max"] {
-            assert!(r["narrow_phase_ms"][key].as_f64().unwrap() >= 0.0, "{r}");
+            assert!(r["narrow_phase_ms"][key].as_f64().unwrap() > 0.0, "{r}");
+            assert!(r["interference_ms"][key].as_f64().unwrap() > 0.0, "{r}");
         }
         assert_eq!(r["fallback_bvh_built"], false);
         assert!(r["bytes_per_triangle"].as_f64().unwrap() > 0.0);
         // 40 steps from just above the turbine: the statue lands.
         assert!(r["steps_in_contact"].as_u64().unwrap() > 0, "{r}");
+        assert!(u(r, "max_contact_pairs") > 0);
+        if r["contact_mode"] == "patches" {
+            // Patches: fewer manifolds than triangle pairs, at most four
+            // points each.
+            assert!(u(r, "max_manifolds") < u(r, "max_contact_pairs"), "{r}");
+            assert!(
+                u(r, "max_contact_points") <= 4 * u(r, "max_manifolds"),
+                "{r}"
+            );
+        } else {
+            assert_eq!(r["contact_mode"], "pairs");
+            assert_eq!(u(r, "max_manifolds"), u(r, "max_contact_pairs"), "{r}");
+        }
     }
+    // The modes and the codecs land the statue at about the same height.
+    for (a, b) in [
+        ("plain", "plain-pairs"),
+        ("racbvh", "racbvh-pairs"),
+        ("plain", "racbvh"),
+    ] {
+        assert!(
+            (y(a) - y(b)).abs() < 0.05 * size,
+            "{a} at {}, {b} at {} (size {size})",
+            y(a),
+            y(b)
+        );
+    }
+    // Patches give the solver far fewer points than the pairs mode.
+    assert!(u(get("plain"), "max_contact_points") < u(get("plain-pairs"), "max_contact_points"));
+}
+
+#[test]
+fn contact_modes_follow_the_flag_and_the_shape_names() {
+    let json = temp("modes.json");
+    let (ok, stderr) = run(
+        env!("CARGO_BIN_EXE_lucy-on-turbine"),
+        &[
+            "--statue-tris",
+            "1000",
+            "--turbine-tris",
+            "1000",
+            "--steps",
+            "2",
+            "--contacts",
+            "patches",
+            "--shapes",
+            "parry,plain,racbvh-pairs",
+            "--json",
+            json.to_str().unwrap(),
+        ],
+    );
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    std::fs::remove_file(&json).ok();
+    let modes: Vec<(&str, &str)> = v["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            (
+                r["shape"].as_str().unwrap(),
+                r["contact_mode"].as_str().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        modes,
+        [
+            ("parry", "parry"),
+            ("plain", "patches"),
+            ("racbvh-pairs", "pairs")
+        ]
+    );
+    let (ok, stderr) = run(
+        env!("CARGO_BIN_EXE_lucy-on-turbine"),
+        &["--steps", "1", "--shapes", "parry-pairs"],
+    );
+    assert!(!ok);
+    assert!(stderr.contains("no contact modes"), "{stderr}");
 }
 
 #[test]
