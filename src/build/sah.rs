@@ -1,12 +1,39 @@
-//! Binned SAH construction, parallel with rayon.
+//! Binned SAH construction, parallel with rayon, without recursion.
+//!
+//! # Slots
 //!
 //! Each triangle becomes a 32-byte reference (its box and id). A subtree over
 //! `n` references owns exactly `2n - 1` node slots laid out in pre-order: the
 //! subtree root, then the left subtree's `2n_l - 1` slots, then the right
-//! subtree's. The slot slices of the two children are disjoint, so the two
-//! recursions run under `rayon::join` with plain `split_at_mut`, no locks and
-//! no unsafe code. A leaf over `k > 1` triangles leaves `2k - 2` slots unused;
-//! the layout pass drops them.
+//! subtree's. A `Job` is a subtree still to build: its references, its slots
+//! and their global offsets. Splitting a job's root fills the root's slot and
+//! cuts both slices in two with `split_at_mut`, which gives two independent
+//! jobs: no locks and no unsafe code. A leaf over `k > 1` triangles leaves
+//! `2k - 2` slots unused; the layout pass drops them.
+//!
+//! # Scheduling: no recursion over the tree
+//!
+//! The stack a build uses does not grow with the input. (It used to: the
+//! builder recursed once per level under `rayon::join` with its bin arrays
+//! on every frame, about 52 KB a level, and overflowed rayon's worker stacks
+//! on flat input, where the tree got deep.)
+//!
+//! - A job of at least [`PARALLEL_THRESHOLD`] references is a task of a
+//!   `rayon::scope` that loops: split the root, spawn the right child as a
+//!   new task, go on with the left. A spawned task starts from a worker's
+//!   scheduling loop, not on top of the task that spawned it, so tasks do not
+//!   pile up on one stack as nested `join`s do.
+//! - A job under the threshold is built whole by the thread that holds it,
+//!   with a loop over a `Vec` of pending jobs (at most one per level).
+//! - Bin arrays and sweep buffers live in one heap `Scratch` per task,
+//!   reused for every node the task splits.
+//!
+//! A mesh under the threshold is built on the calling thread. A split
+//! depends only on its node's references and each subtree writes only its
+//! own slots, so the tree is the same whatever the number of threads and the
+//! order in which tasks run.
+//!
+//! # Splits
 //!
 //! Splits minimise the surface area heuristic over `bins` centroid bins on
 //! each axis. A node over identical centroids splits at the median of its
@@ -17,15 +44,19 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::Vec3A;
+use rayon::prelude::*;
 
 use super::{BuildOptions, CanonicalNode, LEAF_FLAG};
 use crate::geom::Aabb;
 use crate::mesh::Mesh;
 
+/// Jobs of at least this many references are split as rayon tasks; smaller
+/// ones are built whole by one thread.
+const PARALLEL_THRESHOLD: usize = 4096;
+/// Nodes with more references than this bin in parallel chunks.
+const PARALLEL_BINNING: usize = 1 << 16;
 /// Depth beyond which splits use the object median.
 const MAX_SAH_DEPTH: usize = 64;
-/// Subtrees smaller than this are built on the current thread.
-const PARALLEL_THRESHOLD: usize = 4096;
 
 /// A tree in build order (pre-order with unused slots), before layout.
 pub(super) struct BuiltTree {
@@ -71,6 +102,25 @@ impl Ctx<'_> {
     }
 }
 
+/// A subtree still to build: its references and its `2 refs.len() - 1` node
+/// slots, with the global indices of `nodes[0]` and `refs[0]`.
+struct Job<'a> {
+    refs: &'a mut [Ref],
+    nodes: &'a mut [CanonicalNode],
+    node_base: u32,
+    ref_base: u32,
+    /// Depth of the subtree's root (the tree's root is at depth 0).
+    depth: usize,
+}
+
+/// What became of a job's root.
+enum Step<'a> {
+    /// A leaf over this many references.
+    Leaf(usize),
+    /// An inner node with these two subtrees to build.
+    Inner(Job<'a>, Job<'a>),
+}
+
 const UNUSED: CanonicalNode = CanonicalNode {
     min: [0.0; 3],
     max: [0.0; 3],
@@ -83,7 +133,6 @@ pub(super) fn build_tree(
     options: &BuildOptions,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> BuiltTree {
-    use rayon::prelude::*;
     let n = mesh.triangles.len();
     if n == 0 {
         return BuiltTree {
@@ -125,12 +174,60 @@ pub(super) fn build_tree(
         step: (n as u64 / 100).max(1),
         progress,
     };
-    build_rec(&ctx, &mut refs, &mut nodes, 0, 0, 0);
+    let root = Job {
+        refs: &mut refs,
+        nodes: &mut nodes,
+        node_base: 0,
+        ref_base: 0,
+        depth: 0,
+    };
+    if n < PARALLEL_THRESHOLD {
+        build_serial(&ctx, root, &mut Scratch::new());
+    } else {
+        rayon::scope(|s| build_parallel(s, &ctx, root));
+    }
     let leaf_triangles = refs.par_iter().map(|r| r.id).collect();
     BuiltTree {
         nodes,
         leaf_triangles,
     }
+}
+
+/// A scope task: splits `job` down its left spine while it is large,
+/// spawning each right subtree as a new task, then builds the rest itself.
+fn build_parallel<'s>(scope: &rayon::Scope<'s>, ctx: &'s Ctx<'s>, mut job: Job<'s>) {
+    let mut scratch = Scratch::new();
+    while job.refs.len() >= PARALLEL_THRESHOLD {
+        match split(ctx, job, &mut scratch) {
+            Step::Leaf(k) => {
+                ctx.report(k as u64);
+                return;
+            }
+            Step::Inner(left, right) => {
+                scope.spawn(move |s| build_parallel(s, ctx, right));
+                job = left;
+            }
+        }
+    }
+    build_serial(ctx, job, &mut scratch);
+}
+
+/// Builds the whole subtree of `job` on this thread, depth first, with the
+/// pending right subtrees in a `Vec` (at most one per level).
+fn build_serial(ctx: &Ctx, job: Job, scratch: &mut Scratch) {
+    let mut leaves = 0;
+    let mut pending = Vec::with_capacity(64);
+    pending.push(job);
+    while let Some(job) = pending.pop() {
+        match split(ctx, job, scratch) {
+            Step::Leaf(k) => leaves += k,
+            Step::Inner(left, right) => {
+                pending.push(right);
+                pending.push(left);
+            }
+        }
+    }
+    ctx.report(leaves as u64);
 }
 
 fn bounds_of(refs: &[Ref]) -> (Aabb, Aabb) {
@@ -143,18 +240,17 @@ fn bounds_of(refs: &[Ref]) -> (Aabb, Aabb) {
     (b, c)
 }
 
-/// Builds the subtree over `refs` into `nodes` (of length `2 refs.len() - 1`).
-/// `node_base` / `ref_base` are the global indices of `nodes[0]` / `refs[0]`.
-fn build_rec(
-    ctx: &Ctx,
-    refs: &mut [Ref],
-    nodes: &mut [CanonicalNode],
-    node_base: u32,
-    ref_base: u32,
-    depth: usize,
-) {
-    debug_assert_eq!(nodes.len(), 2 * refs.len() - 1);
+/// Makes the root of `job` a leaf or splits it, filling its slot.
+fn split<'a>(ctx: &Ctx, job: Job<'a>, scratch: &mut Scratch) -> Step<'a> {
+    let Job {
+        refs,
+        nodes,
+        node_base,
+        ref_base,
+        depth,
+    } = job;
     let n = refs.len();
+    debug_assert_eq!(nodes.len(), 2 * n - 1);
     let (bounds, cbounds) = bounds_of(refs);
     if n <= ctx.max_leaf {
         nodes[0] = CanonicalNode {
@@ -163,13 +259,12 @@ fn build_rec(
             a: ref_base,
             b: LEAF_FLAG | n as u32,
         };
-        ctx.report(n as u64);
-        return;
+        return Step::Leaf(n);
     }
     let mid = if depth >= MAX_SAH_DEPTH {
         median_split(refs, &cbounds)
     } else {
-        sah_split(refs, &cbounds, ctx.bins).unwrap_or_else(|| median_split(refs, &cbounds))
+        sah_split(refs, &cbounds, ctx.bins, scratch).unwrap_or_else(|| median_split(refs, &cbounds))
     };
     debug_assert!(mid > 0 && mid < n);
     let (left_refs, right_refs) = refs.split_at_mut(mid);
@@ -183,24 +278,22 @@ fn build_rec(
         a: left,
         b: right,
     };
-    let right_ref_base = ref_base + mid as u32;
-    let mut left_job = move || build_rec(ctx, left_refs, left_nodes, left, ref_base, depth + 1);
-    let mut right_job = move || {
-        build_rec(
-            ctx,
-            right_refs,
-            right_nodes,
-            right,
-            right_ref_base,
-            depth + 1,
-        )
-    };
-    if n >= PARALLEL_THRESHOLD {
-        rayon::join(left_job, right_job);
-    } else {
-        left_job();
-        right_job();
-    }
+    Step::Inner(
+        Job {
+            refs: left_refs,
+            nodes: left_nodes,
+            node_base: left,
+            ref_base,
+            depth: depth + 1,
+        },
+        Job {
+            refs: right_refs,
+            nodes: right_nodes,
+            node_base: right,
+            ref_base: ref_base + mid as u32,
+            depth: depth + 1,
+        },
+    )
 }
 
 /// Object-median split on the longest centroid axis.
@@ -223,22 +316,27 @@ fn median_split(refs: &mut [Ref], cbounds: &Aabb) -> usize {
 }
 
 /// Per-axis bin counts and boxes, for at most `N` bins. Small nodes use a
-/// small `N`: initialising the bins is a per-node cost, and there are as
-/// many small nodes as triangles.
+/// small `N`: clearing the bins is a per-node cost, and there are as many
+/// small nodes as triangles.
 #[derive(Clone)]
 struct Bins<const N: usize> {
     counts: [[u32; N]; 3],
     boxes: [[Aabb; N]; 3],
 }
 
-/// Nodes with more references than this bin in parallel chunks.
-const PARALLEL_BINNING: usize = 1 << 16;
-
 impl<const N: usize> Bins<N> {
     fn new() -> Self {
         Self {
             counts: [[0; N]; 3],
             boxes: [[Aabb::EMPTY; N]; 3],
+        }
+    }
+
+    /// Empties the first `bins` bins of each axis.
+    fn clear(&mut self, bins: usize) {
+        for axis in 0..3 {
+            self.counts[axis][..bins].fill(0);
+            self.boxes[axis][..bins].fill(Aabb::EMPTY);
         }
     }
 
@@ -269,6 +367,32 @@ impl<const N: usize> Bins<N> {
     }
 }
 
+/// The most bins [`BuildOptions::bins`] allows.
+const MAX_BINS: usize = 255;
+
+/// A task's reusable binning memory, on the heap: about 30 KB that used to
+/// sit on every recursion frame.
+struct Scratch {
+    bins8: Bins<8>,
+    bins32: Bins<32>,
+    bins255: Bins<MAX_BINS>,
+    /// Sweep buffers: half area and count of bins `[i, bins)`.
+    right_area: [f32; MAX_BINS],
+    right_count: [u32; MAX_BINS],
+}
+
+impl Scratch {
+    fn new() -> Box<Self> {
+        Box::new(Self {
+            bins8: Bins::new(),
+            bins32: Bins::new(),
+            bins255: Bins::new(),
+            right_area: [0.0; MAX_BINS],
+            right_count: [0; MAX_BINS],
+        })
+    }
+}
+
 /// Bin indices of a centroid on the three axes (0 on a flat axis).
 #[inline]
 fn bin_index(c: Vec3A, lo: Vec3A, scale: Vec3A, bins: usize) -> [usize; 3] {
@@ -283,15 +407,34 @@ fn bin_index(c: Vec3A, lo: Vec3A, scale: Vec3A, bins: usize) -> [usize; 3] {
 /// The best binned-SAH split, partitioning `refs` in place; `None` if every
 /// centroid is the same point (no plane separates them). Nodes of fewer
 /// than 64 references use at most 8 bins, of fewer than 1024 at most 32.
-fn sah_split(refs: &mut [Ref], cbounds: &Aabb, bins: usize) -> Option<usize> {
+fn sah_split(
+    refs: &mut [Ref],
+    cbounds: &Aabb,
+    bins: usize,
+    scratch: &mut Scratch,
+) -> Option<usize> {
+    let Scratch {
+        bins8,
+        bins32,
+        bins255,
+        right_area,
+        right_count,
+    } = scratch;
+    let sweep = (&mut right_area[..], &mut right_count[..]);
     match refs.len() {
-        0..64 => sah_split_n::<8>(refs, cbounds, bins.min(8)),
-        64..1024 => sah_split_n::<32>(refs, cbounds, bins.min(32)),
-        _ => sah_split_n::<255>(refs, cbounds, bins),
+        0..64 => sah_split_n(refs, cbounds, bins.min(8), bins8, sweep),
+        64..1024 => sah_split_n(refs, cbounds, bins.min(32), bins32, sweep),
+        _ => sah_split_n(refs, cbounds, bins, bins255, sweep),
     }
 }
 
-fn sah_split_n<const N: usize>(refs: &mut [Ref], cbounds: &Aabb, bins: usize) -> Option<usize> {
+fn sah_split_n<const N: usize>(
+    refs: &mut [Ref],
+    cbounds: &Aabb,
+    bins: usize,
+    scratch: &mut Bins<N>,
+    (right_area, right_count): (&mut [f32], &mut [u32]),
+) -> Option<usize> {
     let ext = cbounds.extent();
     let usable = |a: usize| ext[a] > 0.0 && ext[a].is_finite();
     if !(0..3).any(usable) {
@@ -302,9 +445,10 @@ fn sah_split_n<const N: usize>(refs: &mut [Ref], cbounds: &Aabb, bins: usize) ->
         if usable(a) { bins as f32 / ext[a] } else { 0.0 }
     }));
     let lo = cbounds.min;
-    let binned = if refs.len() > PARALLEL_BINNING {
-        use rayon::prelude::*;
-        refs.par_chunks(PARALLEL_BINNING / 4)
+    let parallel;
+    let binned: &Bins<N> = if refs.len() > PARALLEL_BINNING {
+        parallel = refs
+            .par_chunks(PARALLEL_BINNING / 4)
             .fold(
                 || Box::new(Bins::<N>::new()),
                 |mut acc, chunk| {
@@ -315,15 +459,14 @@ fn sah_split_n<const N: usize>(refs: &mut [Ref], cbounds: &Aabb, bins: usize) ->
             .reduce(
                 || Box::new(Bins::<N>::new()),
                 |a, b| Box::new(a.merge(&b, bins)),
-            )
+            );
+        &parallel
     } else {
-        let mut b = Box::new(Bins::<N>::new());
-        b.fill(refs, lo, scale, bins);
-        b
+        scratch.clear(bins);
+        scratch.fill(refs, lo, scale, bins);
+        scratch
     };
     let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, split bin)
-    let mut right_area = [0f32; N];
-    let mut right_count = [0u32; N];
     for axis in (0..3).filter(|&a| usable(a)) {
         let (counts, boxes) = (&binned.counts[axis], &binned.boxes[axis]);
         // Sweep from the right: area and count of bins [i, bins).
