@@ -178,15 +178,11 @@ pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + S
 ) {
     let mut update = ManifoldUpdate::begin(workspace, manifolds);
     let mut stats = TraversalStats::default();
-    let pose = pose_from_parry(pos12);
     let mut pairs: Vec<(Triangle, Triangle)> = Vec::new();
+    // Every pair the traversal finds goes to parry, as parry's own
+    // composite-shape code does: parry keeps points beyond the prediction
+    // distance too, so no pair may be culled by its own test first.
     for_each_pair(s1, s2, pos12, prediction, &mut stats, |i, t1, j, t2| {
-        let moved = t2.map(|p| pose.transform_point(p));
-        if separated_by_a_face_plane(t1, &moved, prediction) {
-            // parry's manifold for this pair would have no point: skip the
-            // convex-convex call; the pair's old manifold, if any, is dropped.
-            return ControlFlow::Continue(());
-        }
         update.manifold(i, j);
         pairs.push((*t1, *t2));
         ControlFlow::Continue(())
@@ -215,32 +211,6 @@ pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + S
     }
 }
 
-/// Whether the plane of one triangle has the whole other triangle more than
-/// `margin` (plus a relative tolerance) on one side: then their distance
-/// exceeds `margin` and no contact point can be within the prediction.
-/// Degenerate triangles (no normal) never count as separated.
-pub fn separated_by_a_face_plane(a: &Triangle, b: &Triangle, margin: Real) -> bool {
-    fn one_side(p: &Triangle, q: &Triangle, margin: Real) -> bool {
-        let n = (p[1] - p[0]).cross(p[2] - p[0]);
-        let len = n.length();
-        if len.is_nan() || len <= 0.0 || !len.is_finite() {
-            return false;
-        }
-        let n = n / len;
-        let d = q.map(|v| n.dot(v - p[0]));
-        // Leave a relative slack so that rounding cannot skip a pair parry
-        // would report.
-        let scale = p
-            .iter()
-            .chain(q)
-            .map(|v| v.abs().max_element())
-            .fold(0.0, f32::max);
-        let m = margin + 1e-5 * scale.max(1.0);
-        d.iter().all(|&x| x > m) || d.iter().all(|&x| x < -m)
-    }
-    one_side(a, b, margin) || one_side(b, a, margin)
-}
-
 /// Whether any triangle of `s1` intersects one of `s2`.
 pub fn intersection_test(pos12: &PPose, s1: &CbvhShape, s2: &CbvhShape) -> ShapeIntersection {
     let mut stats = TraversalStats::default();
@@ -263,7 +233,7 @@ pub fn intersection_test(pos12: &PPose, s1: &CbvhShape, s2: &CbvhShape) -> Shape
 pub fn contact(pos12: &PPose, s1: &CbvhShape, s2: &CbvhShape, prediction: Real) -> Option<Contact> {
     let mut stats = TraversalStats::default();
     let mut best: Option<Contact> = None;
-    for_each_pair(s1, s2, pos12, prediction, &mut stats, |_, t1, _, t2| {
+    for_each_pair(s1, s2, pos12, prediction, &mut stats, |i, t1, j, t2| {
         if let Ok(Some(c)) = DefaultQueryDispatcher.contact(
             pos12,
             &to_parry_triangle(t1),
@@ -271,7 +241,7 @@ pub fn contact(pos12: &PPose, s1: &CbvhShape, s2: &CbvhShape, prediction: Real) 
             prediction,
         ) && best.is_none_or(|b| c.dist < b.dist)
         {
-            best = Some(c);
+            best = Some(c.with_subshapes(i, j));
         }
         ControlFlow::Continue(())
     });

@@ -189,15 +189,18 @@ pub fn intersection_test(
         } else {
             DefaultQueryDispatcher.intersection_test(pos12, &tri, convex)
         };
-        if r.is_ok_and(|r| r.intersecting) {
-            found = if flipped {
-                ShapeIntersection::new(true).with_subshapes(0, i)
-            } else {
-                ShapeIntersection::new(true).with_subshapes(i, 0)
-            };
-            ControlFlow::Break(())
-        } else {
-            ControlFlow::Continue(())
+        match r {
+            Ok(r) if r.intersecting => {
+                // The other shape's part as its own query named it (a
+                // composite shape's triangle; 0 for a convex shape).
+                found = if flipped {
+                    ShapeIntersection::new(true).with_subshapes(r.subshape1, i)
+                } else {
+                    ShapeIntersection::new(true).with_subshapes(i, r.subshape2)
+                };
+                ControlFlow::Break(())
+            }
+            _ => ControlFlow::Continue(()),
         }
     });
     found
@@ -213,12 +216,16 @@ pub fn contact(
 ) -> Option<Contact> {
     let pose = if flipped { pos12.inverse() } else { *pos12 };
     let mut best: Option<Contact> = None;
-    for_each_triangle_near(mesh, convex, &pose, prediction, |_, t| {
+    for_each_triangle_near(mesh, convex, &pose, prediction, |i, t| {
         let tri = to_parry_triangle(t);
         let r = if flipped {
-            DefaultQueryDispatcher.contact(pos12, convex, &tri, prediction)
+            DefaultQueryDispatcher
+                .contact(pos12, convex, &tri, prediction)
+                .map(|c| c.map(|c| c.with_subshapes(c.subshape1, i)))
         } else {
-            DefaultQueryDispatcher.contact(pos12, &tri, convex, prediction)
+            DefaultQueryDispatcher
+                .contact(pos12, &tri, convex, prediction)
+                .map(|c| c.map(|c| c.with_subshapes(i, c.subshape2)))
         };
         if let Ok(Some(c)) = r
             && best.is_none_or(|b| c.dist < b.dist)

@@ -7,7 +7,14 @@
 //! - [`Dispatcher`]: handles every pair with a cbvh shape on the cbvh trees
 //!   (BVTT for cbvh vs cbvh, overlap queries for cbvh vs convex), chained to
 //!   parry's default dispatcher for everything else. One file per query pair:
-//!   [`cbvh_cbvh`], [`cbvh_convex`].
+//!   [`cbvh_cbvh`], [`cbvh_convex`], [`cbvh_trimesh`]. Its [`ContactMode`]
+//!   chooses between contact patches from cbvh's own triangle-pair kernel
+//!   ([`crate::contact`], turned into manifolds by [`patches`]; the default)
+//!   and one manifold per triangle pair through parry's convex-convex code.
+//!   This departs from the design's first rule that triangle pairs always go
+//!   through parry: at scan resolution a resting contact touches hundreds of
+//!   thousands of pairs, and one manifold each floods the narrow phase and
+//!   the solver.
 //! - [`droptest`]: the rapier drop test behind the sims, timing the narrow
 //!   phase per step through [`timed::Timed`].
 //! - [`trimesh`]: parry's own `TriMesh` built from a [`Mesh`](crate::Mesh),
