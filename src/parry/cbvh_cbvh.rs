@@ -92,7 +92,7 @@ pub fn patches(
             FRONT_TASKS,
             || {
                 (
-                    PairKernel::new(prediction),
+                    PairKernel::new(prediction).exact_separation(false),
                     PatchSet::new(opts, size, record),
                 )
             },

@@ -80,7 +80,7 @@ pub fn patches(
         .length()
         .min(tm.local_aabb().extents().length());
     let mut set = PatchSet::new(opts, size, record);
-    let mut kernel = PairKernel::new(prediction);
+    let mut kernel = PairKernel::new(prediction).exact_separation(false);
     let query = from_parry_aabb(&tm.compute_aabb(tm_in_mesh)).loosened(prediction);
     let mut stats = TraversalStats::default();
     let to_mesh = |p: parry3d::math::Vector| glam::Vec3A::from((*tm_in_mesh * p).to_array());

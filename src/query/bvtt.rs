@@ -41,6 +41,7 @@ fn root_pair<A: NodeCursor, B: NodeCursor>(
 /// half area, never a leaf) is split and the child pairs that still come
 /// within `prediction` are pushed.
 #[inline]
+#[allow(clippy::too_many_arguments)]
 fn descend<A: NodeCursor, B: NodeCursor>(
     a: &A,
     b: &B,
