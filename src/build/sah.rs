@@ -36,9 +36,10 @@
 //! # Splits
 //!
 //! A node splits at the best binned-SAH plane over `bins` centroid bins on
-//! each axis (at most 8 bins below 64 references, 32 below 1024). Where
-//! the SAH cannot separate a node, the split falls back to a median, which
-//! always makes progress:
+//! each axis (at most 8 bins below 64 references, 32 below 1024); of
+//! candidates of exactly equal cost, the most even one wins (quantized
+//! coordinates make such ties). Where the SAH cannot separate a node, the
+//! split falls back to a median, which always makes progress:
 //!
 //! - every centroid is the same point (no plane separates them): the object
 //!   median, where every key ties, so the split is by index, half and half;
@@ -503,7 +504,8 @@ fn sah_split_n<const N: usize>(
         scratch.fill(refs, lo, scale, bins);
         scratch
     };
-    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, split bin)
+    // (cost, |left count - right count|, axis, split bin)
+    let mut best: Option<(f32, u32, usize, usize)> = None;
     for axis in (0..3).filter(|&a| usable(a)) {
         let (counts, boxes) = (&binned.counts[axis], &binned.boxes[axis]);
         // Sweep from the right: area and count of bins [i, bins).
@@ -524,16 +526,17 @@ fn sah_split_n<const N: usize>(
                 continue;
             }
             let cost = acc.half_area() * cnt as f32 + right_area[i] * right_count[i] as f32;
+            let imbalance = cnt.abs_diff(right_count[i]);
             let better = match best {
                 None => cost.is_finite(),
-                Some((c, _, _)) => cost < c,
+                Some((c, im, _, _)) => cost < c || (cost == c && imbalance < im),
             };
             if better {
-                best = Some((cost, axis, i));
+                best = Some((cost, imbalance, axis, i));
             }
         }
     }
-    let (cost, axis, split) = best?;
+    let (cost, _, axis, split) = best?;
     // Two references have one partition whatever the rule: keep the SAH's
     // order. The comparison is written so that a NaN bound (an overflowing
     // area) also gives `None`.
