@@ -35,11 +35,34 @@
 //!
 //! # Splits
 //!
-//! Splits minimise the surface area heuristic over `bins` centroid bins on
-//! each axis. A node over identical centroids splits at the median of its
-//! range. Past depth [`MAX_SAH_DEPTH`] (pathological, e.g. exponentially
-//! clustered input) splits switch to the object median on the longest axis,
-//! which bounds the height by `MAX_SAH_DEPTH + log2 n`.
+//! A node splits at the best binned-SAH plane over `bins` centroid bins on
+//! each axis (at most 8 bins below 64 references, 32 below 1024); of
+//! candidates of exactly equal cost, the most even one wins (quantized
+//! coordinates make such ties). Where the SAH cannot separate a node, the
+//! split falls back to a median, which always makes progress:
+//!
+//! - every centroid is the same point (no plane separates them): the object
+//!   median, where every key ties, so the split is by index, half and half;
+//! - no candidate costs less than keeping the node whole (`area × m` over
+//!   `m` references, with a relative margin of [`MIN_SAH_GAIN`] for
+//!   rounding): every candidate's children are as large as the node, or
+//!   every box has zero area, as in a collinear mesh or a scan translated
+//!   so far that `f32` rounding flattens its boxes. All costs are then
+//!   equal (0 for zero areas), and taking the first candidate peeled one bin
+//!   off per level. Such a node is split at the object median along its
+//!   longest centroid axis. No split costs more than `area × m`, so this is
+//!   at most [`MIN_SAH_GAIN`] worse than the SAH's pick at that node. (Two
+//!   references have one partition whatever the rule; they keep the SAH's.)
+//!
+//! For any input the height is at most `H = 2⌊log2 n⌋ + 16`, `n` the mesh's
+//! triangle count: a node at depth `d` (the root is at depth 1) over `m`
+//! references uses the SAH only if `d + 1 + ⌈log2 m⌉ ≤ H`, and the median
+//! otherwise. Every node then has `d + ⌈log2 m⌉ ≤ H` (an SAH child is one
+//! level deeper with fewer references; a median child is one level deeper
+//! with `⌈log2 m⌉ - 1`), so no leaf is deeper than `H`. The budget is for
+//! pathological input, where every SAH split is rightly lopsided (nested
+//! triangles, exponentially clustered centroids), and replaces a fixed SAH
+//! depth of 64, which allowed heights of `64 + log2 n`.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -55,8 +78,11 @@ use crate::mesh::Mesh;
 const PARALLEL_THRESHOLD: usize = 4096;
 /// Nodes with more references than this bin in parallel chunks.
 const PARALLEL_BINNING: usize = 1 << 16;
-/// Depth beyond which splits use the object median.
-const MAX_SAH_DEPTH: usize = 64;
+/// The height budget is `2⌊log2 n⌋` plus this.
+const HEIGHT_SLACK: usize = 16;
+/// How much cheaper than keeping the node whole (relatively) the best SAH
+/// split must be to be taken; below that the node is split at the median.
+const MIN_SAH_GAIN: f32 = 1e-5;
 
 /// A tree in build order (pre-order with unused slots), before layout.
 pub(super) struct BuiltTree {
@@ -87,6 +113,8 @@ impl Ref {
 struct Ctx<'a> {
     max_leaf: usize,
     bins: usize,
+    /// The deepest a leaf may be (the root is at depth 1).
+    height_budget: usize,
     done: AtomicU64,
     total: u64,
     step: u64,
@@ -109,7 +137,7 @@ struct Job<'a> {
     nodes: &'a mut [CanonicalNode],
     node_base: u32,
     ref_base: u32,
-    /// Depth of the subtree's root (the tree's root is at depth 0).
+    /// Depth of the subtree's root (the tree's root is at depth 1).
     depth: usize,
 }
 
@@ -169,6 +197,7 @@ pub(super) fn build_tree(
     let ctx = Ctx {
         max_leaf: options.max_leaf_triangles,
         bins: options.bins,
+        height_budget: 2 * n.ilog2() as usize + HEIGHT_SLACK,
         done: AtomicU64::new(0),
         total: n as u64,
         step: (n as u64 / 100).max(1),
@@ -179,7 +208,7 @@ pub(super) fn build_tree(
         nodes: &mut nodes,
         node_base: 0,
         ref_base: 0,
-        depth: 0,
+        depth: 1,
     };
     if n < PARALLEL_THRESHOLD {
         build_serial(&ctx, root, &mut Scratch::new());
@@ -240,6 +269,12 @@ fn bounds_of(refs: &[Ref]) -> (Aabb, Aabb) {
     (b, c)
 }
 
+/// `⌈log2 n⌉` for `n ≥ 1`.
+#[inline]
+fn ceil_log2(n: usize) -> usize {
+    n.next_power_of_two().ilog2() as usize
+}
+
 /// Makes the root of `job` a leaf or splits it, filling its slot.
 fn split<'a>(ctx: &Ctx, job: Job<'a>, scratch: &mut Scratch) -> Step<'a> {
     let Job {
@@ -261,11 +296,11 @@ fn split<'a>(ctx: &Ctx, job: Job<'a>, scratch: &mut Scratch) -> Step<'a> {
         };
         return Step::Leaf(n);
     }
-    let mid = if depth >= MAX_SAH_DEPTH {
-        median_split(refs, &cbounds)
-    } else {
-        sah_split(refs, &cbounds, ctx.bins, scratch).unwrap_or_else(|| median_split(refs, &cbounds))
-    };
+    let sah = depth + 1 + ceil_log2(n) <= ctx.height_budget;
+    let mid = sah
+        .then(|| sah_split(refs, &bounds, &cbounds, ctx.bins, scratch))
+        .flatten()
+        .unwrap_or_else(|| median_split(refs, &cbounds));
     debug_assert!(mid > 0 && mid < n);
     let (left_refs, right_refs) = refs.split_at_mut(mid);
     let (head, rest) = nodes.split_at_mut(1);
@@ -296,7 +331,8 @@ fn split<'a>(ctx: &Ctx, job: Job<'a>, scratch: &mut Scratch) -> Step<'a> {
     )
 }
 
-/// Object-median split on the longest centroid axis.
+/// Object-median split on the longest centroid axis. Over identical
+/// centroids every key ties and the split is by index, half and half.
 fn median_split(refs: &mut [Ref], cbounds: &Aabb) -> usize {
     let e = cbounds.extent();
     let axis = if e.x >= e.y && e.x >= e.z {
@@ -404,11 +440,12 @@ fn bin_index(c: Vec3A, lo: Vec3A, scale: Vec3A, bins: usize) -> [usize; 3] {
     ]
 }
 
-/// The best binned-SAH split, partitioning `refs` in place; `None` if every
-/// centroid is the same point (no plane separates them). Nodes of fewer
+/// The best binned-SAH split, partitioning `refs` in place; `None` where
+/// the SAH cannot separate the node (see the module docs). Nodes of fewer
 /// than 64 references use at most 8 bins, of fewer than 1024 at most 32.
 fn sah_split(
     refs: &mut [Ref],
+    bounds: &Aabb,
     cbounds: &Aabb,
     bins: usize,
     scratch: &mut Scratch,
@@ -422,14 +459,15 @@ fn sah_split(
     } = scratch;
     let sweep = (&mut right_area[..], &mut right_count[..]);
     match refs.len() {
-        0..64 => sah_split_n(refs, cbounds, bins.min(8), bins8, sweep),
-        64..1024 => sah_split_n(refs, cbounds, bins.min(32), bins32, sweep),
-        _ => sah_split_n(refs, cbounds, bins, bins255, sweep),
+        0..64 => sah_split_n(refs, bounds, cbounds, bins.min(8), bins8, sweep),
+        64..1024 => sah_split_n(refs, bounds, cbounds, bins.min(32), bins32, sweep),
+        _ => sah_split_n(refs, bounds, cbounds, bins, bins255, sweep),
     }
 }
 
 fn sah_split_n<const N: usize>(
     refs: &mut [Ref],
+    bounds: &Aabb,
     cbounds: &Aabb,
     bins: usize,
     scratch: &mut Bins<N>,
@@ -466,7 +504,8 @@ fn sah_split_n<const N: usize>(
         scratch.fill(refs, lo, scale, bins);
         scratch
     };
-    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, split bin)
+    // (cost, |left count - right count|, axis, split bin)
+    let mut best: Option<(f32, u32, usize, usize)> = None;
     for axis in (0..3).filter(|&a| usable(a)) {
         let (counts, boxes) = (&binned.counts[axis], &binned.boxes[axis]);
         // Sweep from the right: area and count of bins [i, bins).
@@ -487,12 +526,24 @@ fn sah_split_n<const N: usize>(
                 continue;
             }
             let cost = acc.half_area() * cnt as f32 + right_area[i] * right_count[i] as f32;
-            if best.is_none_or(|(c, _, _)| cost < c) {
-                best = Some((cost, axis, i));
+            let imbalance = cnt.abs_diff(right_count[i]);
+            let better = match best {
+                None => cost.is_finite(),
+                Some((c, im, _, _)) => cost < c || (cost == c && imbalance < im),
+            };
+            if better {
+                best = Some((cost, imbalance, axis, i));
             }
         }
     }
-    let (_, axis, split) = best?;
+    let (cost, _, axis, split) = best?;
+    // Two references have one partition whatever the rule: keep the SAH's
+    // order. The comparison is written so that a NaN bound (an overflowing
+    // area) also gives `None`.
+    let gains = cost < bounds.half_area() * refs.len() as f32 * (1.0 - MIN_SAH_GAIN);
+    if !gains && refs.len() > 2 {
+        return None;
+    }
     // In-place partition: bins [0, split) to the left, with the same bin
     // arithmetic as the binning pass.
     let mut i = 0;
