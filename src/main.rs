@@ -28,6 +28,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    cbvh::logger::init_stderr();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Gen(a) => cli::generate::run(a),

@@ -76,7 +76,8 @@ pub enum MeshError {
         place: Place,
         /// The face number (0-based, in file order).
         face: usize,
-        /// The offending index.
+        /// The offending index, as the file writes it (1-based in OBJ,
+        /// 0-based in OFF and PLY).
         index: u64,
         /// How many vertices the mesh has.
         vertices: usize,

@@ -353,9 +353,9 @@ impl CompositeShape for CbvhShape {
         self.inner.fallback_builds.fetch_add(1, Ordering::Relaxed);
         self.inner.fallback.get_or_init(|| {
             if std::env::var_os("CBVH_DEBUG_FALLBACK").is_some() {
-                eprintln!("{}", std::backtrace::Backtrace::force_capture());
+                log::warn!("{}", std::backtrace::Backtrace::force_capture());
             }
-            eprintln!(
+            log::warn!(
                 "cbvh: building a parry Bvh over {} triangles for a {} shape: a query reached \
                  parry's composite-shape code. Install cbvh::parry::Dispatcher \
                  (NarrowPhase::with_query_dispatcher) to use the cbvh tree instead.",
