@@ -38,6 +38,7 @@ struct Args {
 fn main() -> ExitCode {
     let a = Args::parse();
     let run = || -> Result<(), String> {
+        common::validate(&a.sim)?;
         common::init_threads(&a.sim)?;
         let (statue, sn) =
             common::mesh_from(&a.statue, Kind::Statue, a.statue_tris, a.sim.seed, "statue")?;

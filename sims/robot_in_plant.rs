@@ -38,6 +38,7 @@ fn main() -> ExitCode {
         a.sim.width_fraction = 0.1;
     }
     let run = || -> Result<(), String> {
+        common::validate(&a.sim)?;
         common::init_threads(&a.sim)?;
         let (robot, rn) =
             common::mesh_from(&a.robot, Kind::Robot, a.robot_tris, a.sim.seed, "robot")?;
