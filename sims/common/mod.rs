@@ -168,7 +168,8 @@ impl std::str::FromStr for ShapeKindArg {
     }
 }
 
-/// A mesh from a file, or generated.
+/// A mesh from a file (a mesh, or a cbvh codec file's stored mesh), or
+/// generated.
 pub fn mesh_from(
     file: &Option<PathBuf>,
     kind: Kind,
@@ -177,6 +178,16 @@ pub fn mesh_from(
     what: &str,
 ) -> Result<(Mesh, String), String> {
     match file {
+        // A cbvh codec file (recognised by its magic): opened, verified, and
+        // its stored mesh used; each shape is then built from it.
+        Some(p) if cbvh::parry::codec_file_kind(p).is_some() => {
+            let codec = cbvh::parry::open_codec(p, &cbvh::parry::OpenOptions::default())
+                .map_err(|e| e.to_string())?;
+            Ok((
+                codec.decoded_mesh(),
+                format!("{} ({} file)", p.display(), codec.name()),
+            ))
+        }
         Some(p) => cbvh::mesh::load(p)
             .map(|m| (m, p.display().to_string()))
             .map_err(|e| e.to_string()),

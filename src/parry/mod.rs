@@ -8,6 +8,9 @@
 //!   (BVTT for cbvh vs cbvh, overlap queries for cbvh vs convex), chained to
 //!   parry's default dispatcher for everything else. One file per query pair:
 //!   [`cbvh_cbvh`], [`cbvh_convex`].
+//! - [`open_codec`]: any codec's self-contained file, chosen by its magic,
+//!   opened (and verified) into a [`Codec`] or, through [`CbvhShape::open`],
+//!   a shape that needs no mesh.
 //! - [`droptest`]: the rapier drop test behind the sims, timing the narrow
 //!   phase per step through [`timed::Timed`].
 //! - [`trimesh`]: parry's own `TriMesh` built from a [`Mesh`](crate::Mesh),
@@ -21,6 +24,7 @@ pub mod cbvh_convex;
 pub mod cbvh_trimesh;
 mod dispatcher;
 pub mod droptest;
+mod open;
 pub mod raycast_target;
 pub mod shape;
 pub mod timed;
@@ -28,6 +32,7 @@ pub mod trimesh;
 mod workspace;
 
 pub use dispatcher::Dispatcher;
+pub use open::{CodecFileError, OpenOptions, codec_file_kind, open_codec};
 pub use shape::{CbvhShape, Codec, pose_from_parry};
 pub use trimesh::{parry_trimesh, trimesh_bytes_by_part};
 pub use workspace::CbvhWorkspace;

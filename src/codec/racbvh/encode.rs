@@ -296,6 +296,7 @@ impl RacBvh {
             meta,
             pmesh,
             mesh_hash,
+            crate::codec::common::MassProps::of_mesh(mesh),
             options.cache_budget_bytes,
         ))
     }

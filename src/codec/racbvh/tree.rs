@@ -49,6 +49,8 @@ pub struct RacBvh {
     pub(super) mesh: mesh::PackedMesh,
     /// Checksum of the mesh sections, as stored (checked by `verify`).
     pub(super) mesh_hash: u64,
+    /// Mass properties at density 1, computed from the original mesh.
+    pub(super) mass: crate::codec::common::MassProps,
     pub(super) cache: cache::ClusterCache,
     /// Identifies this tree in the threads' pins.
     pub(super) id: u64,
@@ -71,6 +73,7 @@ impl RacBvh {
         meta: Vec<ClusterMeta>,
         mesh: mesh::PackedMesh,
         mesh_hash: u64,
+        mass: crate::codec::common::MassProps,
         budget: usize,
     ) -> Self {
         let max_cluster = (1usize << header.cluster_bits) * decode::CLUSTER_BYTES_PER_NODE;
@@ -81,6 +84,7 @@ impl RacBvh {
             meta,
             mesh_hash,
             mesh,
+            mass,
             cache: cache::ClusterCache::new(budget, max_cluster),
             id: NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         }
@@ -107,6 +111,12 @@ impl RacBvh {
         self.mesh.decoded()
     }
 
+    /// Mass properties at density 1 (computed from the original mesh when
+    /// encoded, stored in the file).
+    pub fn mass(&self) -> crate::codec::common::MassProps {
+        self.mass
+    }
+
     /// The vertex indices of stored triangle `t` (for smooth shading).
     ///
     /// # Panics
@@ -117,6 +127,31 @@ impl RacBvh {
             "racbvh: no triangle {t}"
         );
         self.mesh.indices(t)
+    }
+
+    /// The header's fields, for reports (`cbvh info`).
+    pub fn header_fields(&self) -> Vec<(&'static str, String)> {
+        let h = &self.header;
+        let m = &self.mesh;
+        vec![
+            ("version", file::VERSION.to_string()),
+            ("nodes", h.node_count.to_string()),
+            (
+                "clusters",
+                format!("{} of {} nodes", self.meta.len(), 1u32 << h.cluster_bits),
+            ),
+            ("box bits", h.bits.to_string()),
+            (
+                "vertex bits",
+                if m.lossless {
+                    "32 (lossless f32)".to_string()
+                } else {
+                    m.vertex_bits.to_string()
+                },
+            ),
+            ("vertices", m.vertex_count.to_string()),
+            ("max leaf tris", h.max_leaf.to_string()),
+        ]
     }
 
     /// Compression figures.
