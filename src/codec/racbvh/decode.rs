@@ -345,15 +345,26 @@ impl RacBvh {
     }
 
     /// The complete words of node `g`, completing it if needed (§5.2).
+    ///
+    /// Completing a node needs its local root's parent, which may itself be
+    /// incomplete in an earlier cluster, and so on: the chain is walked
+    /// with a loop and an explicit list (never recursion, whose depth a
+    /// crafted file could make overflow the stack). Parent clusters come
+    /// strictly before their children's (checked when a cluster is
+    /// decoded), so the chain has at most one entry per cluster.
     fn try_words(&self, g: u32) -> Result<[u32; 8], RacError> {
-        if g >= self.header.node_count {
-            return Err(RacError::NoSuchNode {
-                node: g,
-                count: self.header.node_count,
-            });
-        }
-        let c = g >> self.header.cluster_bits;
-        let l = (g - (c << self.header.cluster_bits)) as usize;
+        let cb = self.header.cluster_bits;
+        let split = |x: u32| -> Result<(u32, usize), RacError> {
+            if x >= self.header.node_count {
+                return Err(RacError::NoSuchNode {
+                    node: x,
+                    count: self.header.node_count,
+                });
+            }
+            let c = x >> cb;
+            Ok((c, (x - (c << cb)) as usize))
+        };
+        let (c, l) = split(g)?;
         let fast = cache::with_pinned(self.id, c, |cl| {
             let w = cl.nodes[l].words();
             (w[0] & INCOMPLETE == 0).then_some(w)
@@ -361,28 +372,55 @@ impl RacBvh {
         if let Some(w) = fast {
             return Ok(w);
         }
-        let mut cl = self.cluster(c)?;
-        if !cl.nodes[l].is_complete() {
+        // Walk up: (cluster, local index of the node, its local root) for
+        // every incomplete node of the chain, until a complete one.
+        let mut chain: Vec<(u32, usize, LocalRoot)> = Vec::new();
+        let mut x = g;
+        let mut top = loop {
+            let (c, l) = split(x)?;
+            let cl = self.cluster(c)?;
+            let w = cl.nodes[l].words();
+            if w[0] & INCOMPLETE == 0 {
+                if chain.is_empty() {
+                    cache::pin(self.id, c, cl);
+                }
+                break w;
+            }
             let root = cl.roots[usize::from(cl.root_of[l])];
             // Hold nothing while the parent's cluster loads.
             drop(cl);
-            let pw = self.try_words(root.parent)?;
-            let pq = qbox_of(&pw);
-            if pw[7] & LEAF_FLAG != 0
-                || pw[6 + usize::from(root.right)] != c << self.header.cluster_bits | root.local
-            {
+            if chain.len() > self.meta.len() {
+                return Err(RacError::CorruptCluster {
+                    cluster: c,
+                    what: "the chain of local roots' parents does not end",
+                });
+            }
+            chain.push((c, l, root));
+            x = root.parent;
+        };
+        // Walk down, completing each local root's subtree from its parent.
+        while let Some((c, l, root)) = chain.pop() {
+            if top[7] & LEAF_FLAG != 0 || top[6 + usize::from(root.right)] != c << cb | root.local {
                 return Err(RacError::CorruptCluster {
                     cluster: c,
                     what: "a local root's parent does not name it as child",
                 });
             }
-            cl = self.cluster(c)?;
-            complete(&cl, root, &pq, self.header.grid.max_q)
+            let cl = self.cluster(c)?;
+            complete(&cl, root, &qbox_of(&top), self.header.grid.max_q)
                 .map_err(|what| RacError::CorruptCluster { cluster: c, what })?;
+            top = cl.nodes[l].words();
+            if top[0] & INCOMPLETE != 0 {
+                return Err(RacError::CorruptCluster {
+                    cluster: c,
+                    what: "a node is not below its local root",
+                });
+            }
+            if chain.is_empty() {
+                cache::pin(self.id, c, cl);
+            }
         }
-        let w = cl.nodes[l].words();
-        cache::pin(self.id, c, cl);
-        Ok(w)
+        Ok(top)
     }
 
     #[inline]
@@ -473,41 +511,89 @@ impl RacBvh {
         Ok(())
     }
 
-    /// Decodes and completes every cluster, checks that every triangle id
-    /// appears exactly once, and checks the stored mesh. Uses (and fills)
-    /// the cache.
+    /// Proves everything a query relies on: every cluster decodes and
+    /// completes with a matching checksum; every node but the root has
+    /// exactly one parent, and children come after their parent (so no
+    /// repeats and no cycles: a query visits each node at most once); child
+    /// boxes lie inside their parent's; every triangle id is in exactly one
+    /// leaf and leaf boxes contain their triangles; the mesh sections'
+    /// checksum matches and every vertex index is in range. Runs in
+    /// O(nodes + triangles) without recursion; uses (and fills) the cache.
     pub fn verify(&self) -> Result<(), RacError> {
+        let corrupt = |node: u32, what: &'static str| RacError::CorruptNode { node, what };
         if self.mesh_hash != super::file::mesh_hash(&self.mesh) {
             return Err(RacError::Corrupt(
                 "the mesh sections' checksum does not match",
             ));
         }
         self.mesh.check()?;
-        let mut seen = vec![false; self.header.triangle_count as usize];
-        for g in 0..self.header.node_count {
+        let n = self.header.node_count;
+        // Bit sets: a forged header's counts cannot make this allocate
+        // more than the file (open checks a bit of cluster data per node).
+        let mut seen = BitSet::new(self.header.triangle_count as usize);
+        let mut has_parent = BitSet::new(n as usize);
+        for g in 0..n {
             let w = self.try_words(g)?;
             if w[7] & LEAF_FLAG != 0 {
-                let mut dup = false;
+                let b = self.box_of(&w);
+                let mut bad: Option<&'static str> = None;
                 self.try_leaf_ids(g, &mut |id| {
-                    dup |= std::mem::replace(&mut seen[id as usize], true)
+                    if seen.set(id as usize) {
+                        bad = bad.or(Some("a triangle id appears in two leaves"));
+                    }
+                    let t = self.mesh.triangle(id);
+                    if !self.header.empty && t.iter().any(|&v| !b.contains_point(v)) {
+                        bad = bad.or(Some("the leaf's box does not contain its triangle"));
+                    }
                 })?;
-                if dup {
-                    return Err(RacError::Corrupt("a triangle id appears in two leaves"));
+                if let Some(what) = bad {
+                    return Err(corrupt(g, what));
                 }
-            } else if w[6] <= g
-                || w[7] <= g
-                || w[6] >= self.header.node_count
-                || w[7] >= self.header.node_count
-            {
-                return Err(RacError::Corrupt(
-                    "an inner node's child does not come after it",
-                ));
+            } else {
+                let pq = qbox_of(&w);
+                for c in [w[6], w[7]] {
+                    if c <= g || c >= n {
+                        return Err(corrupt(g, "a child does not come after it"));
+                    }
+                    if has_parent.set(c as usize) {
+                        return Err(corrupt(c, "the node has two parents"));
+                    }
+                    let cq = qbox_of(&self.try_words(c)?);
+                    let inside = (0..3).all(|a| pq.min[a] <= cq.min[a] && cq.max[a] <= pq.max[a]);
+                    if !inside {
+                        return Err(corrupt(c, "its box is not inside its parent's"));
+                    }
+                }
             }
         }
-        if seen.iter().any(|s| !s) {
+        if let Some(g) = (1..n as usize).find(|&g| !has_parent.get(g)) {
+            return Err(corrupt(g as u32, "no node names it as a child"));
+        }
+        if (0..self.header.triangle_count as usize).any(|t| !seen.get(t)) {
             return Err(RacError::Corrupt("a triangle id appears in no leaf"));
         }
         Ok(())
+    }
+}
+
+/// A fixed-size set of bits.
+struct BitSet(Vec<u64>);
+
+impl BitSet {
+    fn new(n: usize) -> Self {
+        Self(vec![0; n.div_ceil(64)])
+    }
+
+    /// Sets bit `i`; returns whether it was already set.
+    fn set(&mut self, i: usize) -> bool {
+        let (w, b) = (i / 64, 1u64 << (i % 64));
+        let was = self.0[w] & b != 0;
+        self.0[w] |= b;
+        was
+    }
+
+    fn get(&self, i: usize) -> bool {
+        self.0[i / 64] & (1u64 << (i % 64)) != 0
     }
 }
 

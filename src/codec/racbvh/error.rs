@@ -56,6 +56,14 @@ pub enum RacError {
         /// What was found.
         what: &'static str,
     },
+    /// A node breaks what queries rely on (found by `verify`).
+    #[error("node {node} is corrupted: {what} (the file is damaged: rebuild it)")]
+    CorruptNode {
+        /// The node.
+        node: u32,
+        /// What was found.
+        what: &'static str,
+    },
     /// Reading or writing a file failed.
     #[error("I/O error: {0}")]
     Io(String),
