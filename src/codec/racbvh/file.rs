@@ -342,6 +342,12 @@ impl RacBvh {
             if off < HEADER_LEN as u64 {
                 return Err(header_err(name, "the section overlaps the header"));
             }
+            if k > 0 && off < ranges[k - 1].end as u64 {
+                return Err(header_err(
+                    name,
+                    "the section overlaps the one before it (sections are stored in order)",
+                ));
+            }
             if end > b.len() as u64 {
                 return Err(RacError::Truncated {
                     section: name,
@@ -368,6 +374,16 @@ impl RacBvh {
             ));
         }
         let data = sections[1];
+        // Every node codes at least one bit (its structure symbol), so a
+        // node count the clusters cannot hold is a forgery; this also bounds
+        // what `verify` allocates per node by the file's size.
+        if (data.len() as u64) * 8 < u64::from(node_count) {
+            return Err(RacError::Truncated {
+                section: "clusters",
+                need: u64::from(node_count).div_ceil(8),
+                have: data.len() as u64,
+            });
+        }
         let mut meta = Vec::with_capacity(clusters as usize);
         let mut prev = 0u64;
         for c in 0..clusters {
