@@ -92,6 +92,22 @@ pub enum MeshError {
         /// The vertex number (0-based).
         vertex: usize,
     },
+    /// A coordinate is finite but too large for `f32` ray and contact tests.
+    #[error(
+        "{path}: vertex {vertex} has a coordinate of magnitude {value:e}; cbvh supports coordinates \
+         up to ±{limit:e} (beyond that f32 triangle tests overflow): scale the mesh down or move it \
+         nearer the origin"
+    )]
+    CoordinateTooLarge {
+        /// The file (or mesh source).
+        path: PathBuf,
+        /// The vertex number (0-based).
+        vertex: usize,
+        /// The largest magnitude among its coordinates.
+        value: f32,
+        /// The supported limit, [`MAX_COORDINATE`](super::MAX_COORDINATE).
+        limit: f32,
+    },
     /// The file holds no faces at all.
     #[error("{path}: the mesh has no faces; cbvh needs at least one triangle")]
     NoFaces {
