@@ -28,23 +28,25 @@ fn main() -> Result<(), String> {
         .map_err(|e| e.to_string())?;
     let bvh = build(&mesh, &BuildOptions::default(), &|_, _| {}).map_err(|e| e.to_string())?;
     let plain = PlainBvh::new(&bvh, &mesh).to_bytes();
-    let rac = RacBvh::encode(
-        &bvh,
-        &mesh,
-        &RacOptions {
-            cluster_nodes: 256,
-            ..Default::default()
-        },
-    )
-    .map_err(|e| e.to_string())?
-    .to_bytes();
+    let rac_opts = RacOptions {
+        cluster_nodes: 256,
+        ..Default::default()
+    };
+    let rac = RacBvh::encode(&bvh, &mesh, &rac_opts)
+        .map_err(|e| e.to_string())?
+        .to_bytes();
     println!(
         "statue of {} triangles, {cases} cases per random attack, seed {seed}",
         mesh.triangles.len()
     );
     let mut rows = Vec::new();
     for (codec, bytes) in [("plain", plain), ("racbvh", rac)] {
-        rows.extend(Subject::new(codec, bytes).run(cases as usize, seed));
+        let subject = Subject::new(codec, bytes);
+        rows.extend(subject.run(cases as usize, seed));
+        if codec == "racbvh" {
+            let n = (cases as usize / 10).max(10);
+            rows.push(subject.racbvh_corrupt_trees(&bvh, &mesh, &rac_opts, n, seed));
+        }
     }
     print_table(&rows);
     if rows.iter().all(|r| r.ok()) {

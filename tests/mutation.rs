@@ -18,19 +18,18 @@ fn every_codec_survives_the_mutation_harness() {
     let mesh = cbvh::scene::generate(cbvh::scene::Kind::Statue, 1500, 7, &mut |_, _| {}).unwrap();
     let bvh = build(&mesh, &BuildOptions::default(), &|_, _| {}).unwrap();
     let plain = PlainBvh::new(&bvh, &mesh).to_bytes();
-    let rac = RacBvh::encode(
-        &bvh,
-        &mesh,
-        &RacOptions {
-            cluster_nodes: 256,
-            ..Default::default()
-        },
-    )
-    .unwrap()
-    .to_bytes();
+    let rac_opts = RacOptions {
+        cluster_nodes: 256,
+        ..Default::default()
+    };
+    let rac = RacBvh::encode(&bvh, &mesh, &rac_opts).unwrap().to_bytes();
     let mut rows = Vec::new();
     for (codec, bytes) in [("plain", plain), ("racbvh", rac)] {
-        rows.extend(Subject::new(codec, bytes).run(60, 42));
+        let subject = Subject::new(codec, bytes);
+        rows.extend(subject.run(60, 42));
+        if codec == "racbvh" {
+            rows.push(subject.racbvh_corrupt_trees(&bvh, &mesh, &rac_opts, 24, 42));
+        }
     }
     print_table(&rows);
     for r in &rows {

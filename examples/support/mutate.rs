@@ -294,6 +294,60 @@ impl Subject {
         rows
     }
 
+    /// RACBVH files whose trees are structurally corrupt, written by the
+    /// real encoder (so every checksum and every bit is as the codec writes
+    /// it): an inner node naming one child twice, a node adopted by a
+    /// second parent (a DAG: the hang and million-triangle
+    /// overlap), or a child moved before its parent; cases the encoder
+    /// refuses are skipped.
+    pub fn racbvh_corrupt_trees(
+        &self,
+        bvh: &cbvh::CanonicalBvh,
+        mesh: &cbvh::Mesh,
+        opts: &cbvh::codec::racbvh::RacOptions,
+        n: usize,
+        seed: u64,
+    ) -> Row {
+        let mut rng = Rng(seed | 1);
+        let inner: Vec<usize> = (0..bvh.nodes.len())
+            .filter(|&i| !bvh.nodes[i].is_leaf())
+            .collect();
+        let mut cases = Vec::new();
+        for k in 0..n {
+            let mut t = bvh.clone();
+            let i = inner[rng.below(inner.len())];
+            let j = inner[rng.below(inner.len())];
+            match k % 3 {
+                0 => t.nodes[i].b = t.nodes[i].a,
+                1 if i < j => {
+                    // j's right child becomes i's left child too (two parents),
+                    // in a later cluster when possible.
+                    let c = t.nodes[j].b;
+                    if c as usize > i {
+                        t.nodes[i].a = c;
+                    }
+                }
+                _ => {
+                    // A deep DAG: every inner node on a path names its left
+                    // child twice.
+                    let mut x = i;
+                    for _ in 0..64 {
+                        if t.nodes[x].is_leaf() {
+                            break;
+                        }
+                        let a = t.nodes[x].a;
+                        t.nodes[x].b = a;
+                        x = a as usize;
+                    }
+                }
+            }
+            if let Ok(r) = RacBvh::encode(&t, mesh, opts) {
+                cases.push(r.to_bytes());
+            }
+        }
+        self.row("corrupt tree via the encoder (repeats, DAGs)", true, cases)
+    }
+
     fn reseal_header_only(&self, b: &mut [u8]) {
         let h = if self.codec == "plain" { 192 } else { 288 };
         let sum = xxh3_64(&b[..h - 8]);
