@@ -248,3 +248,112 @@ fn cli_and_sims_use_codec_files_with_no_mesh_anywhere() {
     assert!(ok);
     std::fs::remove_file(&bad).ok();
 }
+
+/// Bit flips in the mesh sections used to give silently wrong answers to a
+/// caller who did not call `verify`: the first triangle a query reads now
+/// checks the mesh sections once, so such a caller gets the original
+/// answers or a panic that names the damage, never other triangles.
+#[test]
+fn skipping_verify_never_gives_triangles_from_damaged_mesh_bytes() {
+    let mesh = statue(2000);
+    let bvh = build(&mesh, &BuildOptions::default(), &|_, _| {}).unwrap();
+    let rac = RacBvh::encode(&bvh, &mesh, &RacOptions::default()).unwrap();
+    let bytes = rac.to_bytes();
+    let dm = rac.decoded_mesh();
+    let want = hits(&rac, &dm);
+    // The mesh sections are the last two; the vertices' offset is in the
+    // section table (bytes 184 + 2 × 24 of the header).
+    let mesh_at = u64::from_le_bytes(bytes[232..240].try_into().unwrap()) as usize;
+    let mut rng = Rng(17);
+    let mut panics = 0;
+    for _ in 0..60 {
+        let mut bad = bytes.clone();
+        let at = mesh_at + rng.below(bytes.len() - mesh_at);
+        bad[at] ^= 1 << rng.below(8);
+        let Ok(t) = RacBvh::from_bytes(&bad, 1 << 20) else {
+            continue;
+        };
+        match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| hits(&t, &dm))) {
+            Ok(got) => assert_eq!(got, want, "flip at {at} changed answers silently"),
+            Err(e) => {
+                let msg = e.downcast_ref::<String>().cloned().unwrap_or_default();
+                assert!(msg.contains("damaged"), "{msg}");
+                assert!(t.verify().is_err());
+                panics += 1;
+            }
+        }
+    }
+    assert!(panics > 0);
+}
+
+/// A caterpillar tree (each inner node's right child is the next inner
+/// node) makes the chain of local roots' parents as long as the tree has
+/// clusters. Completing its deepest leaf from a cold cache used to recurse
+/// once per cluster (a crafted 3.2 M-node chain overflowed the stack); it
+/// is a loop now, and the whole chain decodes, verifies and answers.
+#[test]
+fn a_deep_chain_of_clusters_completes_without_recursion() {
+    use cbvh::build::{CanonicalBvh, CanonicalNode, LEAF_FLAG, Layout};
+    let n = 40_000usize; // triangles; 2n - 1 nodes, ~310 clusters of 256
+    let vertices: Vec<[f32; 3]> = (0..n)
+        .flat_map(|i| {
+            let x = i as f32;
+            [[x, 0.0, 0.0], [x + 0.5, 0.0, 0.0], [x, 1.0, 0.0]]
+        })
+        .collect();
+    let triangles: Vec<[u32; 3]> = (0..n as u32)
+        .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+        .collect();
+    let mesh = Mesh::new(vertices, triangles);
+    let leaf = |t: usize| CanonicalNode {
+        min: [t as f32, 0.0, 0.0],
+        max: [t as f32 + 0.5, 1.0, 0.0],
+        a: t as u32,
+        b: LEAF_FLAG | 1,
+    };
+    // Node 2k is inner k (covering triangles k..n), node 2k + 1 its left
+    // leaf (triangle k); the last inner node's right child is the leaf of
+    // triangle n - 1, at index 2n - 2.
+    let mut nodes = Vec::with_capacity(2 * n - 1);
+    let mut parents = Vec::with_capacity(2 * n - 1);
+    for k in 0..n - 1 {
+        let right = if k + 1 < n - 1 { 2 * k + 2 } else { 2 * n - 2 };
+        nodes.push(CanonicalNode {
+            min: [k as f32, 0.0, 0.0],
+            max: [n as f32 - 0.5, 1.0, 0.0],
+            a: (2 * k + 1) as u32,
+            b: right as u32,
+        });
+        parents.push(if k == 0 { u32::MAX } else { (2 * k - 2) as u32 });
+        nodes.push(leaf(k));
+        parents.push((2 * k) as u32);
+    }
+    nodes.push(leaf(n - 1));
+    parents.push((2 * n - 4) as u32);
+    let bvh = CanonicalBvh {
+        nodes,
+        parents,
+        leaf_triangles: (0..n as u32).collect(),
+        layout: Layout::DepthFirst,
+        max_leaf_triangles: 1,
+    };
+    let opts = RacOptions {
+        cluster_nodes: 256,
+        vertex_bits: None,
+        ..Default::default()
+    };
+    let rac = RacBvh::encode(&bvh, &mesh, &opts).unwrap();
+    let cold = RacBvh::from_bytes(&rac.to_bytes(), 1 << 30).unwrap();
+    // Run on a thread with a small stack: one frame per cluster would not fit.
+    std::thread::Builder::new()
+        .stack_size(64 << 10)
+        .spawn(move || {
+            let last = (2 * n - 2) as u32;
+            let b = cold.try_bv(last).unwrap();
+            assert!(b.min.x <= (n - 1) as f32 && b.max.x >= n as f32 - 0.5);
+            cold.verify().unwrap();
+        })
+        .unwrap()
+        .join()
+        .unwrap();
+}

@@ -521,12 +521,7 @@ impl RacBvh {
     /// O(nodes + triangles) without recursion; uses (and fills) the cache.
     pub fn verify(&self) -> Result<(), RacError> {
         let corrupt = |node: u32, what: &'static str| RacError::CorruptNode { node, what };
-        if self.mesh_hash != super::file::mesh_hash(&self.mesh) {
-            return Err(RacError::Corrupt(
-                "the mesh sections' checksum does not match",
-            ));
-        }
-        self.mesh.check()?;
+        self.check_mesh()?;
         let n = self.header.node_count;
         // Bit sets: a forged header's counts cannot make this allocate
         // more than the file (open checks a bit of cluster data per node).
@@ -655,6 +650,7 @@ impl RacBvh {
         if let Some(t) = hit {
             return t;
         }
+        self.expect_mesh();
         let t = self.mesh.triangle(id);
         TRIS.with(|c| {
             if let Ok(mut c) = c.try_borrow_mut() {

@@ -307,7 +307,7 @@ impl RacBvh {
         header.bv_bits = bv_bits;
         header.compression_seconds = start.elapsed().as_secs_f64();
         let mesh_hash = super::file::mesh_hash(&pmesh);
-        Ok(RacBvh::assemble(
+        let rac = RacBvh::assemble(
             header,
             super::file::Store::Owned(data),
             meta,
@@ -315,7 +315,10 @@ impl RacBvh {
             mesh_hash,
             crate::codec::common::MassProps::of_mesh(mesh),
             options.cache_budget_bytes,
-        ))
+        );
+        // Packed here, in memory: nothing to check before the first query.
+        let _ = rac.mesh_ok.set(Ok(()));
+        Ok(rac)
     }
 }
 

@@ -3,7 +3,7 @@
 use super::file;
 
 /// What can go wrong encoding, reading or decoding a RACBVH.
-#[derive(Debug, thiserror::Error, PartialEq)]
+#[derive(Clone, Debug, thiserror::Error, PartialEq)]
 pub enum RacError {
     /// An option is out of range.
     #[error("{what} = {value} is not allowed: use {expected}")]

@@ -200,7 +200,8 @@ impl RacBvh {
     /// Opens a container file out of core: the file is memory-mapped and
     /// clusters are read from it on demand (checked as
     /// [`from_bytes`](Self::from_bytes) does). The file must not be modified
-    /// or truncated while the tree is alive.
+    /// in place or truncated while the tree is alive; cbvh's own saves
+    /// replace a file atomically, which is safe.
     pub fn open(path: &Path, cache_budget_bytes: usize) -> Result<RacBvh, RacError> {
         let io = |e: std::io::Error| RacError::Io(format!("{}: {e}", path.display()));
         let file = std::fs::File::open(path).map_err(io)?;
