@@ -13,6 +13,34 @@ use cbvh::codec::plain::PlainBvh;
 use cbvh::codec::racbvh::{RacBvh, RacOptions};
 use mutate::{Subject, print_table};
 
+/// Counts the largest single allocation, so that a forged count that makes
+/// a reader or `verify` allocate far more than the file is caught.
+struct Largest;
+
+static LARGEST: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+// SAFETY: forwards every call to the system allocator unchanged; only
+// records the requested size.
+unsafe impl std::alloc::GlobalAlloc for Largest {
+    unsafe fn alloc(&self, l: std::alloc::Layout) -> *mut u8 {
+        LARGEST.fetch_max(l.size(), std::sync::atomic::Ordering::Relaxed);
+        // SAFETY: the caller's contract is passed on unchanged.
+        unsafe { std::alloc::System.alloc(l) }
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: std::alloc::Layout) {
+        // SAFETY: `p` came from `System.alloc` with layout `l`.
+        unsafe { std::alloc::System.dealloc(p, l) }
+    }
+    unsafe fn realloc(&self, p: *mut u8, l: std::alloc::Layout, size: usize) -> *mut u8 {
+        LARGEST.fetch_max(size, std::sync::atomic::Ordering::Relaxed);
+        // SAFETY: as for `realloc` on the system allocator.
+        unsafe { std::alloc::System.realloc(p, l, size) }
+    }
+}
+
+#[global_allocator]
+static ALLOC: Largest = Largest;
+
 #[test]
 fn every_codec_survives_the_mutation_harness() {
     let mesh = cbvh::scene::generate(cbvh::scene::Kind::Statue, 1500, 7, &mut |_, _| {}).unwrap();
@@ -23,6 +51,7 @@ fn every_codec_survives_the_mutation_harness() {
         ..Default::default()
     };
     let rac = RacBvh::encode(&bvh, &mesh, &rac_opts).unwrap().to_bytes();
+    let biggest_file = plain.len().max(rac.len());
     let mut rows = Vec::new();
     for (codec, bytes) in [("plain", plain), ("racbvh", rac)] {
         let subject = Subject::new(codec, bytes);
@@ -32,6 +61,13 @@ fn every_codec_survives_the_mutation_harness() {
         }
     }
     print_table(&rows);
+    // No case allocated more than the largest file (plus the decoded mesh
+    // and a cluster's working set, both bounded by the original).
+    let largest = LARGEST.load(std::sync::atomic::Ordering::Relaxed);
+    assert!(
+        largest <= 2 * biggest_file,
+        "an allocation of {largest} bytes for files of at most {biggest_file}"
+    );
     for r in &rows {
         assert!(r.ok(), "{r:?}");
         assert_eq!(

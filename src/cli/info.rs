@@ -70,9 +70,11 @@ pub fn run(a: InfoArgs) -> CliResult {
 fn codec_info(a: &InfoArgs) -> CliResult {
     let file_bytes = std::fs::metadata(&a.file)?.len();
     let t0 = Instant::now();
+    // A cache that holds the whole decompressed tree (1 GiB at most), so
+    // verify decodes each cluster once.
     let opts = cbvh::parry::OpenOptions {
         verify: false,
-        ..Default::default()
+        cache_budget_bytes: 1 << 30,
     };
     let codec = cbvh::parry::open_codec(&a.file, &opts)?;
     let open_s = t0.elapsed().as_secs_f64();
