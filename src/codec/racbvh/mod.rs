@@ -161,6 +161,7 @@ pub mod file;
 pub mod mesh;
 pub mod node;
 mod tree;
+mod verify;
 
 pub use cache::CacheStats;
 pub use decode::RacNode;
