@@ -20,10 +20,10 @@ struct Args {
     /// Triangles of the generated turbine.
     #[arg(long, default_value_t = 100_000)]
     turbine_tris: usize,
-    /// Use this mesh file as the statue instead (any units and offset: it is scaled and placed).
+    /// Use this mesh file (or cbvh codec file) as the statue instead (any units and offset: it is scaled and placed).
     #[arg(long)]
     statue: Option<PathBuf>,
-    /// Use this mesh file as the turbine instead.
+    /// Use this mesh file (or cbvh codec file) as the turbine instead.
     #[arg(long)]
     turbine: Option<PathBuf>,
     /// Axis of the generated turbine: `x` stands it upright like the CAD
@@ -38,6 +38,7 @@ struct Args {
 fn main() -> ExitCode {
     let a = Args::parse();
     let run = || -> Result<(), String> {
+        common::validate(&a.sim)?;
         common::init_threads(&a.sim)?;
         // Reject bad shape names before generating meshes.
         common::run_specs(&a.sim)?;

@@ -20,10 +20,10 @@ struct Args {
     /// Triangles of the generated plant.
     #[arg(long, default_value_t = 200_000)]
     plant_tris: usize,
-    /// Use this mesh file as the robot instead.
+    /// Use this mesh file (or cbvh codec file) as the robot instead.
     #[arg(long)]
     robot: Option<PathBuf>,
-    /// Use this mesh file as the plant instead.
+    /// Use this mesh file (or cbvh codec file) as the plant instead.
     #[arg(long)]
     plant: Option<PathBuf>,
     #[command(flatten)]
@@ -38,6 +38,7 @@ fn main() -> ExitCode {
         a.sim.width_fraction = 0.1;
     }
     let run = || -> Result<(), String> {
+        common::validate(&a.sim)?;
         common::init_threads(&a.sim)?;
         // Reject bad shape names before generating meshes.
         common::run_specs(&a.sim)?;

@@ -16,6 +16,8 @@
 //! - [`render`]: a Whitted-style ray tracer over any cursor (and parry's `TriMesh`).
 //! - [`plot`]: PNG line plots for the sims.
 //! - [`geom`]: the small geometry types (glam-based) shared by all of them.
+//! - [`logger`]: a minimal stderr logger for the binaries (the library logs
+//!   warnings through the `log` crate).
 #![warn(missing_docs)]
 
 pub mod build;
@@ -24,6 +26,7 @@ pub mod contact;
 pub mod cursor;
 pub mod geom;
 mod hash;
+pub mod logger;
 pub mod mesh;
 pub mod parry;
 pub mod plot;

@@ -19,7 +19,8 @@ struct Cli {
 enum Command {
     /// Generate a deterministic procedural mesh and write it as PLY or OBJ.
     Gen(cli::generate::GenArgs),
-    /// Print a mesh file's triangles, vertices, bounds, degenerate triangles and boundary edges.
+    /// Print a mesh file's triangles, vertices, bounds, degenerate triangles and boundary edges,
+    /// or a codec file's header, sizes per part and verification.
     Info(cli::info::InfoArgs),
     /// Build a BVH with a codec and report its size and build time.
     Build(cli::build::BuildArgs),
@@ -28,6 +29,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    cbvh::logger::init_stderr();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Gen(a) => cli::generate::run(a),

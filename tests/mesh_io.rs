@@ -212,6 +212,19 @@ fn loads_ply_ascii() {
     assert_sample(&load_file("ply-ascii", "a.PLY", PLY_ASCII.as_bytes()).unwrap());
 }
 
+/// A Blender export had a header line without the `comment` keyword
+/// ("Created by Blender ..."); assimp reads it, so cbvh skips it with a
+/// warning instead of rejecting the file.
+#[test]
+fn ply_header_line_without_keyword_is_skipped() {
+    let blender = PLY_ASCII.replace(
+        "comment a square and a triangle\n",
+        "Created by Blender 3.6.0 - www.blender.org\n",
+    );
+    assert!(blender.contains("Created by"));
+    assert_sample(&load_bytes(blender.as_bytes(), Format::Ply, Path::new("b.ply")).unwrap());
+}
+
 #[test]
 fn loads_ply_binary_both_endians() {
     assert_sample(&load_file("ply-le", "le.ply", &ply_binary(false)).unwrap());
@@ -453,7 +466,7 @@ fn index_out_of_range_names_face_index_and_count() {
             err,
             MeshError::IndexOutOfRange {
                 face: 1,
-                index: 5,
+                index: 6,
                 vertices: 5,
                 place: Place::Line(16),
                 ..
@@ -461,6 +474,8 @@ fn index_out_of_range_names_face_index_and_count() {
         ),
         "{err:?}"
     );
+    // The message quotes the index as the file writes it (1-based).
+    assert!(err.to_string().contains("vertex index 6,"), "{err}");
     let bad = OBJ.replace("f -4//1 -1//1 -3//1", "f -9 -1 -3");
     let err = load_bytes(bad.as_bytes(), Format::Obj, Path::new("bad.obj")).unwrap_err();
     assert!(err.to_string().contains("relative index -9"), "{err}");

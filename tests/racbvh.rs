@@ -324,7 +324,7 @@ fn container_round_trip_and_corruption() {
         RacBvh::from_bytes(b"nonsense bytes", 1).unwrap_err(),
         RacError::Truncated {
             section: "header",
-            need: 232,
+            need: 288,
             have: 14
         }
     );

@@ -169,3 +169,60 @@ fn sims_reject_bad_flags_with_a_message() {
     assert!(!ok);
     assert!(stderr.contains("power of two"), "{stderr}");
 }
+
+/// Every flag is checked before the first shape runs: each of these used to
+/// fail late (after the runs), run with nonsense, or be impossible to give.
+#[test]
+fn sims_check_every_flag_before_the_first_run() {
+    let small = [
+        "--robot-tris",
+        "1000",
+        "--plant-tris",
+        "2000",
+        "--steps",
+        "1",
+    ];
+    let bin = env!("CARGO_BIN_EXE_robot-in-plant");
+    let reject = |extra: &[&str], want: &str| {
+        let args: Vec<&str> = small.iter().chain(extra).copied().collect();
+        let (ok, stderr) = run(bin, &args);
+        assert!(!ok, "{extra:?} was accepted");
+        assert!(stderr.contains(want), "{extra:?}: {stderr}");
+        // Rejected before any mesh was made or any shape ran.
+        assert!(
+            !stderr.contains("dropping"),
+            "{extra:?} ran first: {stderr}"
+        );
+    };
+    reject(&["--width-fraction", "0"], "--width-fraction 0 must be");
+    reject(&["--width-fraction", "NaN"], "--width-fraction NaN must be");
+    reject(&["--gap", "-1"], "--gap -1 must be");
+    reject(&["--cluster-nodes", "3"], "power of two");
+    reject(&["--offset", "0.1"], "is not X,Z");
+    reject(&["--offset", "nan,0"], "not a finite number");
+    reject(
+        &["--plot", "/nonexistent-dir/x.png"],
+        "--plot /nonexistent-dir/x.png",
+    );
+    reject(&["--json", "/nonexistent-dir/x.json"], "cannot write there");
+    // The documented X,Z form, with a negative value, runs.
+    let json = temp("offset.json");
+    let args: Vec<&str> = small
+        .iter()
+        .copied()
+        .chain([
+            "--offset",
+            "-0.2,0.1",
+            "--shapes",
+            "plain",
+            "--json",
+            json.to_str().unwrap(),
+        ])
+        .collect();
+    let (ok, stderr) = run(bin, &args);
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    std::fs::remove_file(&json).ok();
+    assert_eq!(v["runs"].as_array().unwrap().len(), 1);
+}

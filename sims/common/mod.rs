@@ -44,10 +44,10 @@ pub struct SimArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Width of the dropped mesh as a fraction of the base's width.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub width_fraction: f32,
     /// Gap above the base's top, as a fraction of the dropped mesh's height.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
     pub gap: f32,
     /// Ray-trace the final frame (of the last run) to this PNG.
     #[arg(long)]
@@ -59,9 +59,110 @@ pub struct SimArgs {
     /// Nodes per cluster of the racbvh shapes (power of two, 256 to 16384).
     #[arg(long, default_value_t = 4096)]
     pub cluster_nodes: u32,
-    /// Horizontal offset of the drop point, as fractions of the base width: X,Z.
-    #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [0.0, 0.0])]
-    pub offset: Vec<f32>,
+    /// Horizontal offset of the drop point, as fractions of the base width:
+    /// X,Z (e.g. `--offset -0.2,0.1`).
+    #[arg(
+        long,
+        default_value = "0,0",
+        allow_hyphen_values = true,
+        value_name = "X,Z"
+    )]
+    pub offset: Offset,
+}
+
+/// `--offset X,Z`: two comma-separated numbers, either may be negative.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Offset(pub [f32; 2]);
+
+impl std::str::FromStr for Offset {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+        let [x, z] = parts[..] else {
+            return Err(format!(
+                "{s:?} is not X,Z: give two comma-separated numbers, e.g. -0.2,0.1"
+            ));
+        };
+        let num = |t: &str| {
+            t.parse::<f32>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| format!("{t:?} in {s:?} is not a finite number"))
+        };
+        Ok(Offset([num(x)?, num(z)?]))
+    }
+}
+
+impl std::fmt::Display for Offset {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{},{}", self.0[0], self.0[1])
+    }
+}
+
+/// Checks every flag before anything runs, so that a bad value never ends
+/// a run half-way (or, worse, runs and reports nonsense): steps, width
+/// fraction, gap and offset finite and in range, the cluster size, the
+/// thread count, and that the JSON, plot and render files can be written.
+pub fn validate(args: &SimArgs) -> Result<(), String> {
+    if args.steps == 0 {
+        return Err("--steps must be at least 1".into());
+    }
+    if args.threads == Some(0) {
+        return Err("--threads must be at least 1".into());
+    }
+    if args.shapes.is_empty() {
+        return Err("--shapes names no shape".into());
+    }
+    if !(args.width_fraction.is_finite() && args.width_fraction > 0.0) {
+        return Err(format!(
+            "--width-fraction {} must be a finite number above 0 (0.5: half the base's width)",
+            args.width_fraction
+        ));
+    }
+    if !(args.gap.is_finite() && args.gap >= 0.0) {
+        return Err(format!(
+            "--gap {} must be a finite number, 0 or more (a fraction of the dropped mesh's height)",
+            args.gap
+        ));
+    }
+    if args.offset.0.iter().any(|v| !v.is_finite()) {
+        return Err(format!(
+            "--offset {} must be two finite numbers",
+            args.offset
+        ));
+    }
+    let c = args.cluster_nodes;
+    if !(256..=16384).contains(&c) || !c.is_power_of_two() {
+        return Err(format!(
+            "--cluster-nodes {c} is not allowed: use a power of two in 256..=16384"
+        ));
+    }
+    for (flag, path) in [
+        ("--json", &args.json),
+        ("--plot", &args.plot),
+        ("--render", &args.render),
+    ] {
+        if let Some(p) = path {
+            check_writable(flag, p)?;
+        }
+    }
+    Ok(())
+}
+
+/// Whether `path` can be written: opened for writing (created and removed
+/// again if it did not exist), without touching an existing file's bytes.
+fn check_writable(flag: &str, path: &std::path::Path) -> Result<(), String> {
+    let existed = path.exists();
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(path)
+        .map_err(|e| format!("{flag} {}: cannot write there: {e}", path.display()))?;
+    if !existed {
+        std::fs::remove_file(path).ok();
+    }
+    Ok(())
 }
 
 /// The runs `--shapes` and `--contacts` ask for, in order: a bare cbvh
@@ -93,7 +194,8 @@ pub fn run_specs(args: &SimArgs) -> Result<Vec<RunSpec>, String> {
     Ok(specs)
 }
 
-/// A mesh from a file, or generated.
+/// A mesh from a file (a mesh, or a cbvh codec file's stored mesh), or
+/// generated.
 pub fn mesh_from(
     file: &Option<PathBuf>,
     kind: Kind,
@@ -102,6 +204,16 @@ pub fn mesh_from(
     what: &str,
 ) -> Result<(Mesh, String), String> {
     match file {
+        // A cbvh codec file (recognised by its magic): opened, verified, and
+        // its stored mesh used; each shape is then built from it.
+        Some(p) if cbvh::parry::codec_file_kind(p).is_some() => {
+            let codec = cbvh::parry::open_codec(p, &cbvh::parry::OpenOptions::default())
+                .map_err(|e| e.to_string())?;
+            Ok((
+                codec.decoded_mesh(),
+                format!("{} ({} file)", p.display(), codec.name()),
+            ))
+        }
         Some(p) => cbvh::mesh::load(p)
             .map(|m| (m, p.display().to_string()))
             .map_err(|e| e.to_string()),
@@ -140,6 +252,7 @@ fn bar(msg: &str, total: u64) -> ProgressBar {
 /// Sizes rayon's global pool from `--threads`. Call it first: mesh
 /// generation and loading already use the pool.
 pub fn init_threads(args: &SimArgs) -> Result<(), String> {
+    cbvh::logger::init_stderr();
     match args.threads {
         Some(0) => Err("--threads must be at least 1".into()),
         Some(t) => rayon::ThreadPoolBuilder::new()
@@ -165,7 +278,7 @@ pub fn run_sim(
     let placement = Placement {
         width_fraction: args.width_fraction,
         gap_fraction: args.gap,
-        offset_fraction: [args.offset[0], args.offset[1]],
+        offset_fraction: args.offset.0,
     };
     let scale = droptest::place(&mut dropped, &base, &placement);
     let (dlo, dhi) = dropped.bounds().unwrap_or(([0.0; 3], [0.0; 3]));

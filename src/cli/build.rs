@@ -53,8 +53,9 @@ pub struct BuildArgs {
     /// RACBVH: bits per quantized vertex coordinate; 0 keeps vertices as f32.
     #[arg(long, default_value_t = 16)]
     pub vertex_bits: u32,
-    /// RACBVH: write the compressed container to this file (reopen it with
-    /// `cbvh::codec::racbvh::RacBvh::open`).
+    /// Write the codec's self-contained file (plain or racbvh) here; `cbvh
+    /// info`, `cbvh render`, `cbvh build` and the sims open it like a mesh,
+    /// and `cbvh::parry::open_codec` / `CbvhShape::open` in a program.
     #[arg(short, long)]
     pub output: Option<std::path::PathBuf>,
     /// Print JSON instead of text.
@@ -92,6 +93,12 @@ fn build_with_progress(
 
 /// Runs `cbvh build`.
 pub fn run(a: BuildArgs) -> CliResult {
+    if a.output.is_some() && a.codec == CodecName::Parry {
+        return Err(
+            "--codec parry has no cbvh file to write: choose --codec plain or racbvh with -o"
+                .into(),
+        );
+    }
     let (mesh, name) = a.source.load()?;
     let tris = mesh.triangle_count();
     let mesh_rss = peak_rss_bytes();
@@ -104,6 +111,11 @@ pub fn run(a: BuildArgs) -> CliResult {
                 let nodes = bvh.node_count();
                 let plain = PlainBvh::new(&bvh, &mesh);
                 drop(bvh);
+                if let Some(path) = &a.output {
+                    plain.save(path)?;
+                    // Read it back so that a bad file is caught here.
+                    PlainBvh::open(path)?.verify()?;
+                }
                 (
                     plain.bytes_by_part(),
                     Some(a.layout),

@@ -35,9 +35,13 @@ pub fn progress_bar(message: &str, total: u64) -> ProgressBar {
 /// Where a subcommand's mesh comes from: a file, or a generator.
 #[derive(clap::Args, Debug, Clone)]
 pub struct MeshSource {
-    /// A mesh file (.off, .ply, .obj, .stl).
+    /// A mesh file (.off, .ply, .obj, .stl), or a cbvh codec file written by
+    /// `cbvh build ... -o FILE` (recognised by its content, whatever its name).
     #[arg(required_unless_present = "gen_kind", conflicts_with = "gen_kind")]
     pub mesh: Option<PathBuf>,
+    /// Codec files: skip `verify` when opening (only for files you wrote).
+    #[arg(long)]
+    pub no_verify: bool,
     /// Generate the mesh instead: statue, turbine, plant, robot or isosurface.
     #[arg(long = "gen", value_name = "KIND")]
     pub gen_kind: Option<Kind>,
@@ -50,9 +54,35 @@ pub struct MeshSource {
 }
 
 impl MeshSource {
-    /// Loads or generates the mesh, with a progress bar for generation.
-    /// Returns the mesh and a name for reports.
+    /// Loads a mesh or opens a codec file (chosen by the file's magic), or
+    /// generates a mesh.
+    pub fn load_any(&self) -> Result<Loaded, Box<dyn std::error::Error>> {
+        if let Some(path) = &self.mesh
+            && cbvh::parry::codec_file_kind(path).is_some()
+        {
+            let opts = cbvh::parry::OpenOptions {
+                verify: !self.no_verify,
+                cache_budget_bytes: 1 << 30,
+            };
+            let codec = cbvh::parry::open_codec(path, &opts)?;
+            return Ok(Loaded::Codec(codec, path.display().to_string()));
+        }
+        let (mesh, name) = self.load()?;
+        Ok(Loaded::Mesh(mesh, name))
+    }
+
+    /// Loads or generates the mesh, with a progress bar for generation;
+    /// a codec file gives its stored mesh. Returns the mesh and a name for
+    /// reports.
     pub fn load(&self) -> Result<(Mesh, String), Box<dyn std::error::Error>> {
+        if let Some(path) = &self.mesh
+            && cbvh::parry::codec_file_kind(path).is_some()
+        {
+            let Loaded::Codec(codec, name) = self.load_any()? else {
+                unreachable!("a codec file loads as a codec")
+            };
+            return Ok((codec.decoded_mesh(), name));
+        }
         if let Some(kind) = self.gen_kind {
             let tris = self.tris.unwrap_or_else(|| cbvh::scene::default_tris(kind));
             let mesh = generate(kind, tris, self.seed)?;
@@ -65,6 +95,15 @@ impl MeshSource {
             Ok((cbvh::mesh::load(path)?, path.display().to_string()))
         }
     }
+}
+
+/// A loaded input: a mesh, or an opened (and verified) codec file; each
+/// with a name for reports.
+pub enum Loaded {
+    /// A mesh (loaded or generated).
+    Mesh(Mesh, String),
+    /// A codec file.
+    Codec(cbvh::parry::Codec, String),
 }
 
 /// Generates a mesh with a progress bar on a terminal.

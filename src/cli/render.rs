@@ -13,7 +13,7 @@ use cbvh::render::{
     render_turntable, save_animation,
 };
 
-use super::{CliResult, MeshSource, progress_bar};
+use super::{CliResult, Loaded, MeshSource, progress_bar};
 
 /// The structures `cbvh render` can trace.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -36,6 +36,12 @@ impl RenderCodec {
             RenderCodec::Racbvh => "racbvh",
         }
     }
+
+    fn from_name(name: &str) -> Option<Self> {
+        [Self::Plain, Self::Parry, Self::Racbvh]
+            .into_iter()
+            .find(|c| c.name() == name)
+    }
 }
 
 /// Arguments of `cbvh render`.
@@ -43,9 +49,11 @@ impl RenderCodec {
 pub struct RenderArgs {
     #[command(flatten)]
     pub source: MeshSource,
-    /// The structure to trace rays through.
-    #[arg(long, value_enum, default_value_t = RenderCodec::Plain)]
-    pub codec: RenderCodec,
+    /// The structure to trace rays through (default: a codec file's own
+    /// codec, plain for a mesh; a codec file given another codec is
+    /// re-encoded from its stored mesh).
+    #[arg(long, value_enum)]
+    pub codec: Option<RenderCodec>,
     /// Node layout of cbvh codecs: depth-first, van-emde-boas or cache-efficient.
     #[arg(long, default_value = "depth-first")]
     pub layout: Layout,
@@ -180,17 +188,31 @@ fn turntable_path(a: &RenderArgs) -> PathBuf {
 type Rendered = (Image, RenderStats, Option<(Vec<Image>, RenderStats)>);
 
 /// Runs `cbvh render`.
-pub fn run(a: RenderArgs) -> CliResult {
+pub fn run(mut a: RenderArgs) -> CliResult {
     check_output(&a.output, &["png"])?;
     if a.turntable.is_some() {
         check_output(&turntable_path(&a), &["png", "gif"])?;
     }
-    let (mesh, name) = a.source.load()?;
-    let tris = mesh.triangle_count();
-    mesh.validate(&name)?;
     let t0 = Instant::now();
-    let target = make_target(a.codec, &mesh, a.layout)?;
+    let (mesh, name, target) = match a.source.load_any()? {
+        Loaded::Codec(codec, name) if a.codec.is_none_or(|c| c.name() == codec.name()) => {
+            // The file's own codec, as stored: nothing is rebuilt.
+            a.codec = RenderCodec::from_name(codec.name());
+            (codec.decoded_mesh(), name, codec.into_ray_target())
+        }
+        loaded => {
+            let (mesh, name) = match loaded {
+                Loaded::Codec(codec, name) => (codec.decoded_mesh(), name),
+                Loaded::Mesh(mesh, name) => (mesh, name),
+            };
+            mesh.validate(&name)?;
+            let codec = *a.codec.get_or_insert(RenderCodec::Plain);
+            let target = make_target(codec, &mesh, a.layout)?;
+            (mesh, name, target)
+        }
+    };
     let build_seconds = t0.elapsed().as_secs_f64();
+    let tris = mesh.triangle_count();
     let normals = VertexNormals::from_mesh(&mesh);
     drop(mesh);
     let scene = Scene::single(target.as_ref(), Some(&normals));
@@ -267,6 +289,7 @@ fn report(
     s: &RenderStats,
     turntable: Option<(&RenderStats, usize, &PathBuf)>,
 ) -> CliResult {
+    let codec = a.codec.unwrap_or(RenderCodec::Plain);
     let rays = s.rays.total();
     let steps = per_ray(target, s.rays.traversal.nodes_visited, rays);
     let prims = per_ray(target, s.rays.traversal.primitive_tests, rays);
@@ -274,8 +297,8 @@ fn report(
         let mut v = serde_json::json!({
             "mesh": name,
             "triangles": tris,
-            "codec": a.codec.name(),
-            "layout": (a.codec != RenderCodec::Parry).then(|| a.layout.name()),
+            "codec": codec.name(),
+            "layout": (codec != RenderCodec::Parry).then(|| a.layout.name()),
             "width": a.width,
             "height": a.height,
             "lights": a.lights,
@@ -317,7 +340,7 @@ fn report(
         println!("triangles         {tris}");
         println!(
             "codec             {} ({:.2} B/triangle, built in {build_seconds:.3} s)",
-            a.codec.name(),
+            codec.name(),
             target.bytes_per_triangle()
         );
         println!(

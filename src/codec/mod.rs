@@ -7,7 +7,10 @@
 //! - [`racbvh`]: RACBVH (Kim et al. 2010): clusters of consecutive nodes,
 //!   front-based structure coding, predicted quantized boxes, a dictionary
 //!   coder and a cache of decompressed clusters.
+//! - [`common`]: what several codecs share (atomic saves, stored mass
+//!   properties, file magic).
 
+pub mod common;
 pub mod plain;
 pub mod racbvh;
 

@@ -76,7 +76,8 @@ pub enum MeshError {
         place: Place,
         /// The face number (0-based, in file order).
         face: usize,
-        /// The offending index.
+        /// The offending index, as the file writes it (1-based in OBJ,
+        /// 0-based in OFF and PLY).
         index: u64,
         /// How many vertices the mesh has.
         vertices: usize,
@@ -90,6 +91,22 @@ pub enum MeshError {
         place: Place,
         /// The vertex number (0-based).
         vertex: usize,
+    },
+    /// A coordinate is finite but too large for `f32` ray and contact tests.
+    #[error(
+        "{path}: vertex {vertex} has a coordinate of magnitude {value:e}; cbvh supports coordinates \
+         up to ±{limit:e} (beyond that f32 triangle tests overflow): scale the mesh down or move it \
+         nearer the origin"
+    )]
+    CoordinateTooLarge {
+        /// The file (or mesh source).
+        path: PathBuf,
+        /// The vertex number (0-based).
+        vertex: usize,
+        /// The largest magnitude among its coordinates.
+        value: f32,
+        /// The supported limit, [`MAX_COORDINATE`](super::MAX_COORDINATE).
+        limit: f32,
     },
     /// The file holds no faces at all.
     #[error("{path}: the mesh has no faces; cbvh needs at least one triangle")]

@@ -21,6 +21,14 @@ pub use io::{
 };
 pub use stats::{MeshStats, boundary_edges, degenerate_triangles};
 
+/// The largest coordinate magnitude cbvh accepts. Ray/triangle tests
+/// multiply three coordinate differences, and `f32` overflows near 3.4e38:
+/// beyond about 1e12 a scene would render empty or miss contacts without an
+/// error, so [`Mesh::validate`] (run by the builder, the CLI and the sims
+/// right after loading) rejects larger coordinates; loaders read them as
+/// written.
+pub const MAX_COORDINATE: f32 = 1e12;
+
 /// An indexed triangle mesh.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
@@ -81,7 +89,8 @@ impl Mesh {
     }
 
     /// Checks what every consumer of a mesh relies on: at least one
-    /// triangle, every index in range, every coordinate finite.
+    /// triangle, every index in range, every coordinate finite and at most
+    /// [`MAX_COORDINATE`] in magnitude.
     /// `source` names the mesh in the error (a file path, or a generator).
     pub fn validate(&self, source: &str) -> Result<(), MeshError> {
         if let Some(vertex) = self
@@ -93,6 +102,20 @@ impl Mesh {
                 path: source.into(),
                 place: Place::Unknown,
                 vertex,
+            });
+        }
+        if let Some(vertex) = self
+            .vertices
+            .iter()
+            .position(|v| v.iter().any(|c| c.abs() > MAX_COORDINATE))
+        {
+            return Err(MeshError::CoordinateTooLarge {
+                path: source.into(),
+                vertex,
+                value: self.vertices[vertex]
+                    .into_iter()
+                    .fold(0.0, |m: f32, c| m.max(c.abs())),
+                limit: MAX_COORDINATE,
             });
         }
         if self.triangles.is_empty() {

@@ -15,6 +15,9 @@
 //!   through parry: at scan resolution a resting contact touches hundreds of
 //!   thousands of pairs, and one manifold each floods the narrow phase and
 //!   the solver.
+//! - [`open_codec`]: any codec's self-contained file, chosen by its magic,
+//!   opened (and verified) into a [`Codec`] or, through [`CbvhShape::open`],
+//!   a shape that needs no mesh.
 //! - [`droptest`]: the rapier drop test behind the sims, timing the narrow
 //!   phase per step through [`timed::Timed`].
 //! - [`trimesh`]: parry's own `TriMesh` built from a [`Mesh`](crate::Mesh),
@@ -28,6 +31,7 @@ pub mod cbvh_convex;
 pub mod cbvh_trimesh;
 mod dispatcher;
 pub mod droptest;
+mod open;
 pub mod patches;
 pub mod raycast_target;
 pub mod shape;
@@ -36,6 +40,7 @@ pub mod trimesh;
 mod workspace;
 
 pub use dispatcher::Dispatcher;
+pub use open::{CodecFileError, OpenOptions, codec_file_kind, open_codec};
 pub use patches::{ContactCounters, ContactMode};
 pub use shape::{CbvhShape, Codec, pose_from_parry};
 pub use trimesh::{parry_trimesh, trimesh_bytes_by_part};

@@ -19,6 +19,7 @@ use parry3d::shape::{
 
 use crate::build::{BuildError, BuildOptions, build};
 use crate::codec::ByteSize;
+use crate::codec::common::MassProps;
 use crate::codec::plain::PlainBvh;
 use crate::codec::racbvh::{RacBvh, RacOptions};
 use crate::cursor::{NodeCursor, TraversalStats};
@@ -55,6 +56,73 @@ impl Codec {
             Codec::Plain(c) => c.bytes_by_part(),
             Codec::Racbvh(c) => c.bytes_by_part(),
         }
+    }
+
+    /// Mass properties at density 1, as stored with the codec.
+    pub fn mass(&self) -> MassProps {
+        match self {
+            Codec::Plain(c) => c.mass(),
+            Codec::Racbvh(c) => c.mass(),
+        }
+    }
+
+    /// Proves everything a query relies on (see each codec's `verify`).
+    pub fn verify(&self) -> Result<(), String> {
+        match self {
+            Codec::Plain(c) => c.verify().map_err(|e| e.to_string()),
+            Codec::Racbvh(c) => c.verify().map_err(|e| e.to_string()),
+        }
+    }
+
+    /// Writes the codec's self-contained file (atomically).
+    pub fn save(&self, path: &std::path::Path) -> Result<(), String> {
+        match self {
+            Codec::Plain(c) => c.save(path).map_err(|e| e.to_string()),
+            Codec::Racbvh(c) => c.save(path).map_err(|e| e.to_string()),
+        }
+    }
+
+    /// The mesh as stored (quantized vertices decoded), triangles in their
+    /// original order.
+    pub fn decoded_mesh(&self) -> Mesh {
+        match self {
+            Codec::Plain(c) => Mesh::new(c.vertices().to_vec(), c.triangles().to_vec()),
+            Codec::Racbvh(c) => c.decoded_mesh(),
+        }
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        with_cursor!(self, |c| c.triangle_count())
+    }
+
+    /// The codec as a ray-tracing target (for the renderer), smooth-shaded
+    /// through its vertex indices.
+    pub fn into_ray_target(self) -> Box<dyn crate::render::RayTarget> {
+        use crate::render::CursorTarget;
+        match self {
+            Codec::Plain(c) => Box::new(CursorTarget::plain(c)),
+            Codec::Racbvh(c) => Box::new(CursorTarget::racbvh(*c)),
+        }
+    }
+
+    /// The codec's header fields, for `cbvh info`.
+    pub fn header_fields(&self) -> Vec<(&'static str, String)> {
+        let mut out = vec![("codec", self.name().to_string())];
+        match self {
+            Codec::Plain(c) => {
+                out.push(("nodes", c.nodes().len().to_string()));
+                out.push(("vertices", c.vertices().len().to_string()));
+            }
+            Codec::Racbvh(c) => out.extend(c.header_fields()),
+        }
+        out.push(("triangles", self.triangle_count().to_string()));
+        let m = self.mass();
+        out.push((
+            "mass (density 1)",
+            format!("{} at ({}, {}, {})", m.mass, m.com[0], m.com[1], m.com[2]),
+        ));
+        out
     }
 }
 
@@ -105,6 +173,19 @@ impl std::fmt::Debug for CbvhShape {
     }
 }
 
+/// parry's mass properties from the stored ones (parry's own
+/// `with_inertia_matrix`, as its `from_trimesh` ends).
+pub fn parry_mass(m: &MassProps) -> MassProperties {
+    if m.mass == 0.0 {
+        return MassProperties::default();
+    }
+    MassProperties::with_inertia_matrix(
+        Vector::from_array(m.com),
+        m.mass,
+        parry3d::math::Matrix::from_cols_array(&m.inertia),
+    )
+}
+
 /// Converts a parry pose into cbvh's.
 #[inline]
 pub fn pose_from_parry(p: &PPose) -> Pose {
@@ -147,23 +228,40 @@ impl CbvhShape {
         Ok(Self::from_codec(Codec::Racbvh(Box::new(codec)), mesh))
     }
 
-    /// Wraps an already encoded codec built from `mesh`. The mesh is used
-    /// once, for the mass properties (signed-volume integration).
+    /// Wraps an already encoded codec built from `mesh`. The codec carries
+    /// its own mass properties, so the mesh is only checked against it (a
+    /// warning is logged if the triangle counts differ); prefer
+    /// [`CbvhShape::new`].
     pub fn from_codec(codec: Codec, mesh: &Mesh) -> Self {
-        let vertices: Vec<Vector> = mesh
-            .vertices
-            .iter()
-            .map(|v| Vector::from_array(*v))
-            .collect();
-        let unit_mass = if mesh.triangles.is_empty() {
-            MassProperties::default()
-        } else {
-            MassProperties::from_trimesh(1.0, &vertices, &mesh.triangles)
-        };
+        if mesh.triangles.len() != codec.triangle_count() {
+            log::warn!(
+                "cbvh: from_codec was given a mesh of {} triangles for a codec of {}; \
+                 the codec's own triangles and mass properties are used",
+                mesh.triangles.len(),
+                codec.triangle_count()
+            );
+        }
+        Self::new(codec)
+    }
+
+    /// Opens any cbvh codec file (chosen by its magic) as a shape, verified
+    /// (see [`open_codec`](super::open_codec)). No mesh is needed: the file
+    /// holds the mass properties.
+    pub fn open(path: &std::path::Path) -> Result<Self, super::CodecFileError> {
+        Ok(Self::new(super::open_codec(
+            path,
+            &super::OpenOptions::default(),
+        )?))
+    }
+
+    /// Wraps an encoded codec (built, or opened from its file), with the
+    /// mass properties it stores.
+    pub fn new(codec: Codec) -> Self {
+        let unit_mass = parry_mass(&codec.mass());
         let aabb = with_cursor!(&codec, |c| c.root().1);
         Self {
             inner: Arc::new(Inner {
-                triangles: mesh.triangles.len(),
+                triangles: codec.triangle_count(),
                 codec,
                 aabb,
                 unit_mass,
@@ -370,9 +468,9 @@ impl CompositeShape for CbvhShape {
         self.inner.fallback_builds.fetch_add(1, Ordering::Relaxed);
         self.inner.fallback.get_or_init(|| {
             if std::env::var_os("CBVH_DEBUG_FALLBACK").is_some() {
-                eprintln!("{}", std::backtrace::Backtrace::force_capture());
+                log::warn!("{}", std::backtrace::Backtrace::force_capture());
             }
-            eprintln!(
+            log::warn!(
                 "cbvh: building a parry Bvh over {} triangles for a {} shape: a query reached \
                  parry's composite-shape code. Install cbvh::parry::Dispatcher \
                  (NarrowPhase::with_query_dispatcher) to use the cbvh tree instead.",

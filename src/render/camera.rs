@@ -65,10 +65,13 @@ impl Camera {
         let center = bounds.center();
         let (az, el) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
         let back = Vec3A::new(el.cos() * az.sin(), el.sin(), el.cos() * az.cos());
-        let probe = Camera::look_at(center + back, center, fov_deg, width, height);
+        let radius = bounds.half_extents().length().max(1e-6);
+        // The probe only fixes the orientation; it stands a radius away, not
+        // one unit: far from the origin `center + back` rounds to `center`
+        // in f32 and the view direction would be NaN (an empty image).
+        let probe = Camera::look_at(center + back * radius, center, fov_deg, width, height);
         let ty = probe.tan_half_fov / 1.12;
         let tx = ty * probe.aspect;
-        let radius = bounds.half_extents().length().max(1e-6);
         let mut dist: f32 = 0.0;
         for c in bounds.corners() {
             let r = c - center;

@@ -3,6 +3,7 @@
 use super::node::{LEAF_FLAG, PlainNode};
 use crate::build::CanonicalBvh;
 use crate::codec::ByteSize;
+use crate::codec::common::MassProps;
 use crate::mesh::Mesh;
 
 /// The uncompressed BVH with its mesh.
@@ -16,6 +17,8 @@ pub struct PlainBvh {
     pub(super) vertices: Vec<[f32; 3]>,
     pub(super) triangles: Vec<[u32; 3]>,
     pub(super) leaf_ids: Vec<u32>,
+    /// Mass properties at density 1, computed from the mesh.
+    pub(super) mass: MassProps,
 }
 
 impl PlainBvh {
@@ -50,7 +53,14 @@ impl PlainBvh {
             } else {
                 bvh.leaf_triangles.clone()
             },
+            mass: MassProps::of_mesh(mesh),
         }
+    }
+
+    /// Mass properties at density 1 (computed from the mesh when built,
+    /// stored in the file).
+    pub fn mass(&self) -> MassProps {
+        self.mass
     }
 
     /// The nodes, root first.

@@ -345,15 +345,26 @@ impl RacBvh {
     }
 
     /// The complete words of node `g`, completing it if needed (§5.2).
-    fn try_words(&self, g: u32) -> Result<[u32; 8], RacError> {
-        if g >= self.header.node_count {
-            return Err(RacError::NoSuchNode {
-                node: g,
-                count: self.header.node_count,
-            });
-        }
-        let c = g >> self.header.cluster_bits;
-        let l = (g - (c << self.header.cluster_bits)) as usize;
+    ///
+    /// Completing a node needs its local root's parent, which may itself be
+    /// incomplete in an earlier cluster, and so on: the chain is walked
+    /// with a loop and an explicit list (never recursion, whose depth a
+    /// crafted file could make overflow the stack). Parent clusters come
+    /// strictly before their children's (checked when a cluster is
+    /// decoded), so the chain has at most one entry per cluster.
+    pub(super) fn try_words(&self, g: u32) -> Result<[u32; 8], RacError> {
+        let cb = self.header.cluster_bits;
+        let split = |x: u32| -> Result<(u32, usize), RacError> {
+            if x >= self.header.node_count {
+                return Err(RacError::NoSuchNode {
+                    node: x,
+                    count: self.header.node_count,
+                });
+            }
+            let c = x >> cb;
+            Ok((c, (x - (c << cb)) as usize))
+        };
+        let (c, l) = split(g)?;
         let fast = cache::with_pinned(self.id, c, |cl| {
             let w = cl.nodes[l].words();
             (w[0] & INCOMPLETE == 0).then_some(w)
@@ -361,28 +372,55 @@ impl RacBvh {
         if let Some(w) = fast {
             return Ok(w);
         }
-        let mut cl = self.cluster(c)?;
-        if !cl.nodes[l].is_complete() {
+        // Walk up: (cluster, local index of the node, its local root) for
+        // every incomplete node of the chain, until a complete one.
+        let mut chain: Vec<(u32, usize, LocalRoot)> = Vec::new();
+        let mut x = g;
+        let mut top = loop {
+            let (c, l) = split(x)?;
+            let cl = self.cluster(c)?;
+            let w = cl.nodes[l].words();
+            if w[0] & INCOMPLETE == 0 {
+                if chain.is_empty() {
+                    cache::pin(self.id, c, cl);
+                }
+                break w;
+            }
             let root = cl.roots[usize::from(cl.root_of[l])];
             // Hold nothing while the parent's cluster loads.
             drop(cl);
-            let pw = self.try_words(root.parent)?;
-            let pq = qbox_of(&pw);
-            if pw[7] & LEAF_FLAG != 0
-                || pw[6 + usize::from(root.right)] != c << self.header.cluster_bits | root.local
-            {
+            if chain.len() > self.meta.len() {
+                return Err(RacError::CorruptCluster {
+                    cluster: c,
+                    what: "the chain of local roots' parents does not end",
+                });
+            }
+            chain.push((c, l, root));
+            x = root.parent;
+        };
+        // Walk down, completing each local root's subtree from its parent.
+        while let Some((c, l, root)) = chain.pop() {
+            if top[7] & LEAF_FLAG != 0 || top[6 + usize::from(root.right)] != c << cb | root.local {
                 return Err(RacError::CorruptCluster {
                     cluster: c,
                     what: "a local root's parent does not name it as child",
                 });
             }
-            cl = self.cluster(c)?;
-            complete(&cl, root, &pq, self.header.grid.max_q)
+            let cl = self.cluster(c)?;
+            complete(&cl, root, &qbox_of(&top), self.header.grid.max_q)
                 .map_err(|what| RacError::CorruptCluster { cluster: c, what })?;
+            top = cl.nodes[l].words();
+            if top[0] & INCOMPLETE != 0 {
+                return Err(RacError::CorruptCluster {
+                    cluster: c,
+                    what: "a node is not below its local root",
+                });
+            }
+            if chain.is_empty() {
+                cache::pin(self.id, c, cl);
+            }
         }
-        let w = cl.nodes[l].words();
-        cache::pin(self.id, c, cl);
-        Ok(w)
+        Ok(top)
     }
 
     #[inline]
@@ -393,7 +431,7 @@ impl RacBvh {
 
     /// The decoded box of complete words.
     #[inline]
-    fn box_of(&self, w: &[u32; 8]) -> Aabb {
+    pub(super) fn box_of(&self, w: &[u32; 8]) -> Aabb {
         if self.header.empty {
             return Aabb::EMPTY;
         }
@@ -454,7 +492,7 @@ impl RacBvh {
         out
     }
 
-    fn try_leaf_ids(&self, i: u32, f: &mut dyn FnMut(u32)) -> Result<(), RacError> {
+    pub(super) fn try_leaf_ids(&self, i: u32, f: &mut dyn FnMut(u32)) -> Result<(), RacError> {
         let w = self.try_words(i)?;
         assert!(w[7] & LEAF_FLAG != 0, "racbvh: triangles of inner node {i}");
         let count = w[7] & !LEAF_FLAG;
@@ -469,43 +507,6 @@ impl RacBvh {
                         "a leaf's triangle slots are out of range",
                     ))?;
             ids.iter().for_each(|&id| f(id));
-        }
-        Ok(())
-    }
-
-    /// Decodes and completes every cluster, checks that every triangle id
-    /// appears exactly once, and checks the stored mesh. Uses (and fills)
-    /// the cache.
-    pub fn verify(&self) -> Result<(), RacError> {
-        if self.mesh_hash != super::file::mesh_hash(&self.mesh) {
-            return Err(RacError::Corrupt(
-                "the mesh sections' checksum does not match",
-            ));
-        }
-        self.mesh.check()?;
-        let mut seen = vec![false; self.header.triangle_count as usize];
-        for g in 0..self.header.node_count {
-            let w = self.try_words(g)?;
-            if w[7] & LEAF_FLAG != 0 {
-                let mut dup = false;
-                self.try_leaf_ids(g, &mut |id| {
-                    dup |= std::mem::replace(&mut seen[id as usize], true)
-                })?;
-                if dup {
-                    return Err(RacError::Corrupt("a triangle id appears in two leaves"));
-                }
-            } else if w[6] <= g
-                || w[7] <= g
-                || w[6] >= self.header.node_count
-                || w[7] >= self.header.node_count
-            {
-                return Err(RacError::Corrupt(
-                    "an inner node's child does not come after it",
-                ));
-            }
-        }
-        if seen.iter().any(|s| !s) {
-            return Err(RacError::Corrupt("a triangle id appears in no leaf"));
         }
         Ok(())
     }
@@ -569,6 +570,7 @@ impl RacBvh {
         if let Some(t) = hit {
             return t;
         }
+        self.expect_mesh();
         let t = self.mesh.triangle(id);
         TRIS.with(|c| {
             if let Ok(mut c) = c.try_borrow_mut() {

@@ -234,6 +234,23 @@ impl RacBvh {
             })
             .collect();
         q[0] = Header::root_qbox(&grid);
+        // Far from the origin the grid step can be below the f32 spacing
+        // there, so neighbouring grid points coincide and a flat child's
+        // rounded-down min can land past its parent's rounded-up max. Grid
+        // points are monotone in q, so clamping a child into its parent's
+        // quantized box (and swapping an inverted pair) keeps it
+        // conservative: the parent's points already bound the child's box.
+        // Parents come before children (checked above).
+        for g in 1..q.len() {
+            let pq = q[bvh.parents[g] as usize];
+            let c = &mut q[g];
+            for a in 0..3 {
+                let lo = c.min[a].clamp(pq.min[a], pq.max[a]);
+                let hi = c.max[a].clamp(pq.min[a], pq.max[a]);
+                c.min[a] = lo.min(hi);
+                c.max[a] = lo.max(hi);
+            }
+        }
         let cluster_bits = options.cluster_nodes.trailing_zeros();
         let header = Header {
             cluster_bits,
@@ -290,14 +307,18 @@ impl RacBvh {
         header.bv_bits = bv_bits;
         header.compression_seconds = start.elapsed().as_secs_f64();
         let mesh_hash = super::file::mesh_hash(&pmesh);
-        Ok(RacBvh::assemble(
+        let rac = RacBvh::assemble(
             header,
             super::file::Store::Owned(data),
             meta,
             pmesh,
             mesh_hash,
+            crate::codec::common::MassProps::of_mesh(mesh),
             options.cache_budget_bytes,
-        ))
+        );
+        // Packed here, in memory: nothing to check before the first query.
+        let _ = rac.mesh_ok.set(Ok(()));
+        Ok(rac)
     }
 }
 

@@ -3,7 +3,7 @@
 use super::file;
 
 /// What can go wrong encoding, reading or decoding a RACBVH.
-#[derive(Debug, thiserror::Error, PartialEq)]
+#[derive(Clone, Debug, thiserror::Error, PartialEq)]
 pub enum RacError {
     /// An option is out of range.
     #[error("{what} = {value} is not allowed: use {expected}")]
@@ -53,6 +53,14 @@ pub enum RacError {
     CorruptCluster {
         /// The cluster.
         cluster: u32,
+        /// What was found.
+        what: &'static str,
+    },
+    /// A node breaks what queries rely on (found by `verify`).
+    #[error("node {node} is corrupted: {what} (the file is damaged: rebuild it)")]
+    CorruptNode {
+        /// The node.
+        node: u32,
         /// What was found.
         what: &'static str,
     },

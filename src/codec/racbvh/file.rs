@@ -1,13 +1,13 @@
 //! The RACBVH container: [`RacBvh::to_bytes`] and [`RacBvh::from_bytes`].
 //!
 //! # Layout
-//! All integers little-endian. A 232-byte header, then four sections.
+//! All integers little-endian. A 288-byte header, then four sections.
 //! Checksums are xxh3-64.
 //!
 //! | bytes | field |
 //! |---|---|
 //! | 0–7 | magic `CBVHRAC\0` |
-//! | 8–11 | version (2) |
+//! | 8–11 | version (3) |
 //! | 12–15 | flags: bit 0 empty tree, bit 1 lossless vertices |
 //! | 16–19 | cluster bits `k` (clusters of `2^k` nodes, 8..=14) |
 //! | 20–23 | box quantization bits (8..=24) |
@@ -21,8 +21,10 @@
 //! | 88–99 | vertex bits (8..=24, or 32 when lossless), vertex count, vertex-index bits |
 //! | 100–123 | vertex quantization origin and step: 6 × f32 |
 //! | 124–127 | zero |
-//! | 128–223 | section table: (offset u64, length u64, checksum u64) for meta, clusters, vertices, triangles |
-//! | 224–231 | checksum of bytes 0–223 |
+//! | 128–179 | mass properties at density 1 ([`MassProps`]), so that a shape needs no mesh |
+//! | 180–183 | zero |
+//! | 184–279 | section table: (offset u64, length u64, checksum u64) for meta, clusters, vertices, triangles |
+//! | 280–287 | checksum of bytes 0–279 |
 //!
 //! The meta section holds one 20-byte entry per cluster: the cluster's
 //! offset in the clusters section (u64), its node count (u32) and the
@@ -42,11 +44,15 @@ use xxhash_rust::xxh3::xxh3_64;
 use super::mesh::{MeshParams, PackedMesh, bits_for};
 use super::node::Grid;
 use super::{ClusterMeta, Header, RacBvh, RacError};
+use crate::codec::common::{MASS_BYTES, MassProps};
 
 /// The container version this build writes and reads.
-pub const VERSION: u32 = 2;
-const MAGIC: [u8; 8] = *b"CBVHRAC\0";
-const HEADER_LEN: usize = 232;
+pub const VERSION: u32 = 3;
+/// The RACBVH file's magic.
+pub const MAGIC: [u8; 8] = *b"CBVHRAC\0";
+const HEADER_LEN: usize = 288;
+/// Where the section table starts.
+const TABLE: usize = 184;
 /// Bytes of one meta-table entry.
 pub(super) const META_ENTRY: usize = 20;
 
@@ -157,6 +163,9 @@ impl RacBvh {
         }
         out.extend_from_slice(&0u32.to_le_bytes());
         debug_assert_eq!(out.len(), 128);
+        out.extend_from_slice(&self.mass.to_bytes());
+        out.extend_from_slice(&0u32.to_le_bytes());
+        debug_assert_eq!(out.len(), TABLE);
         let mut meta = Vec::with_capacity(self.meta.len() * META_ENTRY);
         for e in &self.meta {
             meta.extend_from_slice(&e.offset.to_le_bytes());
@@ -191,7 +200,8 @@ impl RacBvh {
     /// Opens a container file out of core: the file is memory-mapped and
     /// clusters are read from it on demand (checked as
     /// [`from_bytes`](Self::from_bytes) does). The file must not be modified
-    /// or truncated while the tree is alive.
+    /// in place or truncated while the tree is alive; cbvh's own saves
+    /// replace a file atomically, which is safe.
     pub fn open(path: &Path, cache_budget_bytes: usize) -> Result<RacBvh, RacError> {
         let io = |e: std::io::Error| RacError::Io(format!("{}: {e}", path.display()));
         let file = std::fs::File::open(path).map_err(io)?;
@@ -203,9 +213,11 @@ impl RacBvh {
         Self::parse(&map, &|r| Store::Mapped(map.clone(), r), cache_budget_bytes)
     }
 
-    /// Writes the container to `path`.
+    /// Writes the container to `path` atomically: to a temporary file
+    /// beside it, then renamed over it, so that a reader (or a process that
+    /// has the old file mapped) never sees a half-written file.
     pub fn save(&self, path: &Path) -> Result<(), RacError> {
-        std::fs::write(path, self.to_bytes())
+        crate::codec::common::atomic_write(path, &self.to_bytes())
             .map_err(|e| RacError::Io(format!("{}: {e}", path.display())))
     }
 
@@ -311,19 +323,31 @@ impl RacBvh {
         if morigin.iter().chain(&mstep).any(|v| !v.is_finite()) {
             return Err(header_err("vertex grid", "not finite"));
         }
+        let mass = MassProps::from_bytes(&b[128..128 + MASS_BYTES]).ok_or_else(|| {
+            header_err(
+                "mass properties",
+                "a value is not finite or the mass is negative",
+            )
+        })?;
         let names = ["meta", "clusters", "vertices", "triangles"];
         let mut sections: [&[u8]; 4] = [&[]; 4];
         let mut ranges: [Range<usize>; 4] = Default::default();
         let mut hashes = [0u64; 4];
         for (k, name) in names.into_iter().enumerate() {
-            let off = u64_at(b, 128 + 24 * k);
-            let len = u64_at(b, 136 + 24 * k);
-            hashes[k] = u64_at(b, 144 + 24 * k);
+            let off = u64_at(b, TABLE + 24 * k);
+            let len = u64_at(b, TABLE + 8 + 24 * k);
+            hashes[k] = u64_at(b, TABLE + 16 + 24 * k);
             let end = off
                 .checked_add(len)
                 .ok_or_else(|| header_err(name, "offset + length overflows"))?;
             if off < HEADER_LEN as u64 {
                 return Err(header_err(name, "the section overlaps the header"));
+            }
+            if k > 0 && off < ranges[k - 1].end as u64 {
+                return Err(header_err(
+                    name,
+                    "the section overlaps the one before it (sections are stored in order)",
+                ));
             }
             if end > b.len() as u64 {
                 return Err(RacError::Truncated {
@@ -351,6 +375,16 @@ impl RacBvh {
             ));
         }
         let data = sections[1];
+        // Every node codes at least one bit (its structure symbol), so a
+        // node count the clusters cannot hold is a forgery; this also bounds
+        // what `verify` allocates per node by the file's size.
+        if (data.len() as u64) * 8 < u64::from(node_count) {
+            return Err(RacError::Truncated {
+                section: "clusters",
+                need: u64::from(node_count).div_ceil(8),
+                have: data.len() as u64,
+            });
+        }
         let mut meta = Vec::with_capacity(clusters as usize);
         let mut prev = 0u64;
         for c in 0..clusters {
@@ -391,6 +425,7 @@ impl RacBvh {
             meta,
             mesh,
             mesh_hash,
+            mass,
             cache_budget_bytes,
         ))
     }

@@ -237,10 +237,11 @@ impl PackedMesh {
         let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
         for v in &mesh.vertices {
             for a in 0..3 {
-                if !v[a].is_finite() {
+                if !v[a].is_finite() || v[a].abs() > crate::mesh::MAX_COORDINATE {
                     return Err(RacError::InvalidMesh(format!(
-                        "vertex coordinate {} is not finite",
-                        v[a]
+                        "vertex coordinate {} is not finite or beyond ±{:e}, the supported range",
+                        v[a],
+                        crate::mesh::MAX_COORDINATE
                     )));
                 }
                 lo[a] = lo[a].min(v[a]);

@@ -130,14 +130,26 @@
 //!   overlapping leaf of the other tree, and this took the drop test's
 //!   narrow phase from 1.65 to 1.14 ms.
 //!
-//! Errors: every cluster carries an xxh3 checksum in the meta table, checked
-//! whenever the cluster is decoded; the header, the meta table and the mesh
-//! sections carry one too. [`RacBvh::from_bytes`] checks the container in
-//! O(header + meta table);
-//! [`RacBvh::verify`] decodes and completes every cluster and checks the
-//! mesh, returning the first error. The cursor path and the `bv`/`left`/…
-//! accessors panic with a message naming the cluster if they meet corrupted
-//! data; the `try_` accessors return the error instead.
+//! Errors and validation, in two tiers: every cluster carries an xxh3
+//! checksum in the meta table, checked whenever the cluster is decoded; the
+//! header, the meta table and the mesh sections carry one too.
+//! [`RacBvh::from_bytes`] and [`RacBvh::open`] check the container in
+//! O(header + meta table) (sections in order, without overlap, sized for
+//! the counts). [`RacBvh::verify`] proves everything a query relies on:
+//! every cluster decodes and completes, every node but the root has
+//! exactly one parent and children come after their parents (no repeats,
+//! no cycles), child boxes lie inside their parent's, each triangle is in
+//! exactly one leaf whose box contains it, the mesh's checksum matches and
+//! its vertex indices are in range. A caller who skips `verify` is still
+//! safe from damaged mesh bytes: the first triangle a query reads checks
+//! the mesh sections once ([`RacBvh::check_mesh`]). What only `verify`
+//! proves is the tree's global shape (a checksummed file whose tree is a
+//! DAG can make queries slow); the CLI, the sims and
+//! [`crate::parry::open_codec`] verify by default. The cursor path and the
+//! `bv`/`left`/… accessors panic with a message naming the cluster if they
+//! meet corrupted data; the `try_` accessors return the error instead.
+//! Nothing in the decoder recurses to a depth the file decides (completion
+//! walks the chain of local roots' parents with a loop). Saves are atomic.
 
 mod cache;
 pub mod coder;
@@ -149,6 +161,7 @@ pub mod file;
 pub mod mesh;
 pub mod node;
 mod tree;
+mod verify;
 
 pub use cache::CacheStats;
 pub use decode::RacNode;

@@ -2,7 +2,7 @@
 //! figures about it.
 
 use super::node::{Grid, QBox};
-use super::{CacheStats, RacStats, cache, decode, file, mesh};
+use super::{CacheStats, RacError, RacStats, cache, decode, file, mesh};
 
 /// Everything global a cluster's decoder needs.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -49,6 +49,13 @@ pub struct RacBvh {
     pub(super) mesh: mesh::PackedMesh,
     /// Checksum of the mesh sections, as stored (checked by `verify`).
     pub(super) mesh_hash: u64,
+    /// Mass properties at density 1, computed from the original mesh.
+    pub(super) mass: crate::codec::common::MassProps,
+    /// Whether the mesh sections' checksum and vertex indices were checked
+    /// and found good: done once, on the first triangle any query reads (or
+    /// by `verify`), so a caller who skips `verify` still never gets
+    /// triangles from damaged mesh bytes.
+    pub(super) mesh_ok: std::sync::OnceLock<Result<(), RacError>>,
     pub(super) cache: cache::ClusterCache,
     /// Identifies this tree in the threads' pins.
     pub(super) id: u64,
@@ -71,6 +78,7 @@ impl RacBvh {
         meta: Vec<ClusterMeta>,
         mesh: mesh::PackedMesh,
         mesh_hash: u64,
+        mass: crate::codec::common::MassProps,
         budget: usize,
     ) -> Self {
         let max_cluster = (1usize << header.cluster_bits) * decode::CLUSTER_BYTES_PER_NODE;
@@ -81,6 +89,8 @@ impl RacBvh {
             meta,
             mesh_hash,
             mesh,
+            mass,
+            mesh_ok: std::sync::OnceLock::new(),
             cache: cache::ClusterCache::new(budget, max_cluster),
             id: NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         }
@@ -103,8 +113,42 @@ impl RacBvh {
 
     /// The mesh as stored (with quantized vertices decoded): the triangles
     /// the cursor reports.
+    ///
+    /// # Panics
+    /// If the mesh sections are damaged (see [`check_mesh`](Self::check_mesh)).
     pub fn decoded_mesh(&self) -> crate::mesh::Mesh {
+        self.expect_mesh();
         self.mesh.decoded()
+    }
+
+    /// Checks the mesh sections once (their checksum, then every vertex
+    /// index) and remembers the answer: O(mesh) the first time, O(1) after.
+    /// Queries call it before their first triangle.
+    pub fn check_mesh(&self) -> Result<(), RacError> {
+        self.mesh_ok
+            .get_or_init(|| {
+                if self.mesh_hash != file::mesh_hash(&self.mesh) {
+                    return Err(RacError::Corrupt(
+                        "the mesh sections' checksum does not match",
+                    ));
+                }
+                self.mesh.check()
+            })
+            .clone()
+    }
+
+    /// [`check_mesh`](Self::check_mesh), panicking with its error.
+    #[inline]
+    pub(super) fn expect_mesh(&self) {
+        if let Err(e) = self.check_mesh() {
+            panic!("racbvh: {e} (the file is damaged; verify() reports this as an error)");
+        }
+    }
+
+    /// Mass properties at density 1 (computed from the original mesh when
+    /// encoded, stored in the file).
+    pub fn mass(&self) -> crate::codec::common::MassProps {
+        self.mass
     }
 
     /// The vertex indices of stored triangle `t` (for smooth shading).
@@ -116,7 +160,33 @@ impl RacBvh {
             (t as usize) < self.header.triangle_count as usize,
             "racbvh: no triangle {t}"
         );
+        self.expect_mesh();
         self.mesh.indices(t)
+    }
+
+    /// The header's fields, for reports (`cbvh info`).
+    pub fn header_fields(&self) -> Vec<(&'static str, String)> {
+        let h = &self.header;
+        let m = &self.mesh;
+        vec![
+            ("version", file::VERSION.to_string()),
+            ("nodes", h.node_count.to_string()),
+            (
+                "clusters",
+                format!("{} of {} nodes", self.meta.len(), 1u32 << h.cluster_bits),
+            ),
+            ("box bits", h.bits.to_string()),
+            (
+                "vertex bits",
+                if m.lossless {
+                    "32 (lossless f32)".to_string()
+                } else {
+                    m.vertex_bits.to_string()
+                },
+            ),
+            ("vertices", m.vertex_count.to_string()),
+            ("max leaf tris", h.max_leaf.to_string()),
+        ]
     }
 
     /// Compression figures.

@@ -126,7 +126,13 @@ pub(super) fn read<R: BufRead>(reader: R, src: &Src) -> Result<Mesh, MeshError> 
                             let r = (i - 1) as u64;
                             if r >= n as u64 {
                                 if r > u64::from(u32::MAX) {
-                                    return Err(src.out_of_range(place, face, r, vertices.len()));
+                                    // Quote the index as the file writes it (1-based).
+                                    return Err(src.out_of_range(
+                                        place,
+                                        face,
+                                        i as u64,
+                                        vertices.len(),
+                                    ));
                                 }
                                 forward.push(Forward {
                                     face,
@@ -156,7 +162,8 @@ pub(super) fn read<R: BufRead>(reader: R, src: &Src) -> Result<Mesh, MeshError> 
     }
     let n = vertices.len();
     if let Some(bad) = forward.iter().find(|f| f.index >= n as u64) {
-        return Err(src.out_of_range(Place::Line(bad.line), bad.face, bad.index, n));
+        // Quote the index as the file writes it (1-based).
+        return Err(src.out_of_range(Place::Line(bad.line), bad.face, bad.index + 1, n));
     }
     Ok(Mesh::new(vertices, triangles))
 }

@@ -219,8 +219,13 @@ fn read_header<R: BufRead>(lines: &mut Lines<R>, src: &Src) -> Result<Header, Me
             }
             b"end_header" => break,
             other => {
-                return Err(
-                    src.malformed(place, format!("unknown PLY header keyword {}", show(other)))
+                // Real exporters write free text in the header (a Blender
+                // export had a line starting "Created by"); assimp and other
+                // readers skip such lines, so skip it too, but say so.
+                log::warn!(
+                    "{}: {place}: skipping PLY header line with unknown keyword {}",
+                    src.path.display(),
+                    show(other)
                 );
             }
         }

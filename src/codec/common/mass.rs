@@ -1,0 +1,258 @@
+//! Mass properties at density 1, computed once when a codec is encoded and
+//! stored in its file, so that a shape opened from a file needs no mesh.
+//!
+//! The integration is parry's `MassProperties::from_trimesh` (signed volume
+//! of the tetrahedra from the mesh's centre, then the inertia tensor of each
+//! about the centre of mass), ported operation for operation in `f32` so
+//! that a shape from a file and a parry `TriMesh` of the same mesh get the
+//! same figures; the parry layer turns the stored tensor into principal axes
+//! with parry's own `MassProperties::with_inertia_matrix`.
+
+use glam::{Mat3, Vec3};
+
+use crate::mesh::Mesh;
+
+/// Mass properties of a mesh at density 1.
+///
+/// # Layout
+/// 13 little-endian `f32`, 52 bytes:
+/// | bytes | field |
+/// |---|---|
+/// | 0–3 | `mass`: the enclosed volume (0 for a mesh without volume) |
+/// | 4–15 | `com`: centre of mass x, y, z |
+/// | 16–51 | `inertia`: the 3 × 3 inertia tensor about `com`, column-major |
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct MassProps {
+    /// Mass at density 1 (the enclosed volume; 0 when there is none).
+    pub mass: f32,
+    /// Centre of mass.
+    pub com: [f32; 3],
+    /// Inertia tensor about the centre of mass, column-major.
+    pub inertia: [f32; 9],
+}
+
+const _: () = assert!(std::mem::size_of::<MassProps>() == 52);
+
+/// Bytes of [`MassProps`] in a file.
+pub const MASS_BYTES: usize = 52;
+
+impl MassProps {
+    /// No mass (a mesh without volume, or an empty one).
+    pub const ZERO: MassProps = MassProps {
+        mass: 0.0,
+        com: [0.0; 3],
+        inertia: [0.0; 9],
+    };
+
+    /// Signed-volume integration over `mesh` (as parry's
+    /// `MassProperties::from_trimesh` at density 1).
+    pub fn of_mesh(mesh: &Mesh) -> MassProps {
+        if mesh.vertices.is_empty() || mesh.triangles.is_empty() {
+            return MassProps::ZERO;
+        }
+        let v = |i: u32| Vec3::from(mesh.vertices[i as usize]);
+        let (volume, com) = signed_volume_and_center_of_mass(mesh);
+        if volume == 0.0 {
+            return MassProps::ZERO;
+        }
+        let mut itot = Mat3::ZERO;
+        for t in &mesh.triangles {
+            let (p2, p3, p4) = (v(t[0]), v(t[1]), v(t[2]));
+            let vol = tetra_signed_volume(com, p2, p3, p4);
+            let ipart = tetrahedron_unit_inertia_tensor_wrt_point(com, com, p2, p3, p4);
+            itot += ipart * vol;
+        }
+        let sign = volume.signum();
+        let (mass, inertia) = (volume * sign, itot * sign);
+        if !(mass.is_finite() && inertia.is_finite() && com.is_finite()) {
+            return MassProps::ZERO;
+        }
+        MassProps {
+            mass,
+            com: com.to_array(),
+            inertia: inertia.to_cols_array(),
+        }
+    }
+
+    /// The bytes as stored.
+    pub fn to_bytes(&self) -> [u8; MASS_BYTES] {
+        let mut out = [0u8; MASS_BYTES];
+        let vals = std::iter::once(self.mass)
+            .chain(self.com)
+            .chain(self.inertia);
+        for (k, x) in vals.enumerate() {
+            out[4 * k..4 * k + 4].copy_from_slice(&x.to_le_bytes());
+        }
+        out
+    }
+
+    /// Reads stored bytes (`b` holds at least [`MASS_BYTES`]); `None` if a
+    /// value is not finite or the mass is negative.
+    pub fn from_bytes(b: &[u8]) -> Option<MassProps> {
+        let f = |k: usize| {
+            let w = b.get(4 * k..4 * k + 4)?;
+            Some(f32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+        };
+        let mut vals = [0f32; 13];
+        for (k, v) in vals.iter_mut().enumerate() {
+            *v = f(k)?;
+        }
+        let m = MassProps {
+            mass: vals[0],
+            com: [vals[1], vals[2], vals[3]],
+            inertia: std::array::from_fn(|k| vals[4 + k]),
+        };
+        (vals.iter().all(|x| x.is_finite()) && m.mass >= 0.0).then_some(m)
+    }
+}
+
+fn tetra_signed_volume(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> f32 {
+    Mat3::from_cols(b - a, c - a, d - a).determinant() / 6.0
+}
+
+fn center(pts: &[Vec3]) -> Vec3 {
+    let denom: f32 = 1.0 / (pts.len() as f32);
+    let mut res = pts[0] * denom;
+    for pt in &pts[1..] {
+        res += *pt * denom;
+    }
+    res
+}
+
+fn signed_volume_and_center_of_mass(mesh: &Mesh) -> (f32, Vec3) {
+    let pts: Vec<Vec3> = mesh.vertices.iter().map(|v| Vec3::from(*v)).collect();
+    let geometric_center = center(&pts);
+    let mut res = Vec3::ZERO;
+    let mut vol = 0.0;
+    for t in &mesh.triangles {
+        let (p2, p3, p4) = (pts[t[0] as usize], pts[t[1] as usize], pts[t[2] as usize]);
+        let volume = tetra_signed_volume(geometric_center, p2, p3, p4);
+        let c = center(&[geometric_center, p2, p3, p4]);
+        res += c * volume;
+        vol += volume;
+    }
+    if vol == 0.0 {
+        (vol, geometric_center)
+    } else {
+        (vol, res / vol)
+    }
+}
+
+/// The unit inertia tensor of a tetrahedron about `point` (parry's
+/// `tetrahedron_unit_inertia_tensor_wrt_point`).
+fn tetrahedron_unit_inertia_tensor_wrt_point(
+    point: Vec3,
+    p1: Vec3,
+    p2: Vec3,
+    p3: Vec3,
+    p4: Vec3,
+) -> Mat3 {
+    let p1 = p1 - point;
+    let p2 = p2 - point;
+    let p3 = p3 - point;
+    let p4 = p4 - point;
+
+    // Just for readability.
+    let x1 = p1.x;
+    let y1 = p1.y;
+    let z1 = p1.z;
+    let x2 = p2.x;
+    let y2 = p2.y;
+    let z2 = p2.z;
+    let x3 = p3.x;
+    let y3 = p3.y;
+    let z3 = p3.z;
+    let x4 = p4.x;
+    let y4 = p4.y;
+    let z4 = p4.z;
+
+    let diag_x = x1 * x1
+        + x1 * x2
+        + x2 * x2
+        + x1 * x3
+        + x2 * x3
+        + x3 * x3
+        + x1 * x4
+        + x2 * x4
+        + x3 * x4
+        + x4 * x4;
+    let diag_y = y1 * y1
+        + y1 * y2
+        + y2 * y2
+        + y1 * y3
+        + y2 * y3
+        + y3 * y3
+        + y1 * y4
+        + y2 * y4
+        + y3 * y4
+        + y4 * y4;
+    let diag_z = z1 * z1
+        + z1 * z2
+        + z2 * z2
+        + z1 * z3
+        + z2 * z3
+        + z3 * z3
+        + z1 * z4
+        + z2 * z4
+        + z3 * z4
+        + z4 * z4;
+
+    let a0 = (diag_y + diag_z) * 0.1;
+    let b0 = (diag_z + diag_x) * 0.1;
+    let c0 = (diag_x + diag_y) * 0.1;
+
+    let a1 = (y1 * z1 * 2.0
+        + y2 * z1
+        + y3 * z1
+        + y4 * z1
+        + y1 * z2
+        + y2 * z2 * 2.0
+        + y3 * z2
+        + y4 * z2
+        + y1 * z3
+        + y2 * z3
+        + y3 * z3 * 2.0
+        + y4 * z3
+        + y1 * z4
+        + y2 * z4
+        + y3 * z4
+        + y4 * z4 * 2.0)
+        * 0.05;
+    let b1 = (x1 * z1 * 2.0
+        + x2 * z1
+        + x3 * z1
+        + x4 * z1
+        + x1 * z2
+        + x2 * z2 * 2.0
+        + x3 * z2
+        + x4 * z2
+        + x1 * z3
+        + x2 * z3
+        + x3 * z3 * 2.0
+        + x4 * z3
+        + x1 * z4
+        + x2 * z4
+        + x3 * z4
+        + x4 * z4 * 2.0)
+        * 0.05;
+    let c1 = (x1 * y1 * 2.0
+        + x2 * y1
+        + x3 * y1
+        + x4 * y1
+        + x1 * y2
+        + x2 * y2 * 2.0
+        + x3 * y2
+        + x4 * y2
+        + x1 * y3
+        + x2 * y3
+        + x3 * y3 * 2.0
+        + x4 * y3
+        + x1 * y4
+        + x2 * y4
+        + x3 * y4
+        + x4 * y4 * 2.0)
+        * 0.05;
+
+    Mat3::from_cols_array(&[a0, -c1, -b1, -c1, b0, -a1, -b1, -a1, c0])
+}

@@ -1,0 +1,11 @@
+//! Machinery more than one codec uses: atomic file saves, the stored mass
+//! properties, and recognising a codec file by its magic.
+
+pub mod mass;
+mod save;
+
+pub use mass::{MASS_BYTES, MassProps};
+pub use save::atomic_write;
+
+/// The first four bytes of every cbvh codec file (`CBVHRAC\0`, `CBVHPLN\0`).
+pub const MAGIC_PREFIX: [u8; 4] = *b"CBVH";

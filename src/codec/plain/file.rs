@@ -1,0 +1,366 @@
+//! The plain BVH file: [`PlainBvh::to_bytes`], [`PlainBvh::from_bytes`],
+//! [`PlainBvh::save`], [`PlainBvh::open`] and [`PlainBvh::verify`].
+//!
+//! # Layout
+//! All integers little-endian. A 192-byte header, then four sections back
+//! to back in this order, ending the file. Checksums are xxh3-64.
+//!
+//! | bytes | field |
+//! |---|---|
+//! | 0–7 | magic `CBVHPLN\0` |
+//! | 8–11 | version (1) |
+//! | 12–15 | flags (0) |
+//! | 16–19 | node count (≥ 1) |
+//! | 20–23 | vertex count |
+//! | 24–27 | triangle count |
+//! | 28–31 | leaf-id count (0: one triangle per leaf, stored in the leaf) |
+//! | 32–83 | mass properties at density 1 ([`MassProps`]) |
+//! | 84–87 | zero |
+//! | 88–183 | section table: (offset u64, length u64, checksum u64) for nodes, vertices, triangles, leaf ids |
+//! | 184–191 | checksum of bytes 0–183 |
+//!
+//! Nodes are [`PlainNode`]s (32 bytes), vertices 3 × f32, triangles
+//! 3 × u32, leaf ids u32.
+//!
+//! # Validation
+//! [`from_bytes`](PlainBvh::from_bytes) checks the header, the section
+//! table and every checksum (the bytes are copied into memory anyway);
+//! [`verify`](PlainBvh::verify) proves what queries rely on. A tree that
+//! was not verified may make a query panic or loop; the CLI, the sims and
+//! [`crate::parry::open_codec`] verify by default.
+
+use std::path::Path;
+
+use xxhash_rust::xxh3::xxh3_64;
+
+use super::node::PlainNode;
+use super::{PlainBvh, PlainError};
+use crate::codec::common::{MASS_BYTES, MassProps, atomic_write};
+
+/// The file version this build writes and reads.
+pub const VERSION: u32 = 1;
+/// The plain file's magic.
+pub const MAGIC: [u8; 8] = *b"CBVHPLN\0";
+const HEADER_LEN: usize = 192;
+const TABLE: usize = 88;
+const NAMES: [&str; 4] = ["nodes", "vertices", "triangles", "leaf ids"];
+
+fn u32_at(b: &[u8], at: usize) -> u32 {
+    u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
+}
+
+fn u64_at(b: &[u8], at: usize) -> u64 {
+    u64::from_le_bytes(std::array::from_fn(|k| b[at + k]))
+}
+
+fn words(b: &[u8]) -> impl Iterator<Item = u32> + '_ {
+    b.chunks_exact(4)
+        .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+}
+
+fn header_err(field: &'static str, why: impl Into<String>) -> PlainError {
+    PlainError::Header {
+        field,
+        why: why.into(),
+    }
+}
+
+impl PlainBvh {
+    /// The file bytes (see the module docs for the layout).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let nodes: Vec<u8> = self
+            .nodes
+            .iter()
+            .flat_map(|n| {
+                n.min
+                    .into_iter()
+                    .chain(n.max)
+                    .map(f32::to_bits)
+                    .chain([n.left, n.right])
+            })
+            .flat_map(u32::to_le_bytes)
+            .collect();
+        let verts: Vec<u8> = self
+            .vertices
+            .iter()
+            .flatten()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let tris: Vec<u8> = self
+            .triangles
+            .iter()
+            .flatten()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let ids: Vec<u8> = self.leaf_ids.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let mut out = Vec::with_capacity(HEADER_LEN + nodes.len() + verts.len() + tris.len());
+        out.extend_from_slice(&MAGIC);
+        for v in [
+            VERSION,
+            0,
+            self.nodes.len() as u32,
+            self.vertices.len() as u32,
+            self.triangles.len() as u32,
+            self.leaf_ids.len() as u32,
+        ] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        out.extend_from_slice(&self.mass.to_bytes());
+        out.extend_from_slice(&0u32.to_le_bytes());
+        debug_assert_eq!(out.len(), TABLE);
+        let sections: [&[u8]; 4] = [&nodes, &verts, &tris, &ids];
+        let mut at = HEADER_LEN as u64;
+        for s in sections {
+            out.extend_from_slice(&at.to_le_bytes());
+            out.extend_from_slice(&(s.len() as u64).to_le_bytes());
+            out.extend_from_slice(&xxh3_64(s).to_le_bytes());
+            at += s.len() as u64;
+        }
+        let h = xxh3_64(&out);
+        out.extend_from_slice(&h.to_le_bytes());
+        debug_assert_eq!(out.len(), HEADER_LEN);
+        for s in sections {
+            out.extend_from_slice(s);
+        }
+        out
+    }
+
+    /// Writes the file to `path` atomically (a temporary file beside it,
+    /// then renamed over it).
+    pub fn save(&self, path: &Path) -> Result<(), PlainError> {
+        atomic_write(path, &self.to_bytes()).map_err(|e| PlainError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })
+    }
+
+    /// Reads the file at `path` (see [`from_bytes`](Self::from_bytes)).
+    pub fn open(path: &Path) -> Result<PlainBvh, PlainError> {
+        let bytes = std::fs::read(path).map_err(|e| PlainError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        Self::from_bytes(&bytes)
+    }
+
+    /// Reads a file written by [`to_bytes`](Self::to_bytes): checks the
+    /// header, the section table (sections back to back, sized by the
+    /// counts, ending the file) and every checksum. Never panics and never
+    /// allocates more than the bytes given. Call [`verify`](Self::verify)
+    /// before querying bytes you did not write yourself.
+    pub fn from_bytes(b: &[u8]) -> Result<PlainBvh, PlainError> {
+        if b.len() < HEADER_LEN {
+            return Err(PlainError::Truncated {
+                section: "header",
+                need: HEADER_LEN as u64,
+                have: b.len() as u64,
+            });
+        }
+        if b[..8] != MAGIC {
+            return Err(PlainError::BadMagic);
+        }
+        if xxh3_64(&b[..HEADER_LEN - 8]) != u64_at(b, HEADER_LEN - 8) {
+            return Err(PlainError::Checksum { section: "header" });
+        }
+        let version = u32_at(b, 8);
+        if version != VERSION {
+            return Err(PlainError::Version {
+                found: version,
+                supported: VERSION,
+            });
+        }
+        if u32_at(b, 12) != 0 || u32_at(b, 84) != 0 {
+            return Err(header_err("flags", "reserved bits are set"));
+        }
+        let counts = [u32_at(b, 16), u32_at(b, 20), u32_at(b, 24), u32_at(b, 28)];
+        if counts[0] == 0 {
+            return Err(header_err("node count", "a tree has at least one node"));
+        }
+        let mass = MassProps::from_bytes(&b[32..32 + MASS_BYTES]).ok_or_else(|| {
+            header_err(
+                "mass properties",
+                "a value is not finite or the mass is negative",
+            )
+        })?;
+        let elem = [32u64, 12, 12, 4];
+        let mut at = HEADER_LEN as u64;
+        let mut ranges: [std::ops::Range<usize>; 4] = Default::default();
+        for k in 0..4 {
+            let (off, len, hash) = (
+                u64_at(b, TABLE + 24 * k),
+                u64_at(b, TABLE + 8 + 24 * k),
+                u64_at(b, TABLE + 16 + 24 * k),
+            );
+            if off != at {
+                return Err(header_err(
+                    NAMES[k],
+                    format!("the section starts at {off}, not right after the previous one ({at})"),
+                ));
+            }
+            if len != u64::from(counts[k]) * elem[k] {
+                return Err(header_err(
+                    NAMES[k],
+                    format!("{len} bytes for {} entries", counts[k]),
+                ));
+            }
+            let end = off + len; // both below 2^40: no overflow
+            if end > b.len() as u64 {
+                return Err(PlainError::Truncated {
+                    section: NAMES[k],
+                    need: end,
+                    have: b.len() as u64,
+                });
+            }
+            let r = off as usize..end as usize;
+            if xxh3_64(&b[r.clone()]) != hash {
+                return Err(PlainError::Checksum { section: NAMES[k] });
+            }
+            ranges[k] = r;
+            at = end;
+        }
+        if at != b.len() as u64 {
+            return Err(header_err(
+                "length",
+                format!("{} bytes follow the last section", b.len() as u64 - at),
+            ));
+        }
+        let nodes = b[ranges[0].clone()]
+            .chunks_exact(32)
+            .map(|c| {
+                let w: Vec<u32> = words(c).collect();
+                PlainNode {
+                    min: [w[0], w[1], w[2]].map(f32::from_bits),
+                    max: [w[3], w[4], w[5]].map(f32::from_bits),
+                    left: w[6],
+                    right: w[7],
+                }
+            })
+            .collect();
+        let vertices = b[ranges[1].clone()]
+            .chunks_exact(12)
+            .map(|c| {
+                let w: Vec<u32> = words(c).collect();
+                [w[0], w[1], w[2]].map(f32::from_bits)
+            })
+            .collect();
+        let triangles = b[ranges[2].clone()]
+            .chunks_exact(12)
+            .map(|c| {
+                let w: Vec<u32> = words(c).collect();
+                [w[0], w[1], w[2]]
+            })
+            .collect();
+        let leaf_ids = words(&b[ranges[3].clone()]).collect();
+        Ok(PlainBvh {
+            nodes,
+            vertices,
+            triangles,
+            leaf_ids,
+            mass,
+        })
+    }
+
+    /// Proves what every query relies on, in O(nodes + triangles) without
+    /// recursion: every node but the root has exactly one parent (children
+    /// in range, no repeats, no cycles, none unreachable), child boxes lie
+    /// inside their parent's, leaves hold valid triangle ids (each triangle
+    /// in exactly one leaf) and their boxes contain their triangles, vertex
+    /// indices are in range and vertices finite.
+    pub fn verify(&self) -> Result<(), PlainError> {
+        let bad = |node: usize, what| PlainError::Corrupt {
+            node: node as u64,
+            what,
+        };
+        let (nn, nt, nv) = (self.nodes.len(), self.triangles.len(), self.vertices.len());
+        if nn == 0 {
+            return Err(bad(0, "the tree has no nodes"));
+        }
+        for (t, tri) in self.triangles.iter().enumerate() {
+            if tri.iter().any(|&i| i as usize >= nv) {
+                return Err(bad(t, "triangle refers to a missing vertex"));
+            }
+        }
+        if let Some(v) = self
+            .vertices
+            .iter()
+            .position(|v| v.iter().any(|c| !c.is_finite()))
+        {
+            return Err(bad(v, "vertex has a non-finite coordinate"));
+        }
+        let single = self.leaf_ids.is_empty();
+        if nt == 0 {
+            // The empty tree: one leaf without triangles.
+            let r = &self.nodes[0];
+            return if nn == 1 && r.is_leaf() && r.leaf_count() == 0 {
+                Ok(())
+            } else {
+                Err(bad(0, "a tree without triangles must be one empty leaf"))
+            };
+        }
+        let mut seen_node = vec![false; nn];
+        let mut seen_tri = vec![false; nt];
+        seen_node[0] = true;
+        let mut stack = vec![0usize];
+        while let Some(i) = stack.pop() {
+            let n = &self.nodes[i];
+            let b = n.aabb();
+            let finite = n.min.iter().chain(&n.max).all(|c| c.is_finite());
+            if !finite || (0..3).any(|a| n.min[a] > n.max[a]) {
+                return Err(bad(i, "its box is not finite or inverted"));
+            }
+            if n.is_leaf() {
+                let count = n.leaf_count() as usize;
+                let ids: &[u32] = if single {
+                    if count != 1 {
+                        return Err(bad(i, "a leaf must hold one triangle"));
+                    }
+                    std::slice::from_ref(&n.left)
+                } else {
+                    let first = n.left as usize;
+                    if count == 0 {
+                        return Err(bad(i, "a leaf holds no triangle"));
+                    }
+                    self.leaf_ids
+                        .get(first..first + count)
+                        .ok_or_else(|| bad(i, "a leaf's triangle slots are out of range"))?
+                };
+                for &t in ids {
+                    let seen = seen_tri
+                        .get_mut(t as usize)
+                        .ok_or_else(|| bad(i, "a leaf names a missing triangle"))?;
+                    if std::mem::replace(seen, true) {
+                        return Err(bad(i, "a triangle is in two leaves"));
+                    }
+                    let tri = self.triangles[t as usize];
+                    if tri
+                        .iter()
+                        .any(|&v| !b.contains_point(self.vertices[v as usize].into()))
+                    {
+                        return Err(bad(i, "a leaf's box does not contain its triangle"));
+                    }
+                }
+            } else {
+                for c in [n.left, n.right] {
+                    let c = c as usize;
+                    let slot = seen_node
+                        .get_mut(c)
+                        .ok_or_else(|| bad(i, "a child index is out of range"))?;
+                    if std::mem::replace(slot, true) {
+                        return Err(bad(i, "a child has two parents, or the tree has a cycle"));
+                    }
+                    if !b.contains(&self.nodes[c].aabb()) {
+                        return Err(bad(c, "its box is not inside its parent's"));
+                    }
+                    stack.push(c);
+                }
+            }
+        }
+        if let Some(i) = seen_node.iter().position(|s| !s) {
+            return Err(bad(i, "no node names it as a child"));
+        }
+        if let Some(t) = seen_tri.iter().position(|s| !s) {
+            return Err(bad(t, "triangle is in no leaf"));
+        }
+        Ok(())
+    }
+}

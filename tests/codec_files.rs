@@ -1,0 +1,359 @@
+//! Every codec's self-contained file: saved atomically, opened by content
+//! (not extension) into a shape that needs no mesh, verified, giving the
+//! same answers and mass properties as the codec built from the mesh; and
+//! the CLI and sims using such files as a new user would.
+
+mod common;
+
+use std::path::PathBuf;
+use std::process::Command;
+
+use cbvh::build::{BuildOptions, build};
+use cbvh::codec::racbvh::{RacBvh, RacOptions};
+use cbvh::parry::{CbvhShape, Codec, CodecFileError, OpenOptions, open_codec};
+use cbvh::query;
+use cbvh::{Mesh, NodeCursor, TraversalStats};
+use common::*;
+use parry3d::mass_properties::MassProperties;
+use parry3d::math::Vector;
+use parry3d::shape::Shape;
+
+fn temp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("cbvh-files-{}-{name}", std::process::id()))
+}
+
+fn statue(tris: usize) -> Mesh {
+    cbvh::scene::generate(cbvh::scene::Kind::Statue, tris, 3, &mut |_, _| {}).unwrap()
+}
+
+fn codecs(mesh: &Mesh) -> Vec<Codec> {
+    let bvh = build(mesh, &BuildOptions::default(), &|_, _| {}).unwrap();
+    vec![
+        Codec::Plain(cbvh::codec::plain::PlainBvh::new(&bvh, mesh)),
+        Codec::Racbvh(Box::new(
+            RacBvh::encode(
+                &bvh,
+                mesh,
+                &RacOptions {
+                    cluster_nodes: 256,
+                    ..Default::default()
+                },
+            )
+            .unwrap(),
+        )),
+    ]
+}
+
+fn hits<C: NodeCursor>(c: &C, mesh: &Mesh) -> Vec<Option<(u32, u32)>> {
+    let mut stats = TraversalStats::default();
+    test_rays(mesh, 5, 200)
+        .iter()
+        .map(|r| {
+            query::closest_hit(c, r, f32::INFINITY, &mut stats).map(|h| (h.triangle, h.t.to_bits()))
+        })
+        .collect()
+}
+
+fn codec_hits(c: &Codec, mesh: &Mesh) -> Vec<Option<(u32, u32)>> {
+    match c {
+        Codec::Plain(p) => hits(p, mesh),
+        Codec::Racbvh(r) => hits(r.as_ref(), mesh),
+    }
+}
+
+#[test]
+fn every_codec_file_opens_by_content_into_a_shape_without_the_mesh() {
+    let mesh = statue(3000);
+    let parry = MassProperties::from_trimesh(
+        1.0,
+        &mesh
+            .vertices
+            .iter()
+            .map(|v| Vector::from_array(*v))
+            .collect::<Vec<_>>(),
+        &mesh.triangles,
+    );
+    for codec in codecs(&mesh) {
+        // A name that says nothing: the content decides.
+        let path = temp(&format!("{}.bin", codec.name()));
+        codec.save(&path).unwrap();
+        let opened = open_codec(&path, &OpenOptions::default()).unwrap();
+        assert_eq!(opened.name(), codec.name());
+        let dm = codec.decoded_mesh();
+        assert_eq!(opened.decoded_mesh(), dm);
+        let want = codec_hits(&codec, &dm);
+        assert_eq!(codec_hits(&opened, &dm), want);
+        // Mass properties come from the file, equal to parry's own
+        // integration of the original mesh.
+        let shape = CbvhShape::open(&path).unwrap();
+        let m = shape.mass_properties(1.0);
+        assert_eq!(m, parry, "{}", codec.name());
+        assert_eq!(shape.triangle_count(), mesh.triangles.len());
+        std::fs::remove_file(&path).unwrap();
+    }
+}
+
+#[test]
+fn opening_a_non_codec_file_or_a_missing_one_says_what_to_give() {
+    let path = temp("mesh.rac");
+    std::fs::write(&path, b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n").unwrap();
+    let e = open_codec(&path, &OpenOptions::default()).unwrap_err();
+    assert!(matches!(e, CodecFileError::NotACodecFile { .. }), "{e}");
+    assert!(e.to_string().contains("cbvh build"), "{e}");
+    std::fs::remove_file(&path).unwrap();
+    let e = open_codec(&path, &OpenOptions::default()).unwrap_err();
+    assert!(matches!(e, CodecFileError::Io { .. }), "{e}");
+}
+
+#[test]
+fn saving_over_a_mapped_file_is_atomic() {
+    // The old file stays intact for whoever has it mapped: no SIGBUS, the
+    // old tree still answers as before, and the new file is the new tree.
+    let (a, b) = (statue(2000), soup(9, 1500, 3.0));
+    let path = temp("mapped.rac");
+    let opts = RacOptions {
+        cluster_nodes: 256,
+        ..Default::default()
+    };
+    let ra = RacBvh::encode(
+        &build(&a, &BuildOptions::default(), &|_, _| {}).unwrap(),
+        &a,
+        &opts,
+    )
+    .unwrap();
+    let rb = RacBvh::encode(
+        &build(&b, &BuildOptions::default(), &|_, _| {}).unwrap(),
+        &b,
+        &opts,
+    )
+    .unwrap();
+    ra.save(&path).unwrap();
+    let mapped = RacBvh::open(&path, 1 << 12).unwrap();
+    let da = ra.decoded_mesh();
+    let before = hits(&mapped, &da);
+    rb.save(&path).unwrap();
+    mapped.clear_cache();
+    mapped.verify().unwrap();
+    assert_eq!(hits(&mapped, &da), before);
+    assert_eq!(hits(&ra, &da), before);
+    let now = RacBvh::open(&path, 1 << 20).unwrap();
+    assert_eq!(now.decoded_mesh(), rb.decoded_mesh());
+    drop(mapped);
+    std::fs::remove_file(&path).unwrap();
+}
+
+fn cbvh(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_cbvh"))
+        .args(args)
+        .output()
+        .expect("run cbvh");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+/// The new user's path: build a file, then info, render, re-encode and a
+/// sim, with no mesh file anywhere.
+#[test]
+fn cli_and_sims_use_codec_files_with_no_mesh_anywhere() {
+    for codec in ["racbvh", "plain"] {
+        let file = temp(&format!("cli-{codec}.rac"));
+        let f = file.to_str().unwrap();
+        let (ok, _, err) = cbvh(&[
+            "build", "--gen", "statue", "--tris", "3000", "--codec", codec, "-o", f,
+        ]);
+        assert!(ok, "{err}");
+        let (ok, out, err) = cbvh(&["info", f]);
+        assert!(ok, "{err}");
+        for want in [
+            &format!("codec                 {codec}"),
+            "B/triangle",
+            "verify                ok",
+        ] {
+            assert!(out.contains(want), "{want:?} not in {out}");
+        }
+        let png = temp(&format!("cli-{codec}.png"));
+        let (ok, out, err) = cbvh(&[
+            "render",
+            f,
+            "-o",
+            png.to_str().unwrap(),
+            "--width",
+            "64",
+            "--height",
+            "48",
+        ]);
+        assert!(ok, "{err}");
+        assert!(out.contains(&format!("codec             {codec}")), "{out}");
+        assert!(std::fs::metadata(&png).unwrap().len() > 100);
+        // Re-encode into the other codec.
+        let other = temp(&format!("cli-{codec}-other.bin"));
+        let to = if codec == "plain" { "racbvh" } else { "plain" };
+        let (ok, _, err) = cbvh(&["build", f, "--codec", to, "-o", other.to_str().unwrap()]);
+        assert!(ok, "{err}");
+        let (ok, out, err) = cbvh(&["info", other.to_str().unwrap(), "--json"]);
+        assert!(ok, "{err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(v["codec"], to);
+        assert_eq!(v["verified"], true);
+        let sim = Command::new(env!("CARGO_BIN_EXE_lucy-on-turbine"))
+            .args([
+                "--statue",
+                f,
+                "--turbine-tris",
+                "2000",
+                "--steps",
+                "2",
+                "--shapes",
+                "plain",
+            ])
+            .output()
+            .unwrap();
+        assert!(
+            sim.status.success(),
+            "{}",
+            String::from_utf8_lossy(&sim.stderr)
+        );
+        for p in [&file, &png, &other] {
+            std::fs::remove_file(p).ok();
+        }
+    }
+    // parry has no file; a damaged file is refused with a clear message.
+    let (ok, _, err) = cbvh(&[
+        "build", "--gen", "robot", "--codec", "parry", "-o", "/tmp/x",
+    ]);
+    assert!(!ok && err.contains("no cbvh file"), "{err}");
+    let bad = temp("damaged.rac");
+    let (ok, _, err) = cbvh(&[
+        "build",
+        "--gen",
+        "statue",
+        "--tris",
+        "2000",
+        "--codec",
+        "racbvh",
+        "-o",
+        bad.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let mut bytes = std::fs::read(&bad).unwrap();
+    let n = bytes.len();
+    bytes[n - 100] ^= 4; // in the mesh sections
+    std::fs::write(&bad, &bytes).unwrap();
+    let (ok, _, err) = cbvh(&["info", bad.to_str().unwrap()]);
+    assert!(!ok && err.contains("verify failed"), "{err}");
+    let (ok, _, _) = cbvh(&["info", bad.to_str().unwrap(), "--no-verify"]);
+    assert!(ok);
+    std::fs::remove_file(&bad).ok();
+}
+
+/// Bit flips in the mesh sections used to give silently wrong answers to a
+/// caller who did not call `verify`: the first triangle a query reads now
+/// checks the mesh sections once, so such a caller gets the original
+/// answers or a panic that names the damage, never other triangles.
+#[test]
+fn skipping_verify_never_gives_triangles_from_damaged_mesh_bytes() {
+    let mesh = statue(2000);
+    let bvh = build(&mesh, &BuildOptions::default(), &|_, _| {}).unwrap();
+    let rac = RacBvh::encode(&bvh, &mesh, &RacOptions::default()).unwrap();
+    let bytes = rac.to_bytes();
+    let dm = rac.decoded_mesh();
+    let want = hits(&rac, &dm);
+    // The mesh sections are the last two; the vertices' offset is in the
+    // section table (bytes 184 + 2 × 24 of the header).
+    let mesh_at = u64::from_le_bytes(bytes[232..240].try_into().unwrap()) as usize;
+    let mut rng = Rng(17);
+    let mut panics = 0;
+    for _ in 0..60 {
+        let mut bad = bytes.clone();
+        let at = mesh_at + rng.below(bytes.len() - mesh_at);
+        bad[at] ^= 1 << rng.below(8);
+        let Ok(t) = RacBvh::from_bytes(&bad, 1 << 20) else {
+            continue;
+        };
+        match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| hits(&t, &dm))) {
+            Ok(got) => assert_eq!(got, want, "flip at {at} changed answers silently"),
+            Err(e) => {
+                let msg = e.downcast_ref::<String>().cloned().unwrap_or_default();
+                assert!(msg.contains("damaged"), "{msg}");
+                assert!(t.verify().is_err());
+                panics += 1;
+            }
+        }
+    }
+    assert!(panics > 0);
+}
+
+/// A caterpillar tree (each inner node's right child is the next inner
+/// node) makes the chain of local roots' parents as long as the tree has
+/// clusters. Completing its deepest leaf from a cold cache used to recurse
+/// once per cluster (a crafted 3.2 M-node chain overflowed the stack); it
+/// is a loop now, and the whole chain decodes, verifies and answers.
+#[test]
+fn a_deep_chain_of_clusters_completes_without_recursion() {
+    use cbvh::build::{CanonicalBvh, CanonicalNode, LEAF_FLAG, Layout};
+    let n = 40_000usize; // triangles; 2n - 1 nodes, ~310 clusters of 256
+    let vertices: Vec<[f32; 3]> = (0..n)
+        .flat_map(|i| {
+            let x = i as f32;
+            [[x, 0.0, 0.0], [x + 0.5, 0.0, 0.0], [x, 1.0, 0.0]]
+        })
+        .collect();
+    let triangles: Vec<[u32; 3]> = (0..n as u32)
+        .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+        .collect();
+    let mesh = Mesh::new(vertices, triangles);
+    let leaf = |t: usize| CanonicalNode {
+        min: [t as f32, 0.0, 0.0],
+        max: [t as f32 + 0.5, 1.0, 0.0],
+        a: t as u32,
+        b: LEAF_FLAG | 1,
+    };
+    // Node 2k is inner k (covering triangles k..n), node 2k + 1 its left
+    // leaf (triangle k); the last inner node's right child is the leaf of
+    // triangle n - 1, at index 2n - 2.
+    let mut nodes = Vec::with_capacity(2 * n - 1);
+    let mut parents = Vec::with_capacity(2 * n - 1);
+    for k in 0..n - 1 {
+        let right = if k + 1 < n - 1 { 2 * k + 2 } else { 2 * n - 2 };
+        nodes.push(CanonicalNode {
+            min: [k as f32, 0.0, 0.0],
+            max: [n as f32 - 0.5, 1.0, 0.0],
+            a: (2 * k + 1) as u32,
+            b: right as u32,
+        });
+        parents.push(if k == 0 { u32::MAX } else { (2 * k - 2) as u32 });
+        nodes.push(leaf(k));
+        parents.push((2 * k) as u32);
+    }
+    nodes.push(leaf(n - 1));
+    parents.push((2 * n - 4) as u32);
+    let bvh = CanonicalBvh {
+        nodes,
+        parents,
+        leaf_triangles: (0..n as u32).collect(),
+        layout: Layout::DepthFirst,
+        max_leaf_triangles: 1,
+    };
+    let opts = RacOptions {
+        cluster_nodes: 256,
+        vertex_bits: None,
+        ..Default::default()
+    };
+    let rac = RacBvh::encode(&bvh, &mesh, &opts).unwrap();
+    let cold = RacBvh::from_bytes(&rac.to_bytes(), 1 << 30).unwrap();
+    // Run on a thread with a small stack: one frame per cluster would not fit.
+    std::thread::Builder::new()
+        .stack_size(64 << 10)
+        .spawn(move || {
+            let last = (2 * n - 2) as u32;
+            let b = cold.try_bv(last).unwrap();
+            assert!(b.min.x <= (n - 1) as f32 && b.max.x >= n as f32 - 0.5);
+            cold.verify().unwrap();
+        })
+        .unwrap()
+        .join()
+        .unwrap();
+}
