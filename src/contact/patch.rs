@@ -43,6 +43,14 @@ pub struct PatchOptions {
     /// a patch for the pair to join it, as a fraction of the smaller shape's
     /// bounding-box diagonal.
     pub gap_fraction: f32,
+    /// Bound the prediction distance by the pair's motion: when a pair was
+    /// also queried at the previous step, only triangle pairs within this
+    /// factor times the largest distance any point of shape 2 moved
+    /// relative to shape 1 since then (and at least a tenth of the
+    /// prediction) are considered, never more than the prediction. A
+    /// resting body then skips the pairs that are merely within the
+    /// speculative margin. `None` always uses the full prediction.
+    pub motion_factor: Option<f32>,
 }
 
 impl Default for PatchOptions {
@@ -50,6 +58,7 @@ impl Default for PatchOptions {
         Self {
             max_angle_deg: 5.0,
             gap_fraction: 0.1,
+            motion_factor: Some(2.0),
         }
     }
 }

@@ -47,7 +47,7 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
 ) {
     match mode {
         ContactMode::Patches(opts) => {
-            patch_workspace(workspace);
+            let prediction = patch_workspace(workspace, pos12, &s2.local_aabb(), prediction, opts);
             let set = patches(pos12, s1, s2, prediction, opts, false, counters);
             emit(
                 &set,

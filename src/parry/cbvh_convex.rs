@@ -53,9 +53,10 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
 ) {
     match mode {
         ContactMode::Patches(opts) => {
-            patch_workspace(workspace);
             // The convex shape's pose in the mesh's frame.
             let pose = if flipped { pos12.inverse() } else { *pos12 };
+            let convex_box = from_parry_aabb(&convex.compute_local_aabb());
+            let prediction = patch_workspace(workspace, &pose, &convex_box, prediction, opts);
             let set = patches(&pose, mesh, convex, prediction, opts, false, counters);
             emit(
                 &set,

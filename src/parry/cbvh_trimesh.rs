@@ -39,8 +39,9 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
 ) {
     match mode {
         ContactMode::Patches(opts) => {
-            patch_workspace(workspace);
             let tm_in_mesh = if flipped { pos12.inverse() } else { *pos12 };
+            let tm_box = from_parry_aabb(&tm.local_aabb());
+            let prediction = patch_workspace(workspace, &tm_in_mesh, &tm_box, prediction, opts);
             let set = patches(&tm_in_mesh, mesh, tm, prediction, opts, false, counters);
             emit(
                 &set,

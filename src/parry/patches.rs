@@ -97,8 +97,12 @@ impl ContactCounters {
 /// manifold ordinals change from step to step, and rebuilds its solver
 /// graph entries instead of trusting them (without it, rapier 0.36 panics
 /// with "stale ContactRef manifold ordinal" when the patch count shrinks).
+///
+/// It also keeps the pair's last pose, for [`PatchOptions::motion_factor`].
 #[derive(Clone, Copy, Debug, Default)]
-pub struct PatchWorkspace;
+pub struct PatchWorkspace {
+    last_pos12: Option<PPose>,
+}
 
 impl WorkspaceData for PatchWorkspace {
     fn as_typed_workspace_data(&self) -> TypedWorkspaceData<'_> {
@@ -110,13 +114,45 @@ impl WorkspaceData for PatchWorkspace {
     }
 }
 
-/// Sets `workspace` to a [`PatchWorkspace`] (see there why it must exist).
-pub fn patch_workspace(workspace: &mut Option<ContactManifoldsWorkspace>) {
+/// Sets `workspace` to a [`PatchWorkspace`] (see there why it must exist)
+/// and returns the prediction distance to use at `pos12`: `prediction`,
+/// or less when the options bound it by the pair's motion since the last
+/// step (`local_box2` is shape 2's box in its own frame).
+pub fn patch_workspace(
+    workspace: &mut Option<ContactManifoldsWorkspace>,
+    pos12: &PPose,
+    local_box2: &crate::geom::Aabb,
+    prediction: f32,
+    opts: &PatchOptions,
+) -> f32 {
     let ok = workspace
         .as_ref()
         .is_some_and(|w| w.0.downcast_ref::<PatchWorkspace>().is_some());
     if !ok {
-        *workspace = Some(ContactManifoldsWorkspace(Box::new(PatchWorkspace)));
+        *workspace = Some(ContactManifoldsWorkspace(Box::new(
+            PatchWorkspace::default(),
+        )));
+    }
+    let ws: &mut PatchWorkspace = workspace
+        .as_mut()
+        .and_then(|w| w.0.downcast_mut())
+        .expect("workspace was just set to a PatchWorkspace");
+    let last = ws.last_pos12.replace(*pos12);
+    match (opts.motion_factor, last) {
+        (Some(k), Some(last)) if !local_box2.is_empty() => {
+            // A rigid motion moves points affinely: the largest move over
+            // the box is at a corner.
+            let moved = local_box2
+                .corners()
+                .iter()
+                .map(|c| {
+                    let c = Vector::new(c.x, c.y, c.z);
+                    (*pos12 * c - last * c).length()
+                })
+                .fold(0.0f32, f32::max);
+            (k * moved).max(0.1 * prediction).min(prediction)
+        }
+        _ => prediction,
     }
 }
 
