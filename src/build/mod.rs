@@ -5,6 +5,13 @@
 //! three papers assume) or up to [`BuildOptions::max_leaf_triangles`], and
 //! puts the nodes in the order the [`Layout`] asks for (module `layout`). Every
 //! codec consumes the result.
+//!
+//! It takes any finite mesh at any scale: nothing recurses over the tree (a
+//! build needs the same stack for a collinear mesh as for a statue), a node
+//! the SAH cannot split (flat or collinear boxes, identical centroids) is
+//! split at a median, and no tree is taller than `2⌊log2 n⌋ + 16` over `n`
+//! triangles ([`CanonicalBvh::height`]). The tree is the same whatever the
+//! number of threads.
 
 mod layout;
 mod sah;
