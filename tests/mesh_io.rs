@@ -634,7 +634,12 @@ fn mutate(bytes: &[u8], cut: Option<usize>, flips: &[(usize, u8)]) -> Vec<u8> {
 fn no_panic(bytes: &[u8], format: Format) {
     let name = Path::new("mutated");
     if let Ok(mesh) = load_bytes(bytes, format, name) {
-        mesh.validate("mutated").unwrap();
+        // Loaders read coordinates as written; only their range is left
+        // for `validate` to refuse.
+        match mesh.validate("mutated") {
+            Ok(()) | Err(MeshError::CoordinateTooLarge { .. }) => {}
+            Err(e) => panic!("{e}"),
+        }
     }
 }
 

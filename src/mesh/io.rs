@@ -111,7 +111,9 @@ impl fmt::Display for FormatDetail {
 /// Loads the mesh file at `path`, choosing the format by extension.
 ///
 /// Polygons are fan-triangulated, STL vertices are welded, degenerate
-/// triangles are kept. The result passes [`Mesh::validate`].
+/// triangles are kept. The result passes [`Mesh::validate`], except
+/// that coordinates are read as written: `validate` refuses those beyond
+/// [`MAX_COORDINATE`](super::MAX_COORDINATE).
 ///
 /// # Errors
 /// Any [`MeshError`]: unknown extension, I/O failure, malformed or truncated

@@ -40,7 +40,7 @@ pub mod trimesh;
 mod workspace;
 
 pub use dispatcher::Dispatcher;
-pub use open::{CodecFileError, OpenOptions, codec_file_kind, open_codec};
+pub use open::{CodecError, CodecFileError, OpenOptions, codec_file_kind, open_codec};
 pub use patches::{ContactCounters, ContactMode};
 pub use shape::{CbvhShape, Codec, pose_from_parry};
 pub use trimesh::{parry_trimesh, trimesh_bytes_by_part};

@@ -8,6 +8,17 @@ use super::Codec;
 use crate::codec::plain::{PlainBvh, PlainError};
 use crate::codec::racbvh::{RacBvh, RacError};
 
+/// A codec's own error, whichever the codec.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum CodecError {
+    /// From the plain codec.
+    #[error(transparent)]
+    Plain(#[from] PlainError),
+    /// From the RACBVH codec.
+    #[error(transparent)]
+    Racbvh(#[from] RacError),
+}
+
 /// What can go wrong opening a codec file.
 #[derive(Debug, thiserror::Error)]
 pub enum CodecFileError {
@@ -48,12 +59,13 @@ pub enum CodecFileError {
         source: RacError,
     },
     /// `verify` found the file's contents inconsistent.
-    #[error("{path}: verify failed: {message}; the file is damaged: rebuild it with `cbvh build`")]
+    #[error("{path}: verify failed: {source}; the file is damaged: rebuild it with `cbvh build`")]
     Verify {
         /// The file.
         path: PathBuf,
         /// What `verify` found.
-        message: String,
+        #[source]
+        source: CodecError,
     },
 }
 
@@ -121,7 +133,7 @@ pub fn open_codec(path: &Path, options: &OpenOptions) -> Result<Codec, CodecFile
     if options.verify {
         codec
             .verify()
-            .map_err(|message| CodecFileError::Verify { path: p(), message })?;
+            .map_err(|source| CodecFileError::Verify { path: p(), source })?;
     }
     Ok(codec)
 }

@@ -67,18 +67,18 @@ impl Codec {
     }
 
     /// Proves everything a query relies on (see each codec's `verify`).
-    pub fn verify(&self) -> Result<(), String> {
+    pub fn verify(&self) -> Result<(), super::CodecError> {
         match self {
-            Codec::Plain(c) => c.verify().map_err(|e| e.to_string()),
-            Codec::Racbvh(c) => c.verify().map_err(|e| e.to_string()),
+            Codec::Plain(c) => Ok(c.verify()?),
+            Codec::Racbvh(c) => Ok(c.verify()?),
         }
     }
 
     /// Writes the codec's self-contained file (atomically).
-    pub fn save(&self, path: &std::path::Path) -> Result<(), String> {
+    pub fn save(&self, path: &std::path::Path) -> Result<(), super::CodecError> {
         match self {
-            Codec::Plain(c) => c.save(path).map_err(|e| e.to_string()),
-            Codec::Racbvh(c) => c.save(path).map_err(|e| e.to_string()),
+            Codec::Plain(c) => Ok(c.save(path)?),
+            Codec::Racbvh(c) => Ok(c.save(path)?),
         }
     }
 

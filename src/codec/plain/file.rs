@@ -224,31 +224,25 @@ impl PlainBvh {
                 format!("{} bytes follow the last section", b.len() as u64 - at),
             ));
         }
+        // Fixed-size reads (no per-record allocation): the word `k` of a
+        // record `c`.
+        let w = |c: &[u8], k: usize| u32_at(c, 4 * k);
         let nodes = b[ranges[0].clone()]
             .chunks_exact(32)
-            .map(|c| {
-                let w: Vec<u32> = words(c).collect();
-                PlainNode {
-                    min: [w[0], w[1], w[2]].map(f32::from_bits),
-                    max: [w[3], w[4], w[5]].map(f32::from_bits),
-                    left: w[6],
-                    right: w[7],
-                }
+            .map(|c| PlainNode {
+                min: [w(c, 0), w(c, 1), w(c, 2)].map(f32::from_bits),
+                max: [w(c, 3), w(c, 4), w(c, 5)].map(f32::from_bits),
+                left: w(c, 6),
+                right: w(c, 7),
             })
             .collect();
         let vertices = b[ranges[1].clone()]
             .chunks_exact(12)
-            .map(|c| {
-                let w: Vec<u32> = words(c).collect();
-                [w[0], w[1], w[2]].map(f32::from_bits)
-            })
+            .map(|c| [w(c, 0), w(c, 1), w(c, 2)].map(f32::from_bits))
             .collect();
         let triangles = b[ranges[2].clone()]
             .chunks_exact(12)
-            .map(|c| {
-                let w: Vec<u32> = words(c).collect();
-                [w[0], w[1], w[2]]
-            })
+            .map(|c| [w(c, 0), w(c, 1), w(c, 2)])
             .collect();
         let leaf_ids = words(&b[ranges[3].clone()]).collect();
         Ok(PlainBvh {
