@@ -589,3 +589,64 @@ fn a_convex_cuboid_rests_flat_on_a_fine_flat_mesh() {
     );
     assert_rests_flat("cuboid on a fine mesh", r, 0.8, 0.15);
 }
+
+/// Friction holds on a slope: a box mesh placed on a fine mesh tilted by
+/// 20° (tan 20° = 0.36, below the friction coefficient 0.6) stays where it
+/// was put, with patches as with parry's own meshes.
+#[test]
+fn friction_holds_a_box_mesh_on_a_slope() {
+    let slope = 20f32.to_radians();
+    let rot = glam::Quat::from_rotation_z(slope);
+    let tilt = |m: &mut Mesh| {
+        for v in &mut m.vertices {
+            *v = (rot * glam::Vec3::from(*v)).to_array();
+        }
+    };
+    let mut floor = grid(48, 3.0);
+    tilt(&mut floor);
+    let run = |floor_shape: SharedShape, body: SharedShape, d: Dispatcher| {
+        let mut world = PhysicsWorld {
+            narrow_phase: NarrowPhase::with_query_dispatcher(d.then_default()),
+            ..Default::default()
+        };
+        world
+            .colliders
+            .insert(ColliderBuilder::new(floor_shape).friction(0.6));
+        let up = rot * glam::Vec3::Y;
+        let start = up * 0.151;
+        let h = world.bodies.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(start.x, start.y, start.z))
+                .rotation(Vector::new(0.0, 0.0, slope))
+                .can_sleep(false),
+        );
+        world.colliders.insert_with_parent(
+            ColliderBuilder::new(body).friction(0.6),
+            h,
+            &mut world.bodies,
+        );
+        for _ in 0..240 {
+            world.step();
+        }
+        let t = world.bodies[h].translation();
+        (vec3(t) - Vec3A::from(start)).length()
+    };
+    let boxm = box_mesh([0.4, 0.15, 0.3]);
+    let floor_c = SharedShape::new(CbvhShape::plain(&floor, &BuildOptions::default()).unwrap());
+    let box_c = SharedShape::new(CbvhShape::plain(&boxm, &BuildOptions::default()).unwrap());
+    let patches = run(floor_c.clone(), box_c.clone(), Dispatcher::default());
+    let pairs = run(
+        floor_c,
+        box_c,
+        Dispatcher::new(ContactMode::PerTrianglePair),
+    );
+    let parry = run(
+        SharedShape::new(parry_trimesh(&floor).unwrap()),
+        SharedShape::new(parry_trimesh(&boxm).unwrap()),
+        Dispatcher::default(),
+    );
+    assert!(
+        patches < 0.02 && pairs < 0.02 && parry < 0.02,
+        "moved on the slope: patches {patches}, pairs {pairs}, parry {parry}"
+    );
+}

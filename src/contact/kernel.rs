@@ -496,10 +496,15 @@ fn axis_direction(a: &Triangle, b: &Triangle, axis: u8, up: bool) -> Vec3A {
 fn witness(a: &Triangle, b: &Triangle, axis: u8, n: Vec3A, sep: f32) -> (Vec3A, Vec3A) {
     match axis {
         2..=10 => {
+            // The closest points of the two edges, made to differ by exactly
+            // `sep` along the normal (segment ends can make the segments'
+            // own closest points differ sideways too, which a solver would
+            // read as a tangential offset between the bodies).
             let k = (axis - 2) as usize;
             let (ia, ib) = (k / 3, k % 3);
             let (c1, c2) = closest_on_segments(a[ia], a[(ia + 1) % 3], b[ib], b[(ib + 1) % 3]);
-            (c1, c2)
+            let m = (c1 + c2) * 0.5;
+            (m - n * (0.5 * sep), m + n * (0.5 * sep))
         }
         1 | 14..=16 => {
             // B's feature: A's deepest corner along n.

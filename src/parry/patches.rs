@@ -236,8 +236,13 @@ pub fn emit<M: Default + Clone, C: Default + Copy>(
             }
         }
         let point = |p: &PatchPoint| {
+            // The point on shape 2 sits exactly `dist` along the patch
+            // normal from the point on shape 1: a pair's own normal may
+            // differ from the patch's by up to the patch angle, and rapier
+            // reads any sideways offset between the two points as relative
+            // displacement (its friction anchors).
             let q1 = v(p.p1);
-            let q2 = a_to_b * v(p.p2);
+            let q2 = a_to_b * v(p.p1 + patch.normal * p.dist);
             if flipped {
                 let (f2, f1) = ids(p.i, p.j, p.feature);
                 TrackedContact::new(q2, q1, f1, f2, p.dist)
