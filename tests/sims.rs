@@ -62,6 +62,19 @@ fn lucy_on_turbine_runs_with_threads_and_cluster_size_and_writes_json() {
         // 40 steps from just above the turbine: the statue lands.
         assert!(r["steps_in_contact"].as_u64().unwrap() > 0, "{r}");
         assert!(u(r, "max_contact_pairs") > 0);
+        let state = r["final_state"].as_str().unwrap();
+        assert!(
+            [
+                "resting",
+                "moving",
+                "fell off the base",
+                "tunnelled through the base"
+            ]
+            .contains(&state),
+            "{state}"
+        );
+        // 40 steps: still on the turbine.
+        assert!(!state.contains("base"), "{r}");
         if r["contact_mode"] == "patches" {
             // Patches: fewer manifolds than triangle pairs, at most four
             // points each.

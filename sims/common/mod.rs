@@ -489,12 +489,11 @@ fn print_table(runs: &[RunReport], size: f32) {
         }
     }
     for r in runs {
-        let rest = r.final_speed < 0.05 * size.max(1e-6);
         println!(
             "{}: final speed {:.4} ({}), final translation ({:.4}, {:.4}, {:.4})",
             r.shape,
             r.final_speed,
-            if rest { "at rest" } else { "still moving" },
+            r.final_state,
             r.final_translation[0],
             r.final_translation[1],
             r.final_translation[2]

@@ -273,6 +273,12 @@ pub struct RunReport {
     pub final_rotation: [f32; 4],
     /// Final linear speed of the dropped body.
     pub final_speed: f32,
+    /// Where the dropped body ended: `resting` (slower than 5 % of its size
+    /// per second and its centre of mass above the base's bottom),
+    /// `moving`, `fell off the base` (centre of mass below the base's bottom
+    /// and outside its footprint) or `tunnelled through the base` (below
+    /// the bottom, inside the footprint).
+    pub final_state: String,
     /// Whether parry's fallback `Bvh` was built for a cbvh shape.
     pub fallback_bvh_built: bool,
     /// Narrow-phase milliseconds of every step.
@@ -342,6 +348,28 @@ fn make_shapes(kind: ShapeKind, scene: &DropScene) -> Result<Shapes, String> {
             Shapes::Cbvh(make(&scene.dropped)?, make(&scene.base)?)
         }
     })
+}
+
+/// See [`RunReport::final_state`].
+fn final_state(scene: &DropScene, com: Vector, speed: f32) -> String {
+    let (Some((blo, bhi)), Some((dlo, dhi))) = (scene.base.bounds(), scene.dropped.bounds()) else {
+        return "moving".into();
+    };
+    let size = (0..3).map(|k| dhi[k] - dlo[k]).fold(0.0f32, f32::max);
+    if com.y < blo[1] {
+        let inside = (blo[0]..=bhi[0]).contains(&com.x) && (blo[2]..=bhi[2]).contains(&com.z);
+        return if inside {
+            "tunnelled through the base".into()
+        } else {
+            "fell off the base".into()
+        };
+    }
+    if speed < 0.05 * size {
+        "resting"
+    } else {
+        "moving"
+    }
+    .into()
 }
 
 /// Runs the drop test with `spec`'s shapes and contact mode.
@@ -503,6 +531,7 @@ pub fn run(
         final_translation: [tr.x, tr.y, tr.z],
         final_rotation: [rot.x, rot.y, rot.z, rot.w],
         final_speed: body.linvel().length(),
+        final_state: final_state(scene, body.center_of_mass(), body.linvel().length()),
         fallback_bvh_built: cbvh
             .is_some_and(|(a, b)| a.fallback_bvh_built() || b.fallback_bvh_built()),
         narrow_phase_ms_per_step: narrow,
