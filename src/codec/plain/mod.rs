@@ -1,6 +1,6 @@
 //! The plain codec: the uncompressed reference every comparison is made
 //! against (the papers' "Ori."). See [`node::PlainNode`] for the node
-//! layout and [`file`] for the self-contained file.
+//! layout and [`file`](mod@file) for the self-contained file.
 
 mod decode;
 mod encode;
