@@ -41,7 +41,10 @@
 
 use glam::Vec3A;
 
-use crate::geom::{Triangle, closest_point_on_triangle};
+use super::features::clip_to_prism;
+pub use super::features::{closest_on_segments, closest_points};
+use super::sat::{Batch, Corners, sat_dispatch};
+use crate::geom::Triangle;
 
 /// Pairs tested together by the batched separating-axis test.
 pub const LANES: usize = 8;
@@ -108,42 +111,6 @@ impl PairContact {
             self.len += 1;
         }
     }
-}
-
-type Lanes = [f32; LANES];
-
-/// Triangle corners of a batch: `[corner][coordinate][lane]`.
-type Corners = [[Lanes; 3]; 3];
-
-/// Up to [`LANES`] queued pairs in structure-of-arrays form.
-#[derive(Clone)]
-struct Batch {
-    a: Corners,
-    b: Corners,
-    ids: [(u32, u32); LANES],
-    len: usize,
-}
-
-impl Default for Batch {
-    fn default() -> Self {
-        Self {
-            a: [[[0.0; LANES]; 3]; 3],
-            b: [[[0.0; LANES]; 3]; 3],
-            ids: [(0, 0); LANES],
-            len: 0,
-        }
-    }
-}
-
-/// The result of the separating-axis test of each lane.
-#[derive(Clone, Copy, Debug, Default)]
-struct SatOut {
-    /// The largest signed separation over the axes.
-    sep: Lanes,
-    /// The axis that gave it.
-    axis: [u8; LANES],
-    /// Whether B lies on the axis's positive side.
-    up: [bool; LANES],
 }
 
 /// Counters of a kernel's work.
@@ -303,19 +270,7 @@ impl PairKernel {
         };
         let na = face_normal(a);
         let nb = face_normal(b);
-        if sep > 0.0 && !self.exact {
-            // Separated, and the bound will do: the best axis and its
-            // witness.
-            let n = axis_direction(a, b, axis, up);
-            c.normal = n;
-            let (p1, p2) = witness(a, b, axis, n, sep);
-            c.push(PairPoint {
-                p1,
-                p2,
-                dist: sep,
-                feature: 0,
-            });
-        } else if sep > 0.0 {
+        if sep > 0.0 && self.exact {
             // Separated: the exact distance from the closest features,
             // unless a face axis's witness corner lies over the face (then
             // the bound is the distance).
@@ -343,6 +298,9 @@ impl PairKernel {
                 feature: 0,
             });
         } else {
+            // Overlapping (the best axis gives the exact depth), or
+            // separated with the bound asked for: the best axis and its
+            // witness.
             let n = axis_direction(a, b, axis, up);
             c.normal = n;
             let (p1, p2) = witness(a, b, axis, n, sep);
@@ -559,261 +517,6 @@ fn face_witness(
         return None;
     }
     Some(if from_a { (q, v, sep) } else { (v, q, sep) })
-}
-
-/// Clips triangle `t` to the prism over triangle `f` with unit normal `n`
-/// (Sutherland–Hodgman): at most six corners.
-fn clip_to_prism(t: &Triangle, f: &Triangle, n: Vec3A) -> Poly {
-    let mut poly = Poly::from(t);
-    for k in 0..3 {
-        let (p, q) = (f[k], f[(k + 1) % 3]);
-        let inward = n.cross(q - p);
-        poly = poly.clip(p, inward);
-        if poly.len == 0 {
-            break;
-        }
-    }
-    poly
-}
-
-/// A convex polygon of at most six corners (a triangle clipped by three
-/// planes), on the stack.
-#[derive(Clone, Copy)]
-struct Poly {
-    v: [Vec3A; 9],
-    len: usize,
-}
-
-impl Poly {
-    fn from(t: &Triangle) -> Self {
-        let mut v = [Vec3A::ZERO; 9];
-        v[..3].copy_from_slice(t);
-        Self { v, len: 3 }
-    }
-
-    fn iter(&self) -> impl Iterator<Item = &Vec3A> {
-        self.v[..self.len].iter()
-    }
-
-    /// Keeps the part where `inward · (x − p) ≥ 0`.
-    fn clip(&self, p: Vec3A, inward: Vec3A) -> Poly {
-        let mut out = Poly {
-            v: [Vec3A::ZERO; 9],
-            len: 0,
-        };
-        // A tolerance relative to the plane's scale keeps corners lying on
-        // the plane (shared edges) on both sides.
-        let eps = 1e-6 * inward.length() * (self.v[0] - p).length().max(1.0);
-        for k in 0..self.len {
-            let x = self.v[k];
-            let y = self.v[(k + 1) % self.len];
-            let dx = inward.dot(x - p);
-            let dy = inward.dot(y - p);
-            let x_in = dx >= -eps;
-            let y_in = dy >= -eps;
-            if x_in && out.len < 9 {
-                out.v[out.len] = x;
-                out.len += 1;
-            }
-            if x_in != y_in && out.len < 9 {
-                let t = dx / (dx - dy);
-                if t.is_finite() {
-                    out.v[out.len] = x + (y - x) * t.clamp(0.0, 1.0);
-                    out.len += 1;
-                }
-            }
-        }
-        out
-    }
-}
-
-/// The closest points of segments `p0 q0` and `p1 q1` (Ericson §5.1.9).
-pub fn closest_on_segments(p0: Vec3A, q0: Vec3A, p1: Vec3A, q1: Vec3A) -> (Vec3A, Vec3A) {
-    let d1 = q0 - p0;
-    let d2 = q1 - p1;
-    let r = p0 - p1;
-    let a = d1.dot(d1);
-    let e = d2.dot(d2);
-    let f = d2.dot(r);
-    const EPS: f32 = 1e-30;
-    let (s, t);
-    if a <= EPS && e <= EPS {
-        return (p0, p1);
-    }
-    if a <= EPS {
-        s = 0.0;
-        t = (f / e).clamp(0.0, 1.0);
-    } else {
-        let c = d1.dot(r);
-        if e <= EPS {
-            t = 0.0;
-            s = (-c / a).clamp(0.0, 1.0);
-        } else {
-            let b = d1.dot(d2);
-            let denom = a * e - b * b;
-            let mut s0 = if denom > 0.0 {
-                ((b * f - c * e) / denom).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let mut t0 = (b * s0 + f) / e;
-            if t0 < 0.0 {
-                t0 = 0.0;
-                s0 = (-c / a).clamp(0.0, 1.0);
-            } else if t0 > 1.0 {
-                t0 = 1.0;
-                s0 = ((b - c) / a).clamp(0.0, 1.0);
-            }
-            s = s0;
-            t = t0;
-        }
-    }
-    (p0 + d1 * s, p1 + d2 * t)
-}
-
-/// The closest points of two triangles that do not intersect, and their
-/// distance: the best of the six corner–triangle and nine edge–edge pairs.
-pub fn closest_points(a: &Triangle, b: &Triangle) -> (Vec3A, Vec3A, f32) {
-    let mut best = (a[0], b[0], f32::INFINITY);
-    let mut consider = |p: Vec3A, q: Vec3A| {
-        let d2 = (q - p).length_squared();
-        if d2 < best.2 {
-            best = (p, q, d2);
-        }
-    };
-    for v in a {
-        consider(*v, closest_point_on_triangle(*v, b).0);
-    }
-    for v in b {
-        consider(closest_point_on_triangle(*v, a).0, *v);
-    }
-    for ia in 0..3 {
-        for ib in 0..3 {
-            let (p, q) = closest_on_segments(a[ia], a[(ia + 1) % 3], b[ib], b[(ib + 1) % 3]);
-            consider(p, q);
-        }
-    }
-    (best.0, best.1, best.2.sqrt())
-}
-
-fn sat_dispatch(batch: &Batch, simd: Simd) -> SatOut {
-    #[cfg(target_arch = "x86_64")]
-    if simd == Simd::Auto && std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor supports AVX2, checked just above; the
-        // function has no other requirement.
-        return unsafe { sat_avx2(batch) };
-    }
-    let _ = simd;
-    sat_lanes(batch)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn sat_avx2(batch: &Batch) -> SatOut {
-    sat_lanes(batch)
-}
-
-#[inline(always)]
-fn sub(x: &Lanes, y: &Lanes) -> Lanes {
-    std::array::from_fn(|l| x[l] - y[l])
-}
-
-#[inline(always)]
-fn sub3(x: &[Lanes; 3], y: &[Lanes; 3]) -> [Lanes; 3] {
-    [sub(&x[0], &y[0]), sub(&x[1], &y[1]), sub(&x[2], &y[2])]
-}
-
-#[inline(always)]
-fn cross(x: &[Lanes; 3], y: &[Lanes; 3]) -> [Lanes; 3] {
-    [
-        std::array::from_fn(|l| x[1][l] * y[2][l] - x[2][l] * y[1][l]),
-        std::array::from_fn(|l| x[2][l] * y[0][l] - x[0][l] * y[2][l]),
-        std::array::from_fn(|l| x[0][l] * y[1][l] - x[1][l] * y[0][l]),
-    ]
-}
-
-#[inline(always)]
-fn dot(x: &[Lanes; 3], y: &[Lanes; 3]) -> Lanes {
-    std::array::from_fn(|l| x[0][l] * y[0][l] + x[1][l] * y[1][l] + x[2][l] * y[2][l])
-}
-
-/// One axis of the batched test: the signed separation of every lane along
-/// `l3`, kept where it beats the best so far.
-#[inline(always)]
-fn test_axis(
-    out: &mut SatOut,
-    a: &Corners,
-    b: &Corners,
-    axis: u8,
-    l3: &[Lanes; 3],
-    reference: &Lanes,
-) {
-    let len2 = dot(l3, l3);
-    let pa = [dot(l3, &a[0]), dot(l3, &a[1]), dot(l3, &a[2])];
-    let pb = [dot(l3, &b[0]), dot(l3, &b[1]), dot(l3, &b[2])];
-    for l in 0..LANES {
-        let min_a = pa[0][l].min(pa[1][l]).min(pa[2][l]);
-        let max_a = pa[0][l].max(pa[1][l]).max(pa[2][l]);
-        let min_b = pb[0][l].min(pb[1][l]).min(pb[2][l]);
-        let max_b = pb[0][l].max(pb[1][l]).max(pb[2][l]);
-        let s_up = min_b - max_a;
-        let s_dn = min_a - max_b;
-        let up = s_up >= s_dn;
-        let s = s_up.max(s_dn) / len2[l].sqrt();
-        let valid = len2[l] > 1e-12 * reference[l];
-        let better = valid && s > out.sep[l];
-        out.sep[l] = if better { s } else { out.sep[l] };
-        out.axis[l] = if better { axis } else { out.axis[l] };
-        out.up[l] = if better { up } else { out.up[l] };
-    }
-}
-
-/// The 17-axis test over a batch, written lane-wise so that it vectorizes.
-/// Axis order: 0 A's face normal, 1 B's, 2..=10 `edge_A(k/3) × edge_B(k%3)`,
-/// 11..=13 `n_A × edge_A`, 14..=16 `n_B × edge_B`. Axes shorter than a tiny
-/// fraction of their edges' product (parallel edges) are skipped. Ties keep
-/// the earlier axis, so face normals win over edge axes.
-#[inline(always)]
-fn sat_lanes(batch: &Batch) -> SatOut {
-    let a = &batch.a;
-    let b = &batch.b;
-    let ea = [sub3(&a[1], &a[0]), sub3(&a[2], &a[1]), sub3(&a[0], &a[2])];
-    let eb = [sub3(&b[1], &b[0]), sub3(&b[2], &b[1]), sub3(&b[0], &b[2])];
-    let la: [Lanes; 3] = [0, 1, 2].map(|k| dot(&ea[k], &ea[k]));
-    let lb: [Lanes; 3] = [0, 1, 2].map(|k| dot(&eb[k], &eb[k]));
-    let na = cross(&ea[0], &ea[1]);
-    let nb = cross(&eb[0], &eb[1]);
-    let mut out = SatOut {
-        sep: [f32::NEG_INFINITY; LANES],
-        axis: [0; LANES],
-        up: [true; LANES],
-    };
-    let mut test = |axis: u8, l3: &[Lanes; 3], reference: &Lanes| {
-        test_axis(&mut out, a, b, axis, l3, reference)
-    };
-    // The reference scale of a face normal: the product of two edges' squares.
-    let ra: Lanes = std::array::from_fn(|l| la[0][l] * la[1][l]);
-    let rb: Lanes = std::array::from_fn(|l| lb[0][l] * lb[1][l]);
-    test(0, &na, &ra);
-    test(1, &nb, &rb);
-    for i in 0..3 {
-        for j in 0..3 {
-            let axis = cross(&ea[i], &eb[j]);
-            let r: Lanes = std::array::from_fn(|l| la[i][l] * lb[j][l]);
-            test(2 + (3 * i + j) as u8, &axis, &r);
-        }
-    }
-    for i in 0..3 {
-        let axis = cross(&na, &ea[i]);
-        let r: Lanes = std::array::from_fn(|l| ra[l] * la[i][l]);
-        test(11 + i as u8, &axis, &r);
-    }
-    for j in 0..3 {
-        let axis = cross(&nb, &eb[j]);
-        let r: Lanes = std::array::from_fn(|l| rb[l] * lb[j][l]);
-        test(14 + j as u8, &axis, &r);
-    }
-    out
 }
 
 #[cfg(test)]

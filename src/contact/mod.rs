@@ -14,8 +14,10 @@
 //! parry's convex-convex code: that path stays available as the
 //! per-triangle-pair contact mode.
 
+mod features;
 pub mod kernel;
 pub mod patch;
+mod sat;
 
 pub use kernel::{
     Interference, KernelStats, PairContact, PairKernel, PairPoint, pair_contact,

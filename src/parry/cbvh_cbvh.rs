@@ -14,7 +14,7 @@ use parry3d::query::{
     PersistentQueryDispatcher, QueryDispatcher, ShapeDistance, ShapeIntersection,
 };
 
-use super::patches::{ContactCounters, ContactMode, emit, patch_workspace};
+use super::patches::{ContactCounters, ContactMode, count_pair_manifolds, emit, patch_workspace};
 use super::shape::{CbvhShape, pose_from_parry, to_parry_triangle, with_cursor};
 use super::workspace::ManifoldUpdate;
 use crate::contact::{Interference, PairKernel, PatchOptions, PatchSet};
@@ -59,10 +59,7 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
         }
         ContactMode::PerTrianglePair => {
             contact_manifolds(pos12, s1, s2, prediction, manifolds, workspace);
-            if let Some(c) = counters {
-                let with_points = manifolds.iter().filter(|m| !m.points.is_empty()).count();
-                c.add(0, with_points as u64, 0);
-            }
+            count_pair_manifolds(counters, manifolds);
         }
     }
 }

@@ -13,7 +13,7 @@ use parry3d::query::{
 };
 use parry3d::shape::Shape;
 
-use super::patches::{ContactCounters, ContactMode, emit, patch_workspace};
+use super::patches::{ContactCounters, ContactMode, count_pair_manifolds, emit, patch_workspace};
 use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle, with_cursor};
 use super::workspace::ManifoldUpdate;
 use crate::contact::{PatchOptions, PatchPoint, PatchSet};
@@ -70,10 +70,7 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
             contact_manifolds(
                 pos12, mesh, convex, flipped, prediction, manifolds, workspace,
             );
-            if let Some(c) = counters {
-                let with_points = manifolds.iter().filter(|m| !m.points.is_empty()).count();
-                c.add(0, with_points as u64, 0);
-            }
+            count_pair_manifolds(counters, manifolds);
         }
     }
 }

@@ -156,6 +156,18 @@ pub fn patch_workspace(
     }
 }
 
+/// Counts the per-pair mode's work: one contact pair per manifold with
+/// points.
+pub fn count_pair_manifolds<M, C>(
+    counters: Option<&ContactCounters>,
+    manifolds: &[ContactManifold<M, C>],
+) {
+    if let Some(c) = counters {
+        let with_points = manifolds.iter().filter(|m| !m.points.is_empty()).count();
+        c.add(0, with_points as u64, 0);
+    }
+}
+
 const CODE_MASK: u32 = (1 << 30) - 1;
 
 fn ids(i1: u32, i2: u32, feature: u8) -> (PackedFeatureId, PackedFeatureId) {
