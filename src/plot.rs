@@ -53,7 +53,22 @@ pub fn line_plot_png(
             .y_desc(y_label)
             .draw()
             .map_err(|e| e.to_string())?;
-        let palette = [RED, BLUE, GREEN, MAGENTA, CYAN, BLACK];
+        // Twelve distinct colours (the sims draw up to seven runs and their
+        // interference series), so no two series share one.
+        let palette = [
+            RGBColor(228, 26, 28),
+            RGBColor(55, 126, 184),
+            RGBColor(77, 175, 74),
+            RGBColor(152, 78, 163),
+            RGBColor(255, 127, 0),
+            RGBColor(166, 86, 40),
+            RGBColor(247, 129, 191),
+            RGBColor(0, 0, 0),
+            RGBColor(23, 190, 207),
+            RGBColor(188, 189, 34),
+            RGBColor(127, 127, 127),
+            RGBColor(0, 0, 128),
+        ];
         for (k, (name, ys)) in series.iter().enumerate() {
             let color = palette[k % palette.len()];
             chart
