@@ -199,16 +199,7 @@ impl PairKernel {
         b: &Triangle,
         sink: &mut impl FnMut(&PairContact),
     ) {
-        let l = self.batch.len;
-        for c in 0..3 {
-            for k in 0..3 {
-                self.batch.a[c][k][l] = a[c][k];
-                self.batch.b[c][k][l] = b[c][k];
-            }
-        }
-        self.batch.ids[l] = (i, j);
-        self.batch.len += 1;
-        if self.batch.len == LANES {
+        if self.batch.put(a, b, (i, j)) {
             self.flush(sink);
         }
     }
@@ -391,15 +382,7 @@ impl Interference {
     /// Queues one pair (both triangles in the same frame).
     #[inline]
     pub fn push(&mut self, a: &Triangle, b: &Triangle) {
-        let l = self.batch.len;
-        for c in 0..3 {
-            for k in 0..3 {
-                self.batch.a[c][k][l] = a[c][k];
-                self.batch.b[c][k][l] = b[c][k];
-            }
-        }
-        self.batch.len += 1;
-        if self.batch.len == LANES {
+        if self.batch.put(a, b, (0, 0)) {
             self.flush();
         }
     }

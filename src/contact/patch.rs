@@ -268,6 +268,14 @@ impl PatchSet {
             // still depends only on the order of the contacts.
             return Some(self.last);
         }
+        self.first_near(normal, |p| {
+            p.normal.dot(normal) >= self.cos_angle && p.bounds.loosened(self.gap).contains_point(at)
+        })
+    }
+
+    /// The first patch (in creation order) with a normal in the 27 cells
+    /// around `normal`'s that satisfies `pred`.
+    fn first_near(&self, normal: Vec3A, pred: impl Fn(&Patch) -> bool) -> Option<usize> {
         let (x, y, z) = self.key(normal);
         let mut best: Option<usize> = None;
         for dx in -1..=1 {
@@ -281,7 +289,7 @@ impl PatchSet {
                         if best.is_some_and(|b| b < k) {
                             break;
                         }
-                        if self.accepts(k, normal, at) {
+                        if pred(&self.patches[k]) {
                             best = Some(k);
                             break;
                         }
@@ -292,11 +300,27 @@ impl PatchSet {
         best
     }
 
+    /// The patch a contact with `normal` whose first point is `first`
+    /// joins, created if none accepts it; it becomes the last one used.
+    fn patch_for(&mut self, normal: Vec3A, first: PatchPoint) -> &mut Patch {
+        let k = match self.find(normal, first.p1) {
+            Some(k) => k,
+            None => self.create(normal, first),
+        };
+        self.last = k;
+        &mut self.patches[k]
+    }
+
     fn create(&mut self, normal: Vec3A, first: PatchPoint) -> usize {
+        self.register(Patch::new(normal, first))
+    }
+
+    /// Appends `patch` and indexes it by its normal.
+    fn register(&mut self, patch: Patch) -> usize {
         let k = self.patches.len();
-        self.patches.push(Patch::new(normal, first));
-        let key = self.key(normal);
+        let key = self.key(patch.normal);
         self.index.entry(key).or_default().push(k as u32);
+        self.patches.push(patch);
         k
     }
 
@@ -327,19 +351,11 @@ impl PatchSet {
             j: c.j,
             feature: p.feature,
         };
-        let k = if self.last < self.patches.len() && self.accepts(self.last, c.normal, w.p1) {
-            self.last
-        } else if let Some(k) = (0..self.patches.len()).find(|&k| self.accepts(k, c.normal, w.p1)) {
-            k
-        } else {
-            self.patches.push(Patch::new(c.normal, point(w)));
-            self.patches.len() - 1
-        };
-        self.last = k;
-        let patch = &mut self.patches[k];
+        let record = self.record;
+        let patch = self.patch_for(c.normal, point(w));
         patch.pairs += 1;
         patch.min_cos = patch.min_cos.min(patch.normal.dot(c.normal));
-        if self.record {
+        if record {
             patch.members.push((c.i, c.j));
         }
         for p in pts {
@@ -350,16 +366,12 @@ impl PatchSet {
     /// Adds a contact point that did not come from the triangle kernel (a
     /// convex shape against a triangle), with its pair's normal.
     pub fn add_point(&mut self, normal: Vec3A, p: PatchPoint, new_pair: bool) {
-        let k = match self.find(normal, p.p1) {
-            Some(k) => k,
-            None => self.create(normal, p),
-        };
-        self.last = k;
-        let patch = &mut self.patches[k];
+        let record = self.record;
+        let patch = self.patch_for(normal, p);
         if new_pair {
             patch.pairs += 1;
             patch.min_cos = patch.min_cos.min(patch.normal.dot(normal));
-            if self.record {
+            if record {
                 patch.members.push((p.i, p.j));
             }
         }
@@ -379,21 +391,7 @@ impl PatchSet {
                     && acos(q.normal.dot(p.normal)) + cone <= self.max_angle
                     && q.bounds.loosened(self.gap).intersects(&p.bounds)
             };
-            let (x, y, z) = self.key(p.normal);
-            let mut k: Option<usize> = None;
-            for dx in -1..=1 {
-                for dy in -1..=1 {
-                    for dz in -1..=1 {
-                        if let Some(list) = self.index.get(&(x + dx, y + dy, z + dz))
-                            && let Some(&c) =
-                                list.iter().find(|&&c| fits(&self.patches[c as usize]))
-                            && k.is_none_or(|k| (c as usize) < k)
-                        {
-                            k = Some(c as usize);
-                        }
-                    }
-                }
-            }
+            let k = self.first_near(p.normal, fits);
             match k {
                 Some(k) => {
                     let q = &mut self.patches[k];
@@ -408,12 +406,7 @@ impl PatchSet {
                     q.members.extend(p.members);
                 }
                 None => {
-                    let key = self.key(p.normal);
-                    self.index
-                        .entry(key)
-                        .or_default()
-                        .push(self.patches.len() as u32);
-                    self.patches.push(p);
+                    self.register(p);
                 }
             }
         }

@@ -4,6 +4,7 @@
 //! chosen at run time (see [`super::kernel`] for the axes).
 
 use super::kernel::{LANES, Simd};
+use crate::geom::Triangle;
 
 pub(super) type Lanes = [f32; LANES];
 
@@ -27,6 +28,24 @@ impl Default for Batch {
             ids: [(0, 0); LANES],
             len: 0,
         }
+    }
+}
+
+impl Batch {
+    /// Queues the pair `a`, `b` with its ids in the next lane; returns
+    /// whether the batch is now full.
+    #[inline]
+    pub(super) fn put(&mut self, a: &Triangle, b: &Triangle, ids: (u32, u32)) -> bool {
+        let l = self.len;
+        for c in 0..3 {
+            for k in 0..3 {
+                self.a[c][k][l] = a[c][k];
+                self.b[c][k][l] = b[c][k];
+            }
+        }
+        self.ids[l] = ids;
+        self.len += 1;
+        self.len == LANES
     }
 }
 

@@ -14,7 +14,7 @@ use parry3d::query::{
     PersistentQueryDispatcher, QueryDispatcher, ShapeDistance, ShapeIntersection,
 };
 
-use super::patches::{ContactCounters, ContactMode, count_pair_manifolds, emit, patch_workspace};
+use super::patches::{ContactCounters, ContactMode, count_pair_manifolds, patch_manifolds};
 use super::shape::{CbvhShape, pose_from_parry, to_parry_triangle, with_cursor};
 use super::workspace::ManifoldUpdate;
 use crate::contact::{Interference, PairKernel, PatchOptions, PatchSet};
@@ -47,14 +47,16 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
 ) {
     match mode {
         ContactMode::Patches(opts) => {
-            let prediction = patch_workspace(workspace, pos12, &s2.local_aabb(), prediction, opts);
-            let set = patches(pos12, s1, s2, prediction, opts, false, counters);
-            emit(
-                &set,
-                &pos12.inverse(),
+            let box2 = s2.local_aabb();
+            patch_manifolds(
+                opts,
+                workspace,
+                pos12,
+                &box2,
+                prediction,
                 false,
-                opts.max_angle_deg.to_radians().cos(),
                 manifolds,
+                |p| patches(pos12, s1, s2, p, opts, false, counters),
             );
         }
         ContactMode::PerTrianglePair => {

@@ -13,7 +13,7 @@ use parry3d::query::{
 };
 use parry3d::shape::Shape;
 
-use super::patches::{ContactCounters, ContactMode, count_pair_manifolds, emit, patch_workspace};
+use super::patches::{ContactCounters, ContactMode, count_pair_manifolds, patch_manifolds};
 use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle, with_cursor};
 use super::workspace::ManifoldUpdate;
 use crate::contact::{PatchOptions, PatchPoint, PatchSet};
@@ -56,14 +56,15 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
             // The convex shape's pose in the mesh's frame.
             let pose = if flipped { pos12.inverse() } else { *pos12 };
             let convex_box = from_parry_aabb(&convex.compute_local_aabb());
-            let prediction = patch_workspace(workspace, &pose, &convex_box, prediction, opts);
-            let set = patches(&pose, mesh, convex, prediction, opts, false, counters);
-            emit(
-                &set,
-                &pose.inverse(),
+            patch_manifolds(
+                opts,
+                workspace,
+                &pose,
+                &convex_box,
+                prediction,
                 flipped,
-                opts.max_angle_deg.to_radians().cos(),
                 manifolds,
+                |p| patches(&pose, mesh, convex, p, opts, false, counters),
             );
         }
         ContactMode::PerTrianglePair => {

@@ -16,7 +16,7 @@ use parry3d::query::{
 };
 use parry3d::shape::{CompositeShape, Shape, TriMesh};
 
-use super::patches::{ContactCounters, ContactMode, count_pair_manifolds, emit, patch_workspace};
+use super::patches::{ContactCounters, ContactMode, count_pair_manifolds, patch_manifolds};
 use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle, with_cursor};
 use super::workspace::ManifoldUpdate;
 use crate::contact::{PairKernel, PatchOptions, PatchSet};
@@ -41,14 +41,15 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
         ContactMode::Patches(opts) => {
             let tm_in_mesh = if flipped { pos12.inverse() } else { *pos12 };
             let tm_box = from_parry_aabb(&tm.local_aabb());
-            let prediction = patch_workspace(workspace, &tm_in_mesh, &tm_box, prediction, opts);
-            let set = patches(&tm_in_mesh, mesh, tm, prediction, opts, false, counters);
-            emit(
-                &set,
-                &tm_in_mesh.inverse(),
+            patch_manifolds(
+                opts,
+                workspace,
+                &tm_in_mesh,
+                &tm_box,
+                prediction,
                 flipped,
-                opts.max_angle_deg.to_radians().cos(),
                 manifolds,
+                |p| patches(&tm_in_mesh, mesh, tm, p, opts, false, counters),
             );
         }
         ContactMode::PerTrianglePair => {

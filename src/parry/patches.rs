@@ -156,6 +156,33 @@ pub fn patch_workspace(
     }
 }
 
+/// One step of patch contacts for a pair whose patches are computed in the
+/// frame of side A (the cbvh shape): sets up the pair's workspace, bounds
+/// the prediction by the pair's motion (`b_in_a` places side B, whose own
+/// box is `local_box_b`), computes the patches with `compute(prediction)`
+/// and replaces `manifolds` with them (`flipped`: A is parry's shape 2).
+#[allow(clippy::too_many_arguments)]
+pub fn patch_manifolds<M: Default + Clone, C: Default + Copy>(
+    opts: &PatchOptions,
+    workspace: &mut Option<ContactManifoldsWorkspace>,
+    b_in_a: &PPose,
+    local_box_b: &crate::geom::Aabb,
+    prediction: f32,
+    flipped: bool,
+    manifolds: &mut Vec<ContactManifold<M, C>>,
+    compute: impl FnOnce(f32) -> PatchSet,
+) {
+    let prediction = patch_workspace(workspace, b_in_a, local_box_b, prediction, opts);
+    let set = compute(prediction);
+    emit(
+        &set,
+        &b_in_a.inverse(),
+        flipped,
+        opts.max_angle_deg.to_radians().cos(),
+        manifolds,
+    );
+}
+
 /// Counts the per-pair mode's work: one contact pair per manifold with
 /// points.
 pub fn count_pair_manifolds<M, C>(
