@@ -1,9 +1,12 @@
 //! Machinery more than one codec uses: atomic file saves, the stored mass
 //! properties, and recognising a codec file by its magic.
 
+mod error;
+pub mod le;
 pub mod mass;
 mod save;
 
+pub use error::FormatError;
 pub use mass::{MASS_BYTES, MassProps};
 pub use save::atomic_write;
 

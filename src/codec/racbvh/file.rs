@@ -44,7 +44,8 @@ use xxhash_rust::xxh3::xxh3_64;
 use super::mesh::{MeshParams, PackedMesh, bits_for};
 use super::node::Grid;
 use super::{ClusterMeta, Header, RacBvh, RacError};
-use crate::codec::common::{MASS_BYTES, MassProps};
+use crate::codec::common::le::{f32x3_at, u32_at, u64_at};
+use crate::codec::common::{FormatError, MASS_BYTES, MassProps};
 
 /// The container version this build writes and reads.
 pub const VERSION: u32 = 3;
@@ -55,22 +56,6 @@ const HEADER_LEN: usize = 288;
 const TABLE: usize = 184;
 /// Bytes of one meta-table entry.
 pub(super) const META_ENTRY: usize = 20;
-
-fn u32_at(b: &[u8], at: usize) -> u32 {
-    u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
-}
-
-fn u64_at(b: &[u8], at: usize) -> u64 {
-    u64::from_le_bytes(std::array::from_fn(|k| b[at + k]))
-}
-
-fn f32_at(b: &[u8], at: usize) -> f32 {
-    f32::from_bits(u32_at(b, at))
-}
-
-fn f32x3_at(b: &[u8], at: usize) -> [f32; 3] {
-    [f32_at(b, at), f32_at(b, at + 4), f32_at(b, at + 8)]
-}
 
 /// Bytes of a section: owned (pre-loaded mode) or a range of a memory-mapped
 /// file (out-of-core mode: the operating system reads pages on demand).
@@ -117,10 +102,7 @@ fn combine(a: u64, b: u64) -> u64 {
 }
 
 fn header_err(field: &'static str, why: impl Into<String>) -> RacError {
-    RacError::Header {
-        field,
-        why: why.into(),
-    }
+    FormatError::header(field, why).into()
 }
 
 impl RacBvh {
@@ -227,14 +209,15 @@ impl RacBvh {
         cache_budget_bytes: usize,
     ) -> Result<RacBvh, RacError> {
         if b.len() < HEADER_LEN {
-            return Err(RacError::Truncated {
+            return Err(FormatError::Truncated {
                 section: "header",
                 need: HEADER_LEN as u64,
                 have: b.len() as u64,
-            });
+            }
+            .into());
         }
         if b[..8] != MAGIC {
-            return Err(RacError::BadMagic);
+            return Err(FormatError::BadMagic { format: "RACBVH" }.into());
         }
         if xxh3_64(&b[..HEADER_LEN - 8]) != u64_at(b, HEADER_LEN - 8) {
             return Err(RacError::Corrupt("the header's checksum does not match"));
@@ -350,11 +333,12 @@ impl RacBvh {
                 ));
             }
             if end > b.len() as u64 {
-                return Err(RacError::Truncated {
+                return Err(FormatError::Truncated {
                     section: name,
                     need: end,
                     have: b.len() as u64,
-                });
+                }
+                .into());
             }
             sections[k] = &b[off as usize..end as usize];
             ranges[k] = off as usize..end as usize;
@@ -363,11 +347,12 @@ impl RacBvh {
         let clusters = u64::from(node_count).div_ceil(csize);
         let need = clusters * META_ENTRY as u64;
         if (sections[0].len() as u64) < need {
-            return Err(RacError::Truncated {
+            return Err(FormatError::Truncated {
                 section: "meta",
                 need,
                 have: sections[0].len() as u64,
-            });
+            }
+            .into());
         }
         if xxh3_64(sections[0]) != hashes[0] {
             return Err(RacError::Corrupt(
@@ -379,11 +364,12 @@ impl RacBvh {
         // node count the clusters cannot hold is a forgery; this also bounds
         // what `verify` allocates per node by the file's size.
         if (data.len() as u64) * 8 < u64::from(node_count) {
-            return Err(RacError::Truncated {
+            return Err(FormatError::Truncated {
                 section: "clusters",
                 need: u64::from(node_count).div_ceil(8),
                 have: data.len() as u64,
-            });
+            }
+            .into());
         }
         let mut meta = Vec::with_capacity(clusters as usize);
         let mut prev = 0u64;

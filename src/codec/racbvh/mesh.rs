@@ -24,6 +24,8 @@ use glam::Vec3A;
 
 use super::RacError;
 use super::file::Store;
+use crate::codec::common::FormatError;
+use crate::codec::common::le::{u32_at, u64_at};
 use crate::geom::Triangle;
 use crate::mesh::Mesh;
 
@@ -63,14 +65,6 @@ pub fn bits_for(n: u64) -> u32 {
 
 /// Values per [`ForArray`] block.
 const BLOCK: usize = 128;
-
-fn u32_at(b: &[u8], at: usize) -> u32 {
-    u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
-}
-
-fn u64_at(b: &[u8], at: usize) -> u64 {
-    u64::from_le_bytes(std::array::from_fn(|k| b[at + k]))
-}
 
 /// A view of one frame-of-reference array inside a byte blob (see the
 /// module docs for the layout).
@@ -120,14 +114,14 @@ impl ForArray {
     /// Parses the array starting at `at` of `b`, checking every block head;
     /// returns it and the offset just past it.
     pub fn parse(b: &[u8], at: usize, section: &'static str) -> Result<(Self, usize), RacError> {
-        let short = |need: u64| RacError::Truncated {
+        let short = |need: u64| FormatError::Truncated {
             section,
             need,
             have: b.len() as u64,
         };
         let fixed = at.checked_add(16).ok_or(short(u64::MAX))?;
         if fixed > b.len() {
-            return Err(short(fixed as u64));
+            return Err(short(fixed as u64).into());
         }
         let len = u64_at(b, at);
         let data_len = u64_at(b, at + 8);
@@ -138,7 +132,7 @@ impl ForArray {
             .and_then(|d| d.checked_add(data_len).map(|e| (d, e)))
             .ok_or(short(u64::MAX))?;
         if end.1 > b.len() as u64 {
-            return Err(short(end.1));
+            return Err(short(end.1).into());
         }
         let arr = Self {
             len,
