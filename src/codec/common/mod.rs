@@ -1,6 +1,8 @@
 //! Machinery more than one codec uses: atomic file saves, the stored mass
 //! properties, and recognising a codec file by its magic.
 
+pub mod bits;
+pub mod dict;
 mod error;
 pub mod le;
 pub mod mass;

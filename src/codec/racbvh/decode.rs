@@ -4,12 +4,14 @@
 use std::sync::{Arc, Mutex};
 
 use super::cache::{self, Live};
-use super::coder::{BitReader, DictDecoder, SymbolDecoder, unzigzag};
 use super::node::{CoreNode, INCOMPLETE, LEAF_FLAG, QBox, apply, qbox_of};
 use super::{
     CTX_CHILD, CTX_COUNT, CTX_PCLUSTER, CTX_STRUCT, CTX_TRI, CTX_TRI_FAR, Header, NCTX, RacBvh,
     RacError, STREAMS, mask_context, raw_bits, value_context,
 };
+use crate::codec::common::FormatError;
+use crate::codec::common::bits::{BitReader, unzigzag};
+use crate::codec::common::dict::{DictDecoder, SymbolDecoder};
 use crate::cursor::NodeCursor;
 use crate::geom::{Aabb, Triangle};
 
@@ -332,6 +334,13 @@ impl RacBvh {
             bytes,
             &self.cache.live,
         )
+        .map_err(|e| match e {
+            // The bit and dictionary coders do not know where they are.
+            RacError::Format(FormatError::Corrupt { what }) => {
+                RacError::CorruptCluster { cluster: c, what }
+            }
+            e => e,
+        })
     }
 
     /// Cluster `c`, from the cache or decompressed into it.

@@ -7,7 +7,6 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::coder::{BitWriter, DictEncoder, MAX_K, SymbolEncoder, golomb_len, zigzag};
 use super::mesh::PackedMesh;
 use super::node::{Grid, QBox, residuals};
 use super::{
@@ -16,6 +15,8 @@ use super::{
     value_context, zero_mask,
 };
 use crate::build::CanonicalBvh;
+use crate::codec::common::bits::{BitWriter, golomb_len, zigzag};
+use crate::codec::common::dict::{DictEncoder, MAX_K, SymbolEncoder};
 use crate::geom::Aabb;
 use crate::mesh::Mesh;
 

@@ -82,7 +82,7 @@
 //!   evaluates them, so a decoded box always contains its subtree. The boxes
 //!   are recomputed from the *stored* mesh first, so they also contain the
 //!   quantized triangles the cursor reports.
-//! - **Dictionary coder** ([`coder`]): the paper's variant for residual and
+//! - **Dictionary coder** ([`dict`](crate::codec::common::dict)): the paper's variant for residual and
 //!   delta contexts (empty dictionary, symbols added when met, no
 //!   combination entries) is used for every context, including the
 //!   structure context the paper initialises with all symbols and codes with
@@ -152,7 +152,6 @@
 //! walks the chain of local roots' parents with a loop). Saves are atomic.
 
 mod cache;
-pub mod coder;
 mod context;
 mod decode;
 mod encode;

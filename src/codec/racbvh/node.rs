@@ -5,6 +5,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use glam::{UVec3, Vec3A};
 
+use crate::codec::common::bits::{unzigzag, zigzag};
 use crate::geom::Aabb;
 
 /// Flag in [`CoreNode`] word 7 marking a leaf; the low bits hold the count.
@@ -144,12 +145,12 @@ pub fn residuals(parent: &QBox, right: bool, child: &QBox) -> [u64; 6] {
     let mut out = [0; 6];
     for a in 0..3 {
         out[a] = if right && a == axis {
-            super::coder::zigzag(i64::from(child.min[a]) - i64::from(mid))
+            zigzag(i64::from(child.min[a]) - i64::from(mid))
         } else {
             u64::from(child.min[a] - parent.min[a])
         };
         out[3 + a] = if !right && a == axis {
-            super::coder::zigzag(i64::from(child.max[a]) - i64::from(mid))
+            zigzag(i64::from(child.max[a]) - i64::from(mid))
         } else {
             u64::from(parent.max[a] - child.max[a])
         };
@@ -166,9 +167,9 @@ pub fn apply(parent: &QBox, right: bool, r: &[u32; 6], max_q: u32) -> Option<QBo
     let mut ok = true;
     for a in 0..3 {
         // Both candidates computed, one selected: no data-dependent branch.
-        let split_min = i64::from(mid) + super::coder::unzigzag(u64::from(r[a]));
+        let split_min = i64::from(mid) + unzigzag(u64::from(r[a]));
         let outer_min = i64::from(parent.min[a]) + i64::from(r[a]);
-        let split_max = i64::from(mid) + super::coder::unzigzag(u64::from(r[3 + a]));
+        let split_max = i64::from(mid) + unzigzag(u64::from(r[3 + a]));
         let outer_max = i64::from(parent.max[a]) - i64::from(r[3 + a]);
         let on_axis = a == axis;
         let lo = if right & on_axis {
