@@ -6,6 +6,7 @@ pub mod dict;
 mod error;
 pub mod le;
 pub mod mass;
+pub mod quant;
 mod save;
 
 pub use error::FormatError;

@@ -4,7 +4,7 @@
 use std::sync::{Arc, Mutex};
 
 use super::cache::{self, Live};
-use super::node::{CoreNode, INCOMPLETE, LEAF_FLAG, QBox, apply, qbox_of};
+use super::node::{CoreNode, INCOMPLETE, LEAF_FLAG, apply, qbox_of};
 use super::{
     CTX_CHILD, CTX_COUNT, CTX_PCLUSTER, CTX_STRUCT, CTX_TRI, CTX_TRI_FAR, Header, NCTX, RacBvh,
     RacError, STREAMS, mask_context, raw_bits, value_context,
@@ -12,6 +12,7 @@ use super::{
 use crate::codec::common::FormatError;
 use crate::codec::common::bits::{BitReader, unzigzag};
 use crate::codec::common::dict::{DictDecoder, SymbolDecoder};
+use crate::codec::common::quant::QBox;
 use crate::cursor::NodeCursor;
 use crate::geom::{Aabb, Triangle};
 

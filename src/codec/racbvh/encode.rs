@@ -8,7 +8,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::mesh::PackedMesh;
-use super::node::{Grid, QBox, residuals};
+use super::node::residuals;
 use super::{
     CTX_CHILD, CTX_COUNT, CTX_PCLUSTER, CTX_STRUCT, CTX_TRI, CTX_TRI_FAR, ClusterMeta, Header,
     NCTX, RacBvh, RacError, STREAM_MASK, STREAM_RES, STREAMS, bucket, mask_context, raw_bits,
@@ -17,6 +17,7 @@ use super::{
 use crate::build::CanonicalBvh;
 use crate::codec::common::bits::{BitWriter, golomb_len, zigzag};
 use crate::codec::common::dict::{DictEncoder, MAX_K, SymbolEncoder};
+use crate::codec::common::quant::{Grid, QBox};
 use crate::geom::Aabb;
 use crate::mesh::Mesh;
 

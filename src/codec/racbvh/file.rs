@@ -42,9 +42,9 @@ use glam::Vec3A;
 use xxhash_rust::xxh3::xxh3_64;
 
 use super::mesh::{MeshParams, PackedMesh, bits_for};
-use super::node::Grid;
 use super::{ClusterMeta, Header, RacBvh, RacError};
 use crate::codec::common::le::{f32x3_at, u32_at, u64_at};
+use crate::codec::common::quant::Grid;
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps};
 
 /// The container version this build writes and reads.

@@ -1,8 +1,8 @@
 //! [`RacBvh`]: the compressed tree with its mesh and its cache, and the
 //! figures about it.
 
-use super::node::{Grid, QBox};
 use super::{CacheStats, RacError, RacStats, cache, decode, file, mesh};
+use crate::codec::common::quant::{Grid, QBox};
 
 /// Everything global a cluster's decoder needs.
 #[derive(Clone, Copy, Debug, PartialEq)]
