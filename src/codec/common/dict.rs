@@ -6,15 +6,15 @@
 //! Each compression context owns a dictionary that starts *empty* (it holds
 //! only an escape entry), gains a symbol the first time the symbol is met,
 //! and never gains combination entries: the paper's variant for residual and
-//! delta contexts (RACBVH uses it for every context; its module docs,
-//! [`crate::codec::racbvh`], say why). A symbol is sent as its current
-//! *rank* in the dictionary; a new symbol is sent as the escape's rank
-//! followed by the symbol in `raw_bits` bits. After every use the entry
-//! moves one place towards the front (the transpose heuristic), so frequent
-//! symbols get small ranks. Ranks are written with an Exp-Golomb code whose
-//! parameter `k` (0..=[`MAX_K`]) the encoder chooses per context (RACBVH:
-//! per context and cluster, stored in the cluster header), so a context
-//! with a flat distribution does not pay the γ-code's price for it.
+//! delta contexts (RACBVH uses it for every context; its module docs say
+//! why). A symbol is sent as its current *rank* in the dictionary; a new
+//! symbol is sent as the escape's rank followed by the symbol in `raw_bits`
+//! bits. After every use the entry moves one place towards the front (the
+//! transpose heuristic), so frequent symbols get small ranks. Ranks are
+//! written with an Exp-Golomb code whose parameter `k` (0..=[`MAX_K`]) the
+//! encoder chooses per context (RACBVH: per context and cluster, stored in
+//! the cluster header), so a context with a flat distribution does not pay
+//! the γ-code's price for it.
 //!
 //! The coder sits behind [`SymbolEncoder`] / [`SymbolDecoder`] so that a
 //! range coder can be put in its place.

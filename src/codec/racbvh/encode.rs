@@ -15,6 +15,7 @@ use super::{
     value_context, zero_mask,
 };
 use crate::build::CanonicalBvh;
+use crate::codec::common::Store;
 use crate::codec::common::bits::{BitWriter, golomb_len, zigzag};
 use crate::codec::common::dict::{DictEncoder, MAX_K, SymbolEncoder};
 use crate::codec::common::quant::{Grid, QBox};
@@ -311,7 +312,7 @@ impl RacBvh {
         let mesh_hash = super::file::mesh_hash(&pmesh);
         let rac = RacBvh::assemble(
             header,
-            super::file::Store::Owned(data),
+            Store::Owned(data),
             meta,
             pmesh,
             mesh_hash,

@@ -41,11 +41,12 @@ use std::sync::Arc;
 use glam::Vec3A;
 use xxhash_rust::xxh3::xxh3_64;
 
-use super::mesh::{MeshParams, PackedMesh, bits_for};
+use super::mesh::{MeshParams, PackedMesh};
 use super::{ClusterMeta, Header, RacBvh, RacError};
 use crate::codec::common::le::{f32x3_at, u32_at, u64_at};
+use crate::codec::common::packed::bits_for;
 use crate::codec::common::quant::Grid;
-use crate::codec::common::{FormatError, MASS_BYTES, MassProps};
+use crate::codec::common::{FormatError, MASS_BYTES, MassProps, Store};
 
 /// The container version this build writes and reads.
 pub const VERSION: u32 = 3;
@@ -56,38 +57,6 @@ const HEADER_LEN: usize = 288;
 const TABLE: usize = 184;
 /// Bytes of one meta-table entry.
 pub(super) const META_ENTRY: usize = 20;
-
-/// Bytes of a section: owned (pre-loaded mode) or a range of a memory-mapped
-/// file (out-of-core mode: the operating system reads pages on demand).
-#[derive(Clone)]
-pub enum Store {
-    /// Bytes in memory.
-    Owned(Vec<u8>),
-    /// A range of a mapped file.
-    Mapped(Arc<memmap2::Mmap>, Range<usize>),
-}
-
-impl std::ops::Deref for Store {
-    type Target = [u8];
-    #[inline]
-    fn deref(&self) -> &[u8] {
-        match self {
-            Store::Owned(v) => v,
-            Store::Mapped(m, r) => &m[r.clone()],
-        }
-    }
-}
-
-impl std::fmt::Debug for Store {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let kind = if matches!(self, Store::Owned(_)) {
-            "owned"
-        } else {
-            "mapped"
-        };
-        write!(f, "Store({kind}, {} bytes)", self.len())
-    }
-}
 
 /// The checksum of the two mesh sections.
 pub(super) fn mesh_hash(m: &PackedMesh) -> u64 {

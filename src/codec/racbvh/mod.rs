@@ -166,7 +166,6 @@ pub use cache::CacheStats;
 pub use decode::RacNode;
 pub use encode::{RacOptions, RacStats};
 pub use error::RacError;
-pub use file::Store;
 pub use node::{CoreNode, INCOMPLETE};
 pub use tree::RacBvh;
 
