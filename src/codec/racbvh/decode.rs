@@ -4,11 +4,12 @@
 use std::sync::{Arc, Mutex};
 
 use super::cache::{self, Live};
-use super::node::{CoreNode, INCOMPLETE, LEAF_FLAG, apply, qbox_of};
+use super::node::{CoreNode, INCOMPLETE, apply, qbox_of};
 use super::{
     CTX_CHILD, CTX_COUNT, CTX_PCLUSTER, CTX_STRUCT, CTX_TRI, CTX_TRI_FAR, Header, NCTX, RacBvh,
     RacError, STREAMS, mask_context, raw_bits, value_context,
 };
+use crate::build::LEAF_FLAG;
 use crate::codec::common::FormatError;
 use crate::codec::common::bits::{BitReader, unzigzag};
 use crate::codec::common::dict::{DictDecoder, SymbolDecoder};

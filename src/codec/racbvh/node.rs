@@ -10,8 +10,6 @@ use glam::UVec3;
 use crate::codec::common::bits::{unzigzag, zigzag};
 use crate::codec::common::quant::QBox;
 
-/// Flag in [`CoreNode`] word 7 marking a leaf; the low bits hold the count.
-pub const LEAF_FLAG: u32 = 0x8000_0000;
 /// Flag in [`CoreNode`] word 0 marking an *incomplete* node (§5.2): its
 /// box words still hold the coded residuals.
 pub const INCOMPLETE: u32 = 0x8000_0000;
@@ -97,9 +95,14 @@ pub fn apply(parent: &QBox, right: bool, r: &[u32; 6], max_q: u32) -> Option<QBo
 /// | 6 | inner: left child (global index); leaf with one triangle: its id; leaf with several: first slot in the cluster's triangle list | same |
 /// | 7 | inner: right child; leaf: [`LEAF_FLAG`] \| triangle count | same |
 ///
+/// [`LEAF_FLAG`] is the canonical tree's leaf flag. These words live in
+/// core only: no flag value is part of the file format.
+///
 /// Words are atomics so that a completion (which rewrites words 0–5 under the
 /// cluster's lock, word 0 last with release ordering) can run while other
 /// threads read the same cluster.
+///
+/// [`LEAF_FLAG`]: crate::build::LEAF_FLAG
 #[derive(Default)]
 #[repr(C)]
 pub struct CoreNode(pub [AtomicU32; 8]);
