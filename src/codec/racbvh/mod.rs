@@ -151,8 +151,11 @@
 //! Nothing in the decoder recurses to a depth the file decides (completion
 //! walks the chain of local roots' parents with a loop). Saves are atomic.
 
+mod access;
 mod cache;
+mod complete;
 mod context;
+mod cursor;
 mod decode;
 mod encode;
 mod error;
@@ -160,10 +163,11 @@ pub mod file;
 pub mod mesh;
 pub mod node;
 mod tree;
+mod tricache;
 mod verify;
 
 pub use cache::CacheStats;
-pub use decode::RacNode;
+pub use cursor::RacNode;
 pub use encode::{RacOptions, RacStats};
 pub use error::RacError;
 pub use node::{CoreNode, INCOMPLETE};
