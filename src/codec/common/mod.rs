@@ -11,6 +11,8 @@
 //! - [`packed`]: frame-of-reference arrays of `u32` with O(1) access, and
 //!   [`bits_for`](packed::bits_for).
 //! - [`le`]: little-endian readers at a byte offset.
+//! - [`container`]: the frame of every codec file (magic, section table,
+//!   header checksum), written and checked.
 //! - [`FormatError`] (`error.rs`): bad magic, truncation, bad header
 //!   fields, checksum mismatches, values out of range, corrupted codes.
 //! - [`atomic_write`] (`save.rs`): atomic file saves.
@@ -18,6 +20,7 @@
 //! - [`MAGIC_PREFIX`]: how every codec file starts.
 
 pub mod bits;
+pub mod container;
 pub mod dict;
 mod error;
 pub mod le;

@@ -35,7 +35,8 @@ use xxhash_rust::xxh3::xxh3_64;
 
 use super::node::PlainNode;
 use super::{PlainBvh, PlainError};
-use crate::codec::common::le::{u32_at, u64_at};
+use crate::codec::common::container;
+use crate::codec::common::le::u32_at;
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps, atomic_write};
 
 /// The file version this build writes and reads.
@@ -99,19 +100,7 @@ impl PlainBvh {
         out.extend_from_slice(&0u32.to_le_bytes());
         debug_assert_eq!(out.len(), TABLE);
         let sections: [&[u8]; 4] = [&nodes, &verts, &tris, &ids];
-        let mut at = HEADER_LEN as u64;
-        for s in sections {
-            out.extend_from_slice(&at.to_le_bytes());
-            out.extend_from_slice(&(s.len() as u64).to_le_bytes());
-            out.extend_from_slice(&xxh3_64(s).to_le_bytes());
-            at += s.len() as u64;
-        }
-        let h = xxh3_64(&out);
-        out.extend_from_slice(&h.to_le_bytes());
-        debug_assert_eq!(out.len(), HEADER_LEN);
-        for s in sections {
-            out.extend_from_slice(s);
-        }
+        container::write_sections(&mut out, HEADER_LEN, &sections);
         out
     }
 
@@ -139,23 +128,7 @@ impl PlainBvh {
     /// allocates more than the bytes given. Call [`verify`](Self::verify)
     /// before querying bytes you did not write yourself.
     pub fn from_bytes(b: &[u8]) -> Result<PlainBvh, PlainError> {
-        if b.len() < HEADER_LEN {
-            return Err(FormatError::Truncated {
-                section: "header",
-                need: HEADER_LEN as u64,
-                have: b.len() as u64,
-            }
-            .into());
-        }
-        if b[..8] != MAGIC {
-            return Err(FormatError::BadMagic {
-                format: "plain BVH",
-            }
-            .into());
-        }
-        if xxh3_64(&b[..HEADER_LEN - 8]) != u64_at(b, HEADER_LEN - 8) {
-            return Err(FormatError::Checksum { section: "header" }.into());
-        }
+        container::check_header(b, HEADER_LEN, &MAGIC, "plain BVH")?;
         let version = u32_at(b, 8);
         if version != VERSION {
             return Err(PlainError::Version {
@@ -180,11 +153,7 @@ impl PlainBvh {
         let mut at = HEADER_LEN as u64;
         let mut ranges: [std::ops::Range<usize>; 4] = Default::default();
         for k in 0..4 {
-            let (off, len, hash) = (
-                u64_at(b, TABLE + 24 * k),
-                u64_at(b, TABLE + 8 + 24 * k),
-                u64_at(b, TABLE + 16 + 24 * k),
-            );
+            let (off, len, hash) = container::section_entry(b, TABLE, k);
             if off != at {
                 return Err(header_err(
                     NAMES[k],

@@ -43,6 +43,7 @@ use xxhash_rust::xxh3::xxh3_64;
 
 use super::mesh::{MeshParams, PackedMesh};
 use super::{ClusterMeta, Header, RacBvh, RacError};
+use crate::codec::common::container;
 use crate::codec::common::le::{f32x3_at, u32_at, u64_at};
 use crate::codec::common::packed::bits_for;
 use crate::codec::common::quant::Grid;
@@ -124,19 +125,7 @@ impl RacBvh {
             meta.extend_from_slice(&e.hash.to_le_bytes());
         }
         let sections: [&[u8]; 4] = [&meta, &self.data, &m.vertices, &m.triangles];
-        let mut at = HEADER_LEN as u64;
-        for s in sections {
-            out.extend_from_slice(&at.to_le_bytes());
-            out.extend_from_slice(&(s.len() as u64).to_le_bytes());
-            out.extend_from_slice(&xxh3_64(s).to_le_bytes());
-            at += s.len() as u64;
-        }
-        let h = xxh3_64(&out);
-        out.extend_from_slice(&h.to_le_bytes());
-        debug_assert_eq!(out.len(), HEADER_LEN);
-        for s in sections {
-            out.extend_from_slice(s);
-        }
+        container::write_sections(&mut out, HEADER_LEN, &sections);
         out
     }
 
@@ -177,20 +166,7 @@ impl RacBvh {
         make: &dyn Fn(Range<usize>) -> Store,
         cache_budget_bytes: usize,
     ) -> Result<RacBvh, RacError> {
-        if b.len() < HEADER_LEN {
-            return Err(FormatError::Truncated {
-                section: "header",
-                need: HEADER_LEN as u64,
-                have: b.len() as u64,
-            }
-            .into());
-        }
-        if b[..8] != MAGIC {
-            return Err(FormatError::BadMagic { format: "RACBVH" }.into());
-        }
-        if xxh3_64(&b[..HEADER_LEN - 8]) != u64_at(b, HEADER_LEN - 8) {
-            return Err(RacError::Corrupt("the header's checksum does not match"));
-        }
+        container::check_header(b, HEADER_LEN, &MAGIC, "RACBVH")?;
         let version = u32_at(b, 8);
         if version != VERSION {
             return Err(RacError::Version(version));
@@ -286,9 +262,8 @@ impl RacBvh {
         let mut ranges: [Range<usize>; 4] = Default::default();
         let mut hashes = [0u64; 4];
         for (k, name) in names.into_iter().enumerate() {
-            let off = u64_at(b, TABLE + 24 * k);
-            let len = u64_at(b, TABLE + 8 + 24 * k);
-            hashes[k] = u64_at(b, TABLE + 16 + 24 * k);
+            let (off, len, hash) = container::section_entry(b, TABLE, k);
+            hashes[k] = hash;
             let end = off
                 .checked_add(len)
                 .ok_or_else(|| header_err(name, "offset + length overflows"))?;
