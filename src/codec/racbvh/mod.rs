@@ -154,6 +154,7 @@
 mod cache;
 pub mod coder;
 mod context;
+mod contract;
 mod decode;
 mod encode;
 mod error;
