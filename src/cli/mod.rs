@@ -66,7 +66,7 @@ impl MeshSource {
                 cache_budget_bytes: 1 << 30,
             };
             let codec = AnyCodec::open(path, &opts)?;
-            return Ok(Loaded::Codec(codec, path.display().to_string()));
+            return Ok(Loaded::Codec(Box::new(codec), path.display().to_string()));
         }
         let (mesh, name) = self.load()?;
         Ok(Loaded::Mesh(mesh, name))
@@ -104,7 +104,7 @@ pub enum Loaded {
     /// A mesh (loaded or generated).
     Mesh(Mesh, String),
     /// A codec file.
-    Codec(AnyCodec, String),
+    Codec(Box<AnyCodec>, String),
 }
 
 /// What `cbvh build` and `cbvh render` make: a codec of the registry, or

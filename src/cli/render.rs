@@ -169,7 +169,7 @@ pub fn run(mut a: RenderArgs) -> CliResult {
         {
             // The file's own codec, as stored: nothing is rebuilt.
             a.codec = Some(Structure::Codec(codec.kind()));
-            (codec.decoded_mesh(), name, any_target(codec))
+            (codec.decoded_mesh(), name, any_target(*codec))
         }
         loaded => {
             let (mesh, name) = match loaded {
