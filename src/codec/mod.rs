@@ -10,6 +10,7 @@
 //! - [`common`]: what several codecs share (atomic saves, stored mass
 //!   properties, file magic).
 
+pub mod clbvh;
 pub mod common;
 pub mod plain;
 pub mod racbvh;
