@@ -7,9 +7,9 @@
 //!
 //! | bytes | field |
 //! |---|---|
-//! | 0–7 | magic `CBVHCLB\0` |
+//! | 0–7 | magic: `CBVHCLB\0` fast leaves, `CBVHCLC\0` compact leaves |
 //! | 8–11 | version (1) |
-//! | 12–15 | flags: bit 0 compact leaves, bit 1 multi-leaf nodes; others 0 |
+//! | 12–15 | flags: bit 1 multi-leaf nodes; others 0 |
 //! | 16–19 | leaf size `M` |
 //! | 20–23 | root [`ChildRef`](super::ChildRef) |
 //! | 24–47 | root box (min xyz, max xyz; f32) |
@@ -35,8 +35,10 @@ use crate::geom::Aabb;
 
 /// The file version this build writes and reads.
 pub const VERSION: u32 = 1;
-/// The CLBVH file's magic.
+/// The magic of a CLBVH file with fast leaves.
 pub const MAGIC: [u8; 8] = *b"CBVHCLB\0";
+/// The magic of a CLBVH file with compact leaves.
+pub const MAGIC_COMPACT: [u8; 8] = *b"CBVHCLC\0";
 const HEADER_LEN: usize = 264;
 const TABLE: usize = 112;
 const SECTIONS: usize = 6;
@@ -87,9 +89,11 @@ impl ClBvh {
             le_words(self.blocks.iter().flatten().copied()),
         ];
         let mut out = Vec::with_capacity(HEADER_LEN + sections.iter().map(Vec::len).sum::<usize>());
-        out.extend_from_slice(&MAGIC);
-        let flags = u32::from(self.options.leaves == LeafKind::Compact)
-            | u32::from(self.options.multi_leaf) << 1;
+        out.extend_from_slice(match self.options.leaves {
+            LeafKind::Fast => &MAGIC,
+            LeafKind::Compact => &MAGIC_COMPACT,
+        });
+        let flags = u32::from(self.options.multi_leaf) << 1;
         for v in [VERSION, flags, self.options.leaf_size as u32, self.root] {
             out.extend_from_slice(&v.to_le_bytes());
         }
@@ -161,9 +165,13 @@ impl ClBvh {
                 have: b.len() as u64,
             });
         }
-        if b[..8] != MAGIC {
+        let leaves = if b[..8] == MAGIC {
+            LeafKind::Fast
+        } else if b[..8] == MAGIC_COMPACT {
+            LeafKind::Compact
+        } else {
             return Err(ClError::BadMagic);
-        }
+        };
         if xxh3_64(&b[..HEADER_LEN - 8]) != u64_at(b, HEADER_LEN - 8) {
             return Err(ClError::Checksum { section: "header" });
         }
@@ -175,16 +183,12 @@ impl ClBvh {
             });
         }
         let flags = u32_at(b, 12);
-        if flags > 3 || u32_at(b, 108) != 0 {
+        if flags & !2 != 0 || u32_at(b, 108) != 0 {
             return Err(header_err("flags", "reserved bits are set"));
         }
         let options = ClOptions {
             leaf_size: u32_at(b, 16) as usize,
-            leaves: if flags & 1 != 0 {
-                LeafKind::Compact
-            } else {
-                LeafKind::Fast
-            },
+            leaves,
             multi_leaf: flags & 2 != 0,
         };
         if !(1..=super::MAX_LEAF_SIZE).contains(&options.leaf_size) {

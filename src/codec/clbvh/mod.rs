@@ -62,7 +62,9 @@ mod node;
 pub mod simd;
 mod verify;
 
+use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
+use crate::mesh::Mesh;
 use crate::geom::Aabb;
 
 pub use collapse::{NODE_COST, TRIANGLE_COST};
@@ -135,4 +137,40 @@ pub struct ClBvh {
     /// Compact: `(first slot, word offset)` of each leaf block, by slot.
     blocks: Vec<[u32; 2]>,
     mass: MassProps,
+}
+
+/// Settings of the compact variant ([`ClBvhCompact`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct CompactOptions {
+    /// `M`, as [`ClOptions::leaf_size`].
+    pub leaf_size: usize,
+    /// As [`ClOptions::multi_leaf`].
+    pub multi_leaf: bool,
+}
+
+impl Default for CompactOptions {
+    fn default() -> Self {
+        let o = ClOptions::compact();
+        Self {
+            leaf_size: o.leaf_size,
+            multi_leaf: o.multi_leaf,
+        }
+    }
+}
+
+/// The compact variant as a codec of its own (registry name
+/// `clbvh-compact`): a [`ClBvh`] with [`LeafKind::Compact`] leaves.
+#[derive(Clone, Debug)]
+pub struct ClBvhCompact(pub ClBvh);
+
+impl ClBvhCompact {
+    /// Encodes `bvh` (built over `mesh`) with compact leaves.
+    pub fn encode(bvh: &CanonicalBvh, mesh: &Mesh, o: &CompactOptions) -> Result<Self, ClError> {
+        let opts = ClOptions {
+            leaf_size: o.leaf_size,
+            leaves: LeafKind::Compact,
+            multi_leaf: o.multi_leaf,
+        };
+        ClBvh::encode(bvh, mesh, &opts).map(ClBvhCompact)
+    }
 }
