@@ -15,13 +15,14 @@ use glam::Vec3A;
 
 use super::collapse::{Plan, triangles_below};
 use super::node::{
-    ChildRef, Frame, InnerNode, MAX_REF_INDEX, MULTI_WORDS, MultiLeafNode, TAG_INNER, TAG_LEAF,
-    TAG_MULTI, child_ref,
+    ChildRef, InnerNode, MAX_REF_INDEX, MULTI_WORDS, MultiLeafNode, TAG_INNER, TAG_LEAF, TAG_MULTI,
+    child_ref,
 };
 use super::{ClBvh, ClError, ClOptions, LeafKind};
 use crate::build::CanonicalBvh;
 use crate::codec::ByteSize;
 use crate::codec::common::MassProps;
+use crate::codec::common::quant::Grid;
 use crate::geom::Aabb;
 use crate::mesh::Mesh;
 
@@ -118,16 +119,18 @@ impl Emitter<'_> {
     fn multi_leaf(&mut self, plan: &Plan, c: u32) -> Result<ChildRef, ClError> {
         let kids = plan.children(self.bvh, c);
         let outer = self.bvh.nodes[c as usize].aabb();
-        let frame = Frame::new(&outer);
-        if frame.step.iter().any(|s| !s.is_finite()) {
+        // The 8-bit conservative grid over the node's float box (min
+        // rounds down, max up, checked with the decoder's arithmetic).
+        let frame = Grid::new(&outer, 8);
+        if !frame.step.is_finite() {
             return Err(ClError::Extent {
                 min: outer.min.to_array(),
                 max: outer.max.to_array(),
             });
         }
         let mut node = MultiLeafNode {
-            start: frame.start,
-            step: frame.step,
+            start: frame.origin.to_array(),
+            step: frame.step.to_array(),
             lo_x: [255; 8],
             hi_x: [0; 8],
             lo_y: [255; 8],
@@ -139,7 +142,12 @@ impl Emitter<'_> {
         let mut ids = std::mem::take(&mut self.ids);
         ids.clear();
         for (k, &kid) in kids.iter().enumerate() {
-            let (lo, hi) = frame.quantize(&self.bvh.nodes[kid as usize].aabb());
+            let q = frame.quantize(&self.bvh.nodes[kid as usize].aabb());
+            // At most 255 with 8 bits.
+            let (lo, hi) = (
+                q.min.to_array().map(|v| v as u8),
+                q.max.to_array().map(|v| v as u8),
+            );
             (node.lo_x[k], node.lo_y[k], node.lo_z[k]) = (lo[0], lo[1], lo[2]);
             (node.hi_x[k], node.hi_y[k], node.hi_z[k]) = (hi[0], hi[1], hi[2]);
             triangles_below(self.bvh, kid, &mut ids);

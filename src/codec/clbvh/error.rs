@@ -1,5 +1,7 @@
 //! [`ClError`].
 
+use crate::codec::common::FormatError;
+
 /// What can go wrong encoding, reading, verifying or writing a CLBVH.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum ClError {
@@ -49,9 +51,9 @@ pub enum ClError {
         /// Box maximum.
         max: [f32; 3],
     },
-    /// The bytes do not start with the CLBVH magic.
-    #[error("not a cbvh CLBVH file (bad magic)")]
-    BadMagic,
+    /// The file's frame (magic, header, section table, checksums) is bad.
+    #[error(transparent)]
+    Format(#[from] FormatError),
     /// A version this build cannot read.
     #[error(
         "CLBVH file version {found} is not supported (this build reads version {supported}); rebuild it with `cbvh build MESH --codec clbvh -o FILE`"
@@ -61,30 +63,6 @@ pub enum ClError {
         found: u32,
         /// The version this build reads.
         supported: u32,
-    },
-    /// A section (or the header) is shorter than it must be.
-    #[error("the {section} section is truncated: need {need} bytes, have {have}")]
-    Truncated {
-        /// Section name.
-        section: &'static str,
-        /// Bytes needed.
-        need: u64,
-        /// Bytes present.
-        have: u64,
-    },
-    /// A header field is inconsistent.
-    #[error("bad header field {field}: {why}")]
-    Header {
-        /// The field.
-        field: &'static str,
-        /// What is wrong.
-        why: String,
-    },
-    /// A checksum does not match: the file is damaged.
-    #[error("the {section} section's checksum does not match: the file is damaged")]
-    Checksum {
-        /// The section.
-        section: &'static str,
     },
     /// The tree breaks what queries rely on (found by `verify`).
     #[error("corrupted CLBVH: {what} (at {at})")]

@@ -30,7 +30,9 @@ use xxhash_rust::xxh3::xxh3_64;
 
 use super::node::InnerNode;
 use super::{ClBvh, ClError, ClOptions, LeafKind};
-use crate::codec::common::{MASS_BYTES, MassProps, atomic_write};
+use crate::codec::common::container::{check_header, section_entry, write_sections};
+use crate::codec::common::le::u32_at;
+use crate::codec::common::{FormatError, MASS_BYTES, MassProps, atomic_write};
 use crate::geom::Aabb;
 
 /// The file version this build writes and reads.
@@ -52,24 +54,13 @@ const NAMES: [&str; SECTIONS] = [
 ];
 const ELEM: [u64; SECTIONS] = [224, 4, 12, 12, 4, 8];
 
-fn u32_at(b: &[u8], at: usize) -> u32 {
-    u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
-}
-
-fn u64_at(b: &[u8], at: usize) -> u64 {
-    u64::from_le_bytes(std::array::from_fn(|k| b[at + k]))
-}
-
 fn words(b: &[u8]) -> impl Iterator<Item = u32> + '_ {
     b.chunks_exact(4)
         .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
 }
 
 fn header_err(field: &'static str, why: impl Into<String>) -> ClError {
-    ClError::Header {
-        field,
-        why: why.into(),
-    }
+    FormatError::header(field, why).into()
 }
 
 fn le_words(it: impl Iterator<Item = u32>) -> Vec<u8> {
@@ -115,19 +106,8 @@ impl ClBvh {
         out.extend_from_slice(&self.mass.to_bytes());
         out.extend_from_slice(&0u32.to_le_bytes());
         debug_assert_eq!(out.len(), TABLE);
-        let mut at = HEADER_LEN as u64;
-        for s in &sections {
-            out.extend_from_slice(&at.to_le_bytes());
-            out.extend_from_slice(&(s.len() as u64).to_le_bytes());
-            out.extend_from_slice(&xxh3_64(s).to_le_bytes());
-            at += s.len() as u64;
-        }
-        let h = xxh3_64(&out);
-        out.extend_from_slice(&h.to_le_bytes());
-        debug_assert_eq!(out.len(), HEADER_LEN);
-        for s in &sections {
-            out.extend_from_slice(s);
-        }
+        let refs: Vec<&[u8]> = sections.iter().map(Vec::as_slice).collect();
+        write_sections(&mut out, HEADER_LEN, &refs);
         out
     }
 
@@ -158,23 +138,12 @@ impl ClBvh {
     /// more than the bytes given. Call [`verify`](Self::verify) before
     /// querying bytes you did not write yourself.
     pub fn from_bytes(b: &[u8]) -> Result<ClBvh, ClError> {
-        if b.len() < HEADER_LEN {
-            return Err(ClError::Truncated {
-                section: "header",
-                need: HEADER_LEN as u64,
-                have: b.len() as u64,
-            });
-        }
-        let leaves = if b[..8] == MAGIC {
-            LeafKind::Fast
-        } else if b[..8] == MAGIC_COMPACT {
-            LeafKind::Compact
+        let (leaves, magic) = if b.starts_with(&MAGIC_COMPACT) {
+            (LeafKind::Compact, &MAGIC_COMPACT)
         } else {
-            return Err(ClError::BadMagic);
+            (LeafKind::Fast, &MAGIC)
         };
-        if xxh3_64(&b[..HEADER_LEN - 8]) != u64_at(b, HEADER_LEN - 8) {
-            return Err(ClError::Checksum { section: "header" });
-        }
+        check_header(b, HEADER_LEN, magic, "CLBVH")?;
         let version = u32_at(b, 8);
         if version != VERSION {
             return Err(ClError::Version {
@@ -208,7 +177,7 @@ impl ClBvh {
         let mut at = HEADER_LEN as u64;
         let mut ranges: [std::ops::Range<usize>; SECTIONS] = Default::default();
         for k in 0..SECTIONS {
-            let (off, len) = (u64_at(b, TABLE + 24 * k), u64_at(b, TABLE + 8 + 24 * k));
+            let (off, len, hash) = section_entry(b, TABLE, k);
             if off != at {
                 return Err(header_err(
                     NAMES[k],
@@ -227,14 +196,14 @@ impl ClBvh {
             let end = off
                 .checked_add(len)
                 .filter(|&e| e <= b.len() as u64)
-                .ok_or(ClError::Truncated {
+                .ok_or(FormatError::Truncated {
                     section: NAMES[k],
                     need: off.saturating_add(len),
                     have: b.len() as u64,
                 })?;
             let r = off as usize..end as usize;
-            if xxh3_64(&b[r.clone()]) != u64_at(b, TABLE + 16 + 24 * k) {
-                return Err(ClError::Checksum { section: NAMES[k] });
+            if xxh3_64(&b[r.clone()]) != hash {
+                return Err(FormatError::Checksum { section: NAMES[k] }.into());
             }
             ranges[k] = r;
             at = end;

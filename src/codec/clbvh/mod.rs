@@ -64,15 +64,15 @@ mod verify;
 
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
-use crate::mesh::Mesh;
 use crate::geom::Aabb;
+use crate::mesh::Mesh;
 
 pub use collapse::{NODE_COST, TRIANGLE_COST};
 pub use decode::{ClNode, NodeKind};
 pub use encode::MAX_LEAF_SIZE;
 pub use error::ClError;
 pub use node::{
-    ChildRef, ENDS_WORDS, Frame, InnerNode, MAX_REF_INDEX, MULTI_WORDS, MultiLeafNode, TAG_EMPTY,
+    ChildRef, ENDS_WORDS, InnerNode, MAX_REF_INDEX, MULTI_WORDS, MultiLeafNode, TAG_EMPTY,
     TAG_INNER, TAG_LEAF, TAG_MULTI, child_ref, ref_index, ref_tag,
 };
 

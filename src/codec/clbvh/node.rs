@@ -191,117 +191,23 @@ impl MultiLeafNode {
     }
 }
 
-/// The 8-bit conservative quantization frame of a multi-leaf node:
-/// `255` steps over the node's box per axis, the step grown by ulps until
-/// the last grid point reaches the box's maximum. A minimum rounds down to
-/// the largest grid point at or below it, a maximum up to the smallest at
-/// or above it, both checked with the decoder's own `f32` arithmetic.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Frame {
-    /// The box minimum.
-    pub start: [f32; 3],
-    /// One quantum per axis (0 for a flat axis).
-    pub step: [f32; 3],
-}
-
-const MAX_Q: u32 = 255;
-
-impl Frame {
-    /// The frame over `b` (finite, non-empty).
-    pub fn new(b: &Aabb) -> Frame {
-        let n = MAX_Q as f32;
-        let mut step = [0f32; 3];
-        for (a, s) in step.iter_mut().enumerate() {
-            let (lo, hi) = (b.min[a], b.max[a]);
-            if hi > lo {
-                let mut st = (hi - lo) / n;
-                if st == 0.0 {
-                    st = f32::from_bits(1);
-                }
-                // Grow the step until the last grid point reaches `hi`: by
-                // ulps while close, by doubling the gap if far (huge
-                // coordinates whose difference overflowed are not finite
-                // input, so this ends).
-                let mut ulps = 1u32;
-                while lo + n * st < hi {
-                    st = f32::from_bits(st.to_bits() + ulps);
-                    ulps = ulps.saturating_mul(2);
-                }
-                *s = st;
-            }
-        }
-        Frame {
-            start: b.min.to_array(),
-            step,
-        }
-    }
-
-    #[inline]
-    fn deq(&self, a: usize, q: u32) -> f32 {
-        self.start[a] + q as f32 * self.step[a]
-    }
-
-    /// The largest `q` whose grid point is at or below `v` (0 if none).
-    fn floor(&self, a: usize, v: f32) -> u32 {
-        if self.step[a] == 0.0 {
-            return 0;
-        }
-        let guess = ((v - self.start[a]) / self.step[a]).floor();
-        let mut q = guess.clamp(0.0, MAX_Q as f32) as u32;
-        while q > 0 && self.deq(a, q) > v {
-            q -= 1;
-        }
-        while q < MAX_Q && self.deq(a, q + 1) <= v {
-            q += 1;
-        }
-        q
-    }
-
-    /// The smallest `q` whose grid point is at or above `v` (255 if none).
-    fn ceil(&self, a: usize, v: f32) -> u32 {
-        if self.step[a] == 0.0 {
-            return 0;
-        }
-        let guess = ((v - self.start[a]) / self.step[a]).ceil();
-        let mut q = guess.clamp(0.0, MAX_Q as f32) as u32;
-        while q < MAX_Q && self.deq(a, q) < v {
-            q += 1;
-        }
-        while q > 0 && self.deq(a, q - 1) >= v {
-            q -= 1;
-        }
-        q
-    }
-
-    /// Conservative quantization of `b` (inside the frame's box): the
-    /// `(lo, hi)` grid indices per axis.
-    pub fn quantize(&self, b: &Aabb) -> ([u8; 3], [u8; 3]) {
-        let mut lo = [0u8; 3];
-        let mut hi = [0u8; 3];
-        for a in 0..3 {
-            let l = self.floor(a, b.min[a]);
-            lo[a] = l as u8;
-            hi[a] = self.ceil(a, b.max[a]).max(l) as u8;
-        }
-        (lo, hi)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::codec::common::quant::Grid;
 
     #[test]
-    fn frame_rounds_outward_even_far_from_origin() {
+    fn eight_bit_boxes_round_outward_even_far_from_origin() {
         let boxes = [
             Aabb::from_arrays([0.0; 3], [1.0; 3]),
             Aabb::from_arrays([1e7, -1e7, 3.0], [1e7 + 0.5, -1e7 + 2.0, 3.0]),
             Aabb::from_arrays([-3e9, 1e-30, 0.0], [3e9, 2e-30, 1e-3]),
         ];
         for outer in boxes {
-            let f = Frame::new(&outer);
+            let f = Grid::new(&outer, 8);
+            let deq = |a: usize, q: u32| f.origin[a] + q as f32 * f.step[a];
             for a in 0..3 {
-                assert!(f.deq(a, 255) >= outer.max[a]);
+                assert!(deq(a, 255) >= outer.max[a]);
             }
             let e = outer.extent();
             for k in 0..50 {
@@ -310,11 +216,23 @@ mod tests {
                     outer.min + e * s * 0.5,
                     outer.min + e * (0.5 + s * 0.5).min(1.0),
                 );
-                let (lo, hi) = f.quantize(&inner);
+                let q = f.quantize(&inner);
                 for a in 0..3 {
-                    assert!(f.deq(a, lo[a] as u32) <= inner.min[a], "{inner:?}");
-                    assert!(f.deq(a, hi[a] as u32) >= inner.max[a], "{inner:?}");
+                    assert!(q.max[a] <= 255);
+                    assert!(deq(a, q.min[a]) <= inner.min[a], "{inner:?}");
+                    assert!(deq(a, q.max[a]) >= inner.max[a], "{inner:?}");
                 }
+                let m = MultiLeafNode {
+                    start: f.origin.to_array(),
+                    step: f.step.to_array(),
+                    lo_x: [q.min.x as u8; 8],
+                    hi_x: [q.max.x as u8; 8],
+                    lo_y: [q.min.y as u8; 8],
+                    hi_y: [q.max.y as u8; 8],
+                    lo_z: [q.min.z as u8; 8],
+                    hi_z: [q.max.z as u8; 8],
+                };
+                assert!(m.child_box(3).contains(&inner));
             }
         }
     }
