@@ -5,6 +5,7 @@
 use cbvh::Mesh;
 use cbvh::build::BuildOptions;
 use cbvh::codec::racbvh::RacOptions;
+use cbvh::codec::{AnyOptions, CodecKind};
 use cbvh::parry::{CbvhShape, parry_trimesh};
 use cbvh::scene::{Kind, generate};
 use parry3d::math::Vector;
@@ -15,18 +16,21 @@ fn mesh_of(kind: Kind, tris: usize, seed: u64) -> Mesh {
     generate(kind, tris, seed, &mut |_, _| {}).expect("generate")
 }
 
-/// The shapes under test: plain and (with `f32` vertices, so that its
-/// triangles are the mesh's) RACBVH.
+/// The shapes under test: every codec of the registry (RACBVH with `f32`
+/// vertices, so that its triangles are the mesh's).
 fn cbvh_shapes(mesh: &Mesh) -> Vec<CbvhShape> {
-    let rac = RacOptions {
-        vertex_bits: None,
-        cluster_nodes: 256,
+    let options = AnyOptions {
+        racbvh: RacOptions {
+            vertex_bits: None,
+            cluster_nodes: 256,
+            ..Default::default()
+        },
         ..Default::default()
     };
-    vec![
-        CbvhShape::plain(mesh, &BuildOptions::default()).unwrap(),
-        CbvhShape::racbvh(mesh, &BuildOptions::default(), &rac).unwrap(),
-    ]
+    CodecKind::ALL
+        .iter()
+        .map(|&k| CbvhShape::build(mesh, &BuildOptions::default(), k, &options).unwrap())
+        .collect()
 }
 
 /// Query points around a closed mesh, by kind: on triangles (inside a

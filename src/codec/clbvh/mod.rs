@@ -54,6 +54,7 @@
 //!   the figures.
 
 mod collapse;
+mod contract;
 mod decode;
 mod encode;
 mod error;
