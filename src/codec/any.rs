@@ -20,6 +20,7 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use super::ByteSize;
+use super::clbvh::{ClBvh, ClBvhCompact};
 use super::common::MassProps;
 use super::contract::{Codec, OpenOptions};
 use super::plain::PlainBvh;
@@ -121,6 +122,10 @@ registry! {
         "Uncompressed 32-byte nodes, f32 vertices, u32 indices";
     Racbvh(RacBvh, racbvh) = "racbvh",
         "RACBVH: clusters of consecutive nodes compressed independently, decoded on demand into an LRU cache";
+    Clbvh(ClBvh, clbvh) = "clbvh",
+        "CLBVH: 8-wide, float inner nodes, 72-byte compressed multi-leaf nodes, pre-gathered triangles";
+    ClbvhCompact(ClBvhCompact, clbvh_compact) = "clbvh-compact",
+        "CLBVH with compact leaves: de-duplicated vertex indices, 8-bit corner indices";
 }
 
 /// Runs `$body` with `$c` bound to the concrete codec inside an
@@ -140,6 +145,8 @@ macro_rules! with_codec {
         match $codec {
             $crate::codec::AnyCodec::Plain($c) => $body,
             $crate::codec::AnyCodec::Racbvh($c) => $body,
+            $crate::codec::AnyCodec::Clbvh($c) => $body,
+            $crate::codec::AnyCodec::ClbvhCompact($c) => $body,
         }
     };
 }
