@@ -477,3 +477,5 @@ fn rac(bits: u32, vertex_bits: Option<u32>) -> cbvh::codec::racbvh::RacOptions {
 // One line per codec.
 codec_suite!(plain, cbvh::codec::plain::PlainBvh, lossless: [()], lossy: []);
 codec_suite!(racbvh, cbvh::codec::racbvh::RacBvh, lossless: [rac(16, None)], lossy: [rac(8, Some(8)), rac(16, Some(16))]);
+codec_suite!(clbvh, cbvh::codec::clbvh::ClBvh, lossless: [Default::default()], lossy: []);
+codec_suite!(clbvh_compact, cbvh::codec::clbvh::ClBvhCompact, lossless: [Default::default()], lossy: []);
