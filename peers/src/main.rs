@@ -475,12 +475,6 @@ fn main() {
             packet: None,
         };
 
-        #[cfg(feature = "embree")]
-        let embree = embree_peer::Embree::new(&mesh);
-        #[allow(unused_mut)]
-        let mut peers: Vec<Peer> = vec![p_cbvh, p_packets, p_rac, p_parry, p_obvhs];
-        #[cfg(feature = "embree")]
-        peers.push(embree.peer());
 
         // cbvh CLBVH, fast and compact leaves (issue 12), from the same
         // canonical tree (built again: its build time counts for each).
@@ -500,6 +494,13 @@ fn main() {
         let clb_target = cbvh::render::CursorTarget::new(clb).with_name("cbvh clbvh");
         let clc_target = cbvh::render::CursorTarget::new(clc).with_name("cbvh clbvh-compact");
         let (clb_ref, clc_ref) = (clb_target.cursor(), clc_target.cursor());
+        // The peers borrow the targets above, so the list is made after them.
+        #[cfg(feature = "embree")]
+        let embree = embree_peer::Embree::new(&mesh);
+        #[allow(unused_mut)]
+        let mut peers: Vec<Peer> = vec![p_cbvh, p_packets, p_rac, p_parry, p_obvhs];
+        #[cfg(feature = "embree")]
+        peers.push(embree.peer());
         peers.push(Peer {
             name: "cbvh clbvh",
             bytes: clb_ref.bytes_total(),
