@@ -11,6 +11,7 @@
 //!   properties, file magic).
 
 pub mod common;
+pub mod hcc;
 pub mod plain;
 pub mod racbvh;
 
