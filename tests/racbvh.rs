@@ -5,6 +5,7 @@ mod common;
 
 use cbvh::build::{BuildOptions, CanonicalBvh, Layout, build};
 use cbvh::codec::ByteSize;
+use cbvh::codec::common::FormatError;
 use cbvh::codec::racbvh::{RacBvh, RacError, RacOptions};
 use cbvh::cursor::NodeCursor;
 use cbvh::scene::{Kind, generate};
@@ -322,15 +323,18 @@ fn container_round_trip_and_corruption() {
     }
     assert_eq!(
         RacBvh::from_bytes(b"nonsense bytes", 1).unwrap_err(),
-        RacError::Truncated {
+        RacError::Format(FormatError::Truncated {
             section: "header",
             need: 288,
             have: 14
-        }
+        })
     );
     let mut bad = bytes.clone();
     bad[0] ^= 1;
-    assert_eq!(RacBvh::from_bytes(&bad, 1).unwrap_err(), RacError::BadMagic);
+    assert_eq!(
+        RacBvh::from_bytes(&bad, 1).unwrap_err(),
+        RacError::Format(FormatError::BadMagic { format: "RACBVH" })
+    );
     // Bit flips anywhere: from_bytes or verify reports an error, and the
     // try_ accessors never panic.
     let mut rng = Rng(77);

@@ -409,7 +409,7 @@ pub fn machine() -> String {
 fn print_table(runs: &[RunReport], size: f32) {
     println!();
     println!(
-        "{:<19} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9} {:>7} {:>8} {:>9} {:>8}",
+        "{:<19} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9} {:>7} {:>7} {:>8} {:>9} {:>8}",
         "shape",
         "np median",
         "np p95",
@@ -422,18 +422,33 @@ fn print_table(runs: &[RunReport], size: f32) {
         "points",
         "interf",
         "max pen",
+        "E gain",
         "B/tri",
         "RSS",
         "final y",
         "fallback"
     );
     println!(
-        "{:<19} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9} {:>7} {:>8}",
-        "", "ms", "ms", "ms", "ms", "med ms", "steps", "max", "max", "max", "pairs", "", "", "MB"
+        "{:<19} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9} {:>7} {:>7} {:>8}",
+        "",
+        "ms",
+        "ms",
+        "ms",
+        "ms",
+        "med ms",
+        "steps",
+        "max",
+        "max",
+        "max",
+        "pairs",
+        "",
+        "%",
+        "",
+        "MB"
     );
     for r in runs {
         println!(
-            "{:<19} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9.5} {:>7.1} {:>8} {:>9.4} {:>8}",
+            "{:<19} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9.5} {:>7.2} {:>7.1} {:>8} {:>9.4} {:>8}",
             r.shape,
             r.narrow_phase_ms.median,
             r.narrow_phase_ms.p95,
@@ -446,6 +461,7 @@ fn print_table(runs: &[RunReport], size: f32) {
             r.max_contact_points,
             r.max_interference_pairs,
             r.max_penetration,
+            100.0 * r.energy_gain,
             r.bytes_per_triangle,
             r.peak_rss_bytes
                 .map(|b| format!("{:.0}", b as f64 / 1e6))
@@ -454,6 +470,11 @@ fn print_table(runs: &[RunReport], size: f32) {
             if r.fallback_bvh_built { "BUILT" } else { "no" }
         );
     }
+    println!(
+        "E gain: the largest rise of the dropped body's energy after its first contact, in % of \
+         its weight × size; contacts without restitution only take energy out, so a rise is \
+         energy the contacts put in"
+    );
     if let Some(base) = runs.iter().find(|r| r.shape == "parry") {
         println!();
         for r in runs.iter().filter(|r| r.shape != "parry") {

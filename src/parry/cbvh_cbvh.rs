@@ -52,6 +52,7 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
                 opts,
                 workspace,
                 pos12,
+                &s1.local_aabb(),
                 &box2,
                 prediction,
                 false,

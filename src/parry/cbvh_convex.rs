@@ -60,6 +60,7 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
                 opts,
                 workspace,
                 &pose,
+                &mesh.local_aabb(),
                 &convex_box,
                 prediction,
                 flipped,

@@ -45,6 +45,7 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
                 opts,
                 workspace,
                 &tm_in_mesh,
+                &mesh.local_aabb(),
                 &tm_box,
                 prediction,
                 flipped,

@@ -1,7 +1,7 @@
 //! Building a [`PlainBvh`] from the canonical tree.
 
-use super::node::{LEAF_FLAG, PlainNode};
-use crate::build::CanonicalBvh;
+use super::node::PlainNode;
+use crate::build::{CanonicalBvh, LEAF_FLAG};
 use crate::codec::ByteSize;
 use crate::codec::common::MassProps;
 use crate::mesh::Mesh;

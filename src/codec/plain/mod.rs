@@ -10,4 +10,4 @@ mod node;
 
 pub use encode::PlainBvh;
 pub use error::PlainError;
-pub use node::{LEAF_FLAG, PlainNode};
+pub use node::PlainNode;
