@@ -371,3 +371,38 @@ fn every_layout_encodes_the_same_answers() {
         check_round_trip(&t, &h, &mesh);
     }
 }
+
+#[test]
+fn files_round_trip_and_reject_damage() {
+    let mesh = cbvh::scene::generate(cbvh::scene::Kind::Turbine, 3000, 5, &mut |_, _| {}).unwrap();
+    for leaf in [1, 4] {
+        let (_, h) = hcc(&mesh, leaf);
+        h.verify().expect("a fresh encode verifies");
+        let bytes = h.to_bytes();
+        let back = HccBvh::from_bytes(&bytes).expect("read back");
+        back.verify().expect("read back verifies");
+        assert_eq!(back.to_bytes(), bytes);
+        assert_eq!(back.decoded_mesh(), h.decoded_mesh());
+        check_structure(&back, &h.decoded_mesh());
+        let dir = std::env::temp_dir().join(format!("cbvh-hcc-{}-{leaf}.hcc", std::process::id()));
+        h.save(&dir).unwrap();
+        assert_eq!(HccBvh::open(&dir).unwrap().to_bytes(), bytes);
+        std::fs::remove_file(&dir).unwrap();
+        for cut in [0, 7, 100, 247, 248, bytes.len() / 2, bytes.len() - 1] {
+            assert!(
+                HccBvh::from_bytes(&bytes[..cut]).is_err(),
+                "cut at {cut} accepted"
+            );
+        }
+        let mut rng = Rng(leaf as u64);
+        for _ in 0..300 {
+            let mut b = bytes.clone();
+            let i = rng.below(b.len());
+            b[i] ^= 1 << rng.below(8);
+            assert!(
+                HccBvh::from_bytes(&b).is_err(),
+                "a bit flip at byte {i} accepted"
+            );
+        }
+    }
+}

@@ -38,6 +38,16 @@ impl HccNode {
         self.bounds
     }
 
+    /// The node word index (low-level nodes).
+    pub(super) fn pos(&self) -> u32 {
+        self.pos
+    }
+
+    /// The node word index of the first node of the node's template.
+    pub(super) fn block(&self) -> u32 {
+        self.block
+    }
+
     /// The template id of the template the node sits in (low-level nodes;
     /// `None` for high-level nodes).
     pub fn template(&self) -> Option<u8> {
@@ -57,7 +67,7 @@ fn set_extent(b: &mut Aabb, e: usize, v: f32) {
 impl HccBvh {
     /// The handle of low-level tree `tree`'s root, whose box is `bounds`.
     #[inline]
-    fn low_root(&self, tree: u32, bounds: Aabb) -> HccNode {
+    pub(super) fn low_root(&self, tree: u32, bounds: Aabb) -> HccNode {
         let start = self.headers[tree as usize].node_start;
         let w = self.nodes[start as usize];
         let ty = node_type(w);
@@ -191,6 +201,29 @@ impl HccBvh {
         self.leaf_rank[w] + (self.leaf_bits[w] & ((1u64 << b) - 1)).count_ones()
     }
 
+    /// Triangle `id`'s corners as indices into the stored vertex array
+    /// (the low-level trees' arrays one after the other, as
+    /// [`HccBvh::decoded_mesh`] gives them). With one triangle a leaf, the
+    /// leaf word of rank `id` is found by select over the leaf bits; with
+    /// several, the tree by a binary search over the first ids.
+    pub fn triangle_vertex_indices(&self, id: u32) -> [u32; 3] {
+        if self.multi {
+            let tree = self.headers.partition_point(|h| h.first_triangle <= id) - 1;
+            let base = self.headers[tree].vertex_start;
+            self.multi_corners(id).map(|c| base + c)
+        } else {
+            let w = self.leaf_rank.partition_point(|&r| r <= id) - 1;
+            let mut bits = self.leaf_bits[w];
+            for _ in 0..id - self.leaf_rank[w] {
+                bits &= bits - 1;
+            }
+            let pos = (w * 64) as u32 + bits.trailing_zeros();
+            let base = self.headers[self.tree_of_word(pos)].vertex_start;
+            let word = self.nodes[pos as usize];
+            [0, 1, 2].map(|j| base + field(word, j))
+        }
+    }
+
     /// The low-level tree holding node word `pos`.
     fn tree_of_word(&self, pos: u32) -> usize {
         self.headers.partition_point(|h| h.node_start <= pos) - 1
@@ -285,21 +318,8 @@ impl NodeCursor for HccBvh {
     }
 
     fn triangle(&self, id: u32) -> Triangle {
-        if self.multi {
-            let tree = self.headers.partition_point(|h| h.first_triangle <= id) - 1;
-            self.corners(&self.headers[tree], self.multi_corners(id))
-        } else {
-            // Select: the leaf word of rank `id`.
-            let w = self.leaf_rank.partition_point(|&r| r <= id) - 1;
-            let mut bits = self.leaf_bits[w];
-            for _ in 0..id - self.leaf_rank[w] {
-                bits &= bits - 1;
-            }
-            let pos = (w * 64) as u32 + bits.trailing_zeros();
-            let h = &self.headers[self.tree_of_word(pos)];
-            let word = self.nodes[pos as usize];
-            self.corners(h, [field(word, 0), field(word, 1), field(word, 2)])
-        }
+        let [a, b, c] = self.triangle_vertex_indices(id);
+        [a, b, c].map(|v| Vec3A::from(self.vertices[v as usize]))
     }
 
     fn triangle_count(&self) -> usize {

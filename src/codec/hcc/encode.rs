@@ -279,22 +279,7 @@ impl HccBvh {
             }
         }
         if !multi {
-            out.leaf_bits = vec![0; out.nodes.len().div_ceil(64)];
-            for (p, &w) in out.nodes.iter().enumerate() {
-                if w >> TYPE_SHIFT == TYPE_LEAF {
-                    out.leaf_bits[p / 64] |= 1 << (p % 64);
-                }
-            }
-            let mut before = 0;
-            out.leaf_rank = out
-                .leaf_bits
-                .iter()
-                .map(|w| {
-                    let r = before;
-                    before += w.count_ones();
-                    r
-                })
-                .collect();
+            out.build_leaf_ranks();
         }
         let mut used = vec![false; mesh.vertices.len()];
         for t in &mesh.triangles {
@@ -481,6 +466,26 @@ impl HccBvh {
             self.stats.templates[ic.right_template as usize] += 1;
         }
         Ok(())
+    }
+
+    /// Rebuilds the leaf rank/select bits from the node words.
+    pub(super) fn build_leaf_ranks(&mut self) {
+        self.leaf_bits = vec![0; self.nodes.len().div_ceil(64)];
+        for (p, &w) in self.nodes.iter().enumerate() {
+            if w >> TYPE_SHIFT == TYPE_LEAF {
+                self.leaf_bits[p / 64] |= 1 << (p % 64);
+            }
+        }
+        let mut before = 0;
+        self.leaf_rank = self
+            .leaf_bits
+            .iter()
+            .map(|w| {
+                let r = before;
+                before += w.count_ones();
+                r
+            })
+            .collect();
     }
 
     /// Statistics of the encode: trees, duplicated vertices, templates.

@@ -1,7 +1,7 @@
 //! [`HccError`].
 
 /// What can stop an i-HCCMesh encode.
-#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+#[derive(Debug, thiserror::Error, PartialEq)]
 pub enum HccError {
     /// The canonical tree was built with leaves too large for a
     /// multi-triangle leaf.
@@ -46,5 +46,36 @@ pub enum HccError {
         nodes: usize,
         /// Its inter-connections.
         interconnections: usize,
+    },
+    /// Bytes that break the file frame (magic, truncation, checksums).
+    #[error(transparent)]
+    Format(#[from] crate::codec::common::FormatError),
+    /// A version this build cannot read.
+    #[error(
+        "i-HCCMesh file version {found} is not supported (this build reads version {supported}); rebuild it with `cbvh build MESH --codec hcc -o FILE`"
+    )]
+    Version {
+        /// The file's version.
+        found: u32,
+        /// The version this build reads.
+        supported: u32,
+    },
+    /// A structure that breaks what queries rely on.
+    #[error("low-level tree {tree}, node word {node}: {what}; the file is damaged, rebuild it")]
+    Corrupt {
+        /// The low-level tree (0 for the high-level tree).
+        tree: u32,
+        /// The node word or high-level node.
+        node: u32,
+        /// What is wrong.
+        what: &'static str,
+    },
+    /// Reading or writing a file failed.
+    #[error("{path}: {message}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The operating system's message.
+        message: String,
     },
 }

@@ -92,6 +92,7 @@ mod decode;
 mod decompose;
 mod encode;
 mod error;
+mod file;
 pub mod node;
 pub mod template;
 
