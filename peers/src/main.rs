@@ -325,7 +325,7 @@ fn main() {
         let bvh = cbvh::build::build(&mesh, &cbvh::build::BuildOptions::default(), &|_, _| {})
             .unwrap_or_else(|e| die(&format!("cbvh build: {e}")));
         let plain_target =
-            cbvh::render::CursorTarget::new(PlainBvh::new(&bvh, &mesh), "cbvh plain");
+            cbvh::render::CursorTarget::new(PlainBvh::new(&bvh, &mesh)).with_name("cbvh plain");
         let build = t0.elapsed();
         drop(bvh);
         let plain_ref = plain_target.cursor();
@@ -388,7 +388,7 @@ fn main() {
         .unwrap_or_else(|e| die(&format!("racbvh: {e}")));
         let build = t0.elapsed();
         drop(bvh);
-        let rac_target = cbvh::render::CursorTarget::new(rac, "cbvh racbvh");
+        let rac_target = cbvh::render::CursorTarget::new(rac).with_name("cbvh racbvh");
         let rac_ref = rac_target.cursor();
         let rac = rac_ref;
         let p_rac = Peer {

@@ -88,6 +88,7 @@
 //!
 //! See [`node`] for the bit layouts.
 
+mod contract;
 mod decode;
 mod decompose;
 mod encode;

@@ -27,7 +27,7 @@
 //! table and every checksum (the bytes are copied into memory anyway);
 //! [`verify`](PlainBvh::verify) proves what queries rely on. A tree that
 //! was not verified may make a query panic or loop; the CLI, the sims and
-//! [`crate::parry::open_codec`] verify by default.
+//! [`crate::codec::AnyCodec::open`] verify by default.
 
 use std::path::Path;
 

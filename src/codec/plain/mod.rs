@@ -2,6 +2,7 @@
 //! against (the papers' "Ori."). See [`node::PlainNode`] for the node
 //! layout and [`file`](mod@file) for the self-contained file.
 
+mod contract;
 mod decode;
 mod encode;
 mod error;

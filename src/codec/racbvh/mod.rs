@@ -147,7 +147,7 @@
 //! the mesh sections once ([`RacBvh::check_mesh`]). What only `verify`
 //! proves is the tree's global shape (a checksummed file whose tree is a
 //! DAG can make queries slow); the CLI, the sims and
-//! [`crate::parry::open_codec`] verify by default. The cursor path and the
+//! [`crate::codec::AnyCodec::open`] verify by default. The cursor path and the
 //! `bv`/`left`/… accessors panic with a message naming the cluster if they
 //! meet corrupted data; the `try_` accessors return the error instead.
 //! Nothing in the decoder recurses to a depth the file decides (completion
@@ -157,6 +157,7 @@ mod access;
 mod cache;
 mod complete;
 mod context;
+mod contract;
 mod cursor;
 mod decode;
 mod encode;
