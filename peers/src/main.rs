@@ -482,6 +482,55 @@ fn main() {
         #[cfg(feature = "embree")]
         peers.push(embree.peer());
 
+        // cbvh CLBVH, fast and compact leaves (issue 12), from the same
+        // canonical tree (built again: its build time counts for each).
+        let t0 = Instant::now();
+        let bvh = cbvh::build::build(&mesh, &cbvh::build::BuildOptions::default(), &|_, _| {})
+            .unwrap_or_else(|e| die(&format!("cbvh build: {e}")));
+        let canonical = t0.elapsed();
+        let t0 = Instant::now();
+        let clb = cbvh::codec::clbvh::ClBvh::encode(&bvh, &mesh, &Default::default())
+            .unwrap_or_else(|e| die(&format!("clbvh: {e}")));
+        let clb_build = canonical + t0.elapsed();
+        let t0 = Instant::now();
+        let clc = cbvh::codec::clbvh::ClBvhCompact::encode(&bvh, &mesh, &Default::default())
+            .unwrap_or_else(|e| die(&format!("clbvh-compact: {e}")));
+        let clc_build = canonical + t0.elapsed();
+        drop(bvh);
+        let clb_target = cbvh::render::CursorTarget::new(clb).with_name("cbvh clbvh");
+        let clc_target = cbvh::render::CursorTarget::new(clc).with_name("cbvh clbvh-compact");
+        let (clb_ref, clc_ref) = (clb_target.cursor(), clc_target.cursor());
+        peers.push(Peer {
+            name: "cbvh clbvh",
+            bytes: clb_ref.bytes_total(),
+            build: clb_build,
+            cast: Box::new(move |o, d| {
+                cbvh::query::closest_hit(
+                    clb_ref,
+                    &cbvh::geom::Ray::new(o, d),
+                    f32::INFINITY,
+                    &mut cbvh::TraversalStats::default(),
+                )
+                .map(|h| h.t)
+            }),
+            packet: None,
+        });
+        peers.push(Peer {
+            name: "cbvh clbvh-compact",
+            bytes: clc_ref.bytes_total(),
+            build: clc_build,
+            cast: Box::new(move |o, d| {
+                cbvh::query::closest_hit(
+                    clc_ref,
+                    &cbvh::geom::Ray::new(o, d),
+                    f32::INFINITY,
+                    &mut cbvh::TraversalStats::default(),
+                )
+                .map(|h| h.t)
+            }),
+            packet: None,
+        });
+
         let mut ray_sets = vec![camera_rays(lo, hi, args.width)];
         if args.random > 0 {
             ray_sets.push(random_rays(lo, hi, args.random, args.width));
@@ -643,6 +692,9 @@ fn main() {
             let et = embree.target(&mesh);
             #[cfg(feature = "embree")]
             targets.push((&et, "embree", peers[5].build));
+            let last = peers.len() - 2;
+            targets.push((&clb_target, "cbvh clbvh", peers[last].build));
+            targets.push((&clc_target, "cbvh clbvh-compact", peers[last + 1].build));
             for (threads, pool) in &pools {
                 for &(t, name, build) in &targets {
                     let (rays, secs) = whitted::best_render(t, &whitted_opts, pool, 3);

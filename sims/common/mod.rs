@@ -195,6 +195,9 @@ pub fn run_specs(args: &SimArgs) -> Result<Vec<RunSpec>, String> {
     if specs.is_empty() {
         return Err("--shapes names no shape".into());
     }
+    // `plain,plain-pairs` with both modes names plain-pairs twice: run it once.
+    let mut seen = std::collections::HashSet::new();
+    specs.retain(|s| seen.insert(s.name()));
     Ok(specs)
 }
 

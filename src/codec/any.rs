@@ -20,6 +20,7 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use super::ByteSize;
+use super::clbvh::{ClBvh, ClBvhCompact};
 use super::common::MassProps;
 use super::contract::{Codec, OpenOptions};
 use super::hcc::HccBvh;
@@ -122,6 +123,10 @@ registry! {
         "Uncompressed 32-byte nodes, f32 vertices, u32 indices";
     Racbvh(RacBvh, racbvh) = "racbvh",
         "RACBVH: clusters of consecutive nodes compressed independently, decoded on demand into an LRU cache";
+    Clbvh(ClBvh, clbvh) = "clbvh",
+        "CLBVH: 8-wide, float inner nodes, 72-byte compressed multi-leaf nodes, pre-gathered triangles";
+    ClbvhCompact(ClBvhCompact, clbvh_compact) = "clbvh-compact",
+        "CLBVH with compact leaves: de-duplicated vertex indices, 8-bit corner indices";
     Hcc(HccBvh, hcc) = "hcc",
         "i-HCCMesh: low-level trees of < 512 vertices, 4-byte nodes with boxes from vertex indices and reuse masks, tree templates (multi-triangle leaves with --leaf-size > 1)";
 }
@@ -143,6 +148,8 @@ macro_rules! with_codec {
         match $codec {
             $crate::codec::AnyCodec::Plain($c) => $body,
             $crate::codec::AnyCodec::Racbvh($c) => $body,
+            $crate::codec::AnyCodec::Clbvh($c) => $body,
+            $crate::codec::AnyCodec::ClbvhCompact($c) => $body,
             $crate::codec::AnyCodec::Hcc($c) => $body,
         }
     };

@@ -19,6 +19,10 @@
 //! - [`racbvh`]: RACBVH (Kim et al. 2010): clusters of consecutive nodes,
 //!   front-based structure coding, predicted quantized boxes, a dictionary
 //!   coder and a cache of decompressed clusters.
+//! - [`clbvh`]: CLBVH (Benthin et al. 2018): an 8-wide tree with float
+//!   inner nodes and 72-byte compressed multi-leaf nodes whose leaf data
+//!   follows them; `clbvh` (pre-gathered leaves) and `clbvh-compact`
+//!   (de-duplicated vertex indices).
 //! - [`common`]: machinery more than one codec uses (bit streams, the
 //!   dictionary coder, the conservative quantizer, owned-or-mapped storage,
 //!   packed arrays, little-endian readers, [`FormatError`](common::FormatError),
@@ -56,6 +60,7 @@
 //! 5. Its name and paper in the README's list of codecs.
 
 pub mod any;
+pub mod clbvh;
 pub mod common;
 mod contract;
 pub mod hcc;
