@@ -23,6 +23,7 @@ use super::ByteSize;
 use super::clbvh::{ClBvh, ClBvhCompact};
 use super::common::MassProps;
 use super::contract::{Codec, OpenOptions};
+use super::hcc::HccBvh;
 use super::plain::PlainBvh;
 use super::racbvh::RacBvh;
 use crate::build::CanonicalBvh;
@@ -126,6 +127,8 @@ registry! {
         "CLBVH: 8-wide, float inner nodes, 72-byte compressed multi-leaf nodes, pre-gathered triangles";
     ClbvhCompact(ClBvhCompact, clbvh_compact) = "clbvh-compact",
         "CLBVH with compact leaves: de-duplicated vertex indices, 8-bit corner indices";
+    Hcc(HccBvh, hcc) = "hcc",
+        "i-HCCMesh: low-level trees of < 512 vertices, 4-byte nodes with boxes from vertex indices and reuse masks, tree templates (multi-triangle leaves with --leaf-size > 1)";
 }
 
 /// Runs `$body` with `$c` bound to the concrete codec inside an
@@ -147,6 +150,7 @@ macro_rules! with_codec {
             $crate::codec::AnyCodec::Racbvh($c) => $body,
             $crate::codec::AnyCodec::Clbvh($c) => $body,
             $crate::codec::AnyCodec::ClbvhCompact($c) => $body,
+            $crate::codec::AnyCodec::Hcc($c) => $body,
         }
     };
 }
@@ -462,8 +466,9 @@ impl AnyCodec {
         crate::with_codec!(self, |c| Codec::save(c, path).map_err(error_of(c)))
     }
 
-    /// The mesh as stored (quantized vertices decoded), triangles in their
-    /// original order.
+    /// The mesh as stored (quantized vertices decoded), triangle `k` being
+    /// the one the cursor reports as id `k` (the input's order, except for
+    /// codecs that store triangles implicitly, such as hcc).
     pub fn decoded_mesh(&self) -> Mesh {
         crate::with_codec!(self, |c| Codec::decoded_mesh(c))
     }

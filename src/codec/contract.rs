@@ -58,8 +58,10 @@ pub trait Codec: NodeCursor + ByteSize + Send + Sync + Sized + 'static {
     /// [`Codec::decoded_mesh`]'s vertices: what smooth shading needs.
     fn triangle_vertices(&self, id: u32) -> [u32; 3];
 
-    /// The mesh as stored (quantized vertices decoded), triangles in their
-    /// original order: the triangles the cursor reports.
+    /// The mesh as stored (quantized vertices decoded), triangle `k` being
+    /// the triangle the cursor reports as id `k`: the input's order for a
+    /// codec that stores ids, storage order for one that stores triangles
+    /// implicitly (hcc: see its module docs on triangle ids).
     fn decoded_mesh(&self) -> Mesh;
 
     /// Mass properties at density 1, computed from the original mesh when

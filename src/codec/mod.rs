@@ -12,6 +12,10 @@
 //!   shape, the renderer, the CLI and the sims ask it; none lists codecs.
 //! - [`plain`]: the uncompressed reference (the papers' "Ori."): 32-byte
 //!   nodes, an `f32` vertex array and `u32` triangle indices.
+//! - [`hcc`]: HCCMesh (Kim et al. 2010): a high-level tree over low-level
+//!   trees of fewer than 512 vertices, 4-byte nodes whose boxes come from
+//!   vertex indices and the parent's box, tree templates, per-tree vertex
+//!   arrays (i-HCCMesh), with an optional multi-triangle-leaf form.
 //! - [`racbvh`]: RACBVH (Kim et al. 2010): clusters of consecutive nodes,
 //!   front-based structure coding, predicted quantized boxes, a dictionary
 //!   coder and a cache of decompressed clusters.
@@ -59,6 +63,7 @@ pub mod any;
 pub mod clbvh;
 pub mod common;
 mod contract;
+pub mod hcc;
 pub mod plain;
 pub mod racbvh;
 
