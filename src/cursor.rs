@@ -7,13 +7,21 @@
 //!
 //! - the root handle and the root's box;
 //! - whether a handle is a leaf;
-//! - an inner node's children, each with its *conservative* decoded box
-//!   (binary trees give two, 8-wide trees up to [`MAX_CHILDREN`]);
+//! - an inner node's children as a *batch* ([`Children`]): their handles and
+//!   their *conservative* decoded boxes in structure-of-arrays form
+//!   ([`ChildBoxes`]), so that a traversal tests all of them at once (binary
+//!   trees give two, 8-wide trees up to [`MAX_CHILDREN`]);
 //! - a leaf's triangles, as stable triangle ids (the original mesh's ids)
 //!   with their corners.
 //!
 //! The queries in [`crate::query`] are written once over this trait, with
 //! the primitive test passed in as a closure, and monomorphized per codec.
+//! Which child a query descends into first is the query's choice (nearest
+//! first for closest hits, lane order elsewhere), never the cursor's.
+
+mod batch;
+
+pub use batch::ChildBoxes;
 
 use crate::geom::{Aabb, Triangle};
 
@@ -36,18 +44,205 @@ pub trait NodeCursor: Sync {
     fn is_leaf(&self, node: &Self::Node) -> bool;
 
     /// Calls `f` with each child of the inner node `node` and the child's
-    /// conservative box. Must not be called on a leaf.
+    /// conservative box, in the node's child order. Must not be called on a
+    /// leaf.
+    ///
+    /// This is the fallback the default [`children`](Self::children) builds
+    /// on; the queries use [`children`](Self::children) only.
     fn for_each_child(&self, node: &Self::Node, f: impl FnMut(Self::Node, Aabb));
+
+    /// Writes the children of the inner node `node` into `out` as one
+    /// batch, replacing what it held: lane `i` is the `i`-th child (the
+    /// order of [`for_each_child`](Self::for_each_child)) with its
+    /// conservative box. Must not be called on a leaf.
+    ///
+    /// The default pushes what [`for_each_child`](Self::for_each_child)
+    /// gives; a codec overrides it when it can write the batch directly
+    /// (plain does; an 8-wide codec writes its child boxes straight into
+    /// the lanes, [`ChildBoxes::from_rows`]).
+    #[inline(always)]
+    fn children(&self, node: &Self::Node, out: &mut Children<Self::Node>) {
+        // Two children (a binary node) are staged in registers' worth of
+        // memory and written whole; more are pushed one by one.
+        let mut first = [(*node, Aabb::EMPTY); 2];
+        let mut n = 0;
+        self.for_each_child(node, |c, b| {
+            if let Some(slot) = first.get_mut(n) {
+                *slot = (c, b);
+            }
+            n += 1;
+        });
+        if n <= first.len() {
+            out.set(&first[..n]);
+        } else {
+            collect_children(self, node, out);
+        }
+    }
 
     /// Calls `f` with the id and corners of each triangle of the leaf
     /// `node`. Must not be called on an inner node.
     fn for_each_triangle(&self, node: &Self::Node, f: impl FnMut(u32, &Triangle));
 
-    /// The corners of triangle `id` (an id a leaf reported).
+    /// The corners of the triangle with the original mesh's id `id`.
+    ///
+    /// Defined for every `id < triangle_count()`, not only for ids a leaf
+    /// reported, with the same corners, bit for bit, as the leaf that holds
+    /// the triangle reports; and cheap (no tree search): the renderer shades
+    /// every hit through it and parry's compatibility path looks parts up by
+    /// it. Ids are always the original mesh's, never a codec's storage
+    /// order, because results depend on them (ties go to the smaller id), so
+    /// that every codec answers every query alike. A codec that stores
+    /// triangles implicitly (a template codec such as i-HCCMesh, where a
+    /// triangle is a position in a low-level tree) therefore stores the map
+    /// from original id to that position (and leaves report original ids
+    /// through its inverse), and counts the map in its bytes by part.
     fn triangle(&self, id: u32) -> Triangle;
 
     /// Number of triangles in the tree.
     fn triangle_count(&self) -> usize;
+}
+
+/// [`NodeCursor::children`] for a node with more than two children, by
+/// [`NodeCursor::for_each_child`] again (kept out of the traversals' loops:
+/// a codec with wide nodes overrides `children`).
+#[cold]
+fn collect_children<C: NodeCursor + ?Sized>(c: &C, node: &C::Node, out: &mut Children<C::Node>) {
+    out.clear();
+    c.for_each_child(node, |n, b| out.push(n, b));
+}
+
+/// The children of one inner node as a batch: their handles and their
+/// boxes ([`ChildBoxes`], lane `i` for child `i`), which
+/// [`NodeCursor::children`] writes. A traversal keeps one and has it
+/// rewritten at every inner node (no copies of the batch on the way).
+#[derive(Clone, Copy, Debug)]
+pub struct Children<N> {
+    boxes: ChildBoxes,
+    nodes: Handles<N>,
+    fill: N,
+}
+
+/// The handles of a node's children, indexed by lane. Two or fewer (a
+/// binary node's) are kept apart from the full array of [`MAX_CHILDREN`],
+/// so that a binary codec's batch writes two handles, not eight.
+#[derive(Clone, Copy, Debug)]
+enum Handles<N> {
+    Two([N; 2]),
+    Many([N; MAX_CHILDREN]),
+}
+
+impl<N: Copy> Children<N> {
+    /// An empty batch; `fill` only initialises unused handle slots (any
+    /// handle of the tree will do, such as its root).
+    #[inline]
+    pub fn new(fill: N) -> Self {
+        Self {
+            boxes: ChildBoxes::EMPTY,
+            nodes: Handles::Two([fill; 2]),
+            fill,
+        }
+    }
+
+    /// Empties the batch.
+    #[inline(always)]
+    pub fn clear(&mut self) {
+        self.boxes.clear();
+    }
+
+    /// Appends a child and its box.
+    ///
+    /// # Panics
+    /// If the batch already holds [`MAX_CHILDREN`] children.
+    #[inline(always)]
+    pub fn push(&mut self, node: N, b: Aabb) {
+        let i = self.boxes.len();
+        match &mut self.nodes {
+            Handles::Two(h) if i < 2 => h[i] = node,
+            Handles::Two(h) => {
+                let mut many = [self.fill; MAX_CHILDREN];
+                many[..2].copy_from_slice(h);
+                many[i] = node;
+                self.nodes = Handles::Many(many);
+            }
+            Handles::Many(h) => h[i] = node,
+        }
+        self.boxes.push(b);
+    }
+
+    /// Replaces the batch by `kids` (handle and box, in child order).
+    ///
+    /// # Panics
+    /// With more than [`MAX_CHILDREN`] children.
+    #[inline(always)]
+    pub fn set(&mut self, kids: &[(N, Aabb)]) {
+        // Written whole, without reading what the batch held, so that the
+        // tests that follow see constants where the compiler can tell.
+        self.boxes = ChildBoxes::from_lanes(kids.len(), |i| kids[i].1);
+        self.nodes = if kids.len() <= 2 {
+            let mut h = [self.fill; 2];
+            for (slot, &(n, _)) in h.iter_mut().zip(kids) {
+                *slot = n;
+            }
+            Handles::Two(h)
+        } else {
+            let mut h = [self.fill; MAX_CHILDREN];
+            for (slot, &(n, _)) in h.iter_mut().zip(kids) {
+                *slot = n;
+            }
+            Handles::Many(h)
+        };
+    }
+
+    /// Replaces the boxes by `boxes` and the handles by `nodes` (for codecs
+    /// that decode a node's child boxes as rows, [`ChildBoxes::from_rows`]).
+    ///
+    /// # Panics
+    /// If `nodes` and `boxes` differ in length.
+    #[inline(always)]
+    pub fn set_boxes(&mut self, boxes: ChildBoxes, nodes: &[N]) {
+        assert_eq!(nodes.len(), boxes.len(), "one handle per box");
+        if nodes.len() <= 2 {
+            let mut h = [self.fill; 2];
+            h[..nodes.len()].copy_from_slice(nodes);
+            self.nodes = Handles::Two(h);
+        } else {
+            let mut h = [self.fill; MAX_CHILDREN];
+            h[..nodes.len()].copy_from_slice(nodes);
+            self.nodes = Handles::Many(h);
+        }
+        self.boxes = boxes;
+    }
+
+    /// Number of children.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.boxes.len()
+    }
+
+    /// Whether the batch holds no child.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.boxes.is_empty()
+    }
+
+    /// The children's boxes.
+    #[inline(always)]
+    pub fn boxes(&self) -> &ChildBoxes {
+        &self.boxes
+    }
+
+    /// The handle of child `i`.
+    ///
+    /// # Panics
+    /// If `i >= len()`.
+    #[inline(always)]
+    pub fn node(&self, i: usize) -> N {
+        assert!(i < self.len(), "child {i} of {}", self.len());
+        match &self.nodes {
+            Handles::Two(h) => h[i],
+            Handles::Many(h) => h[i],
+        }
+    }
 }
 
 /// Traversal counters, for the papers' "travs/isecs" figures.
