@@ -3,15 +3,14 @@
 //! obvhs and Embree).
 //!
 //! ```text
-//! cargo run --release --example packet_bench -- [tris] [width] [codec: plain|racbvh]
+//! cargo run --release --example packet_bench -- [tris] [width] [codec, default plain]
 //! ```
 
 use std::time::Instant;
 
 use cbvh::TraversalStats;
 use cbvh::build::{BuildOptions, build};
-use cbvh::codec::plain::PlainBvh;
-use cbvh::codec::racbvh::{RacBvh, RacOptions};
+use cbvh::codec::{AnyCodec, AnyOptions, CodecKind};
 use cbvh::cursor::NodeCursor;
 use cbvh::geom::Ray;
 use cbvh::query::{self, RayHit};
@@ -81,7 +80,10 @@ fn main() {
         .and_then(|s| s.parse().ok())
         .unwrap_or(1_000_000);
     let width: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(512);
-    let codec = args.next().unwrap_or_else(|| "plain".into());
+    let codec: CodecKind = match args.next() {
+        Some(name) => name.parse().unwrap_or_else(|e| panic!("{e}")),
+        None => CodecKind::Plain,
+    };
     let mesh = generate(Kind::Statue, tris, 0, &mut |_, _| {}).expect("generate");
     let (lo, hi) = mesh.bounds().expect("non-empty");
     let (eye, dirs) = ray_sets::camera_tiles(Vec3A::from(lo), Vec3A::from(hi), width);
@@ -91,15 +93,8 @@ fn main() {
         "statue, {} triangles, {width}×{width} camera, 1 thread, {codec}",
         mesh.triangle_count()
     );
-    match codec.as_str() {
-        "plain" => bench(&PlainBvh::new(&bvh, &mesh), &rays),
-        "racbvh" => {
-            let opts = RacOptions {
-                cache_budget_bytes: usize::MAX,
-                ..Default::default()
-            };
-            bench(&RacBvh::encode(&bvh, &mesh, &opts).expect("encode"), &rays)
-        }
-        other => panic!("unknown codec {other}"),
-    }
+    // A codec with a cache gets one that holds the whole tree.
+    let options = AnyOptions::default().with_cache_budget(usize::MAX);
+    let codec = AnyCodec::encode(codec, &bvh, &mesh, &options).expect("encode");
+    cbvh::with_codec!(&codec, |c| bench(c, &rays));
 }

@@ -12,7 +12,7 @@
 
 use cbvh::Mesh;
 use cbvh::build::BuildOptions;
-use cbvh::codec::racbvh::RacOptions;
+use cbvh::codec::{AnyOptions, CodecKind};
 use cbvh::parry::{CbvhShape, Dispatcher};
 use rapier3d::prelude::*;
 
@@ -51,9 +51,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // The dropped body: a codec file needs no mesh (it stores its own mass
     // properties); a mesh or a generated statue is compressed here.
     let body_shape = match path {
-        Some(p) if cbvh::parry::codec_file_kind(p.as_ref()).is_some() => {
-            CbvhShape::open(p.as_ref())?
-        }
+        Some(p) if CodecKind::of_file(p.as_ref()).is_some() => CbvhShape::open(p.as_ref())?,
         _ => {
             let mesh = match path {
                 Some(p) => cbvh::mesh::load(p)?,
@@ -62,7 +60,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 }
             };
             mesh.validate("the dropped mesh")?;
-            CbvhShape::racbvh(&mesh, &BuildOptions::default(), &RacOptions::default())?
+            CbvhShape::build(
+                &mesh,
+                &BuildOptions::default(),
+                CodecKind::Racbvh,
+                &AnyOptions::default(),
+            )?
         }
     };
     let b = body_shape.local_aabb();

@@ -1,5 +1,5 @@
-//! Ray-tracing throughput of cbvh's plain and RACBVH codecs and parry's
-//! `TriMesh`, side by side in one process: rays per second on generated statues, primary
+//! Ray-tracing throughput of every cbvh codec (plain, RACBVH, ...) and
+//! parry's `TriMesh`, side by side in one process: rays per second on generated statues, primary
 //! rays only and full Whitted (shadows from 3 lights, 2 mirror bounces),
 //! on 1 and 2 threads.
 //!
@@ -16,10 +16,9 @@
 use std::time::Instant;
 
 use cbvh::build::{BuildOptions, build};
-use cbvh::codec::plain::PlainBvh;
-use cbvh::codec::racbvh::{RacBvh, RacOptions};
+use cbvh::codec::{AnyCodec, AnyOptions, CodecKind};
 use cbvh::render::{
-    CursorTarget, RayTarget, RenderOptions, RenderStats, Scene, VertexNormals, render,
+    RayTarget, RenderOptions, RenderStats, Scene, VertexNormals, any_target, render,
 };
 use cbvh::scene::{Kind, generate};
 use clap::Parser;
@@ -113,29 +112,27 @@ fn main() {
         let mesh = generate(Kind::Statue, tris, 0, &mut |_, _| {}).expect("generate");
         let t0 = Instant::now();
         let bvh = build(&mesh, &BuildOptions::default(), &|_, _| {}).expect("build");
-        let plain = CursorTarget::plain(PlainBvh::new(&bvh, &mesh));
-        let plain_build = t0.elapsed().as_secs_f64();
-        // RACBVH with a cache that holds the whole tree (the warm-up render
-        // fills it).
-        let t0 = Instant::now();
-        let rac_opts = RacOptions {
-            cache_budget_bytes: usize::MAX,
-            ..Default::default()
-        };
-        let rac = CursorTarget::racbvh(RacBvh::encode(&bvh, &mesh, &rac_opts).expect("racbvh"));
-        let rac_build = plain_build + t0.elapsed().as_secs_f64();
+        let tree_build = t0.elapsed().as_secs_f64();
+        // Codecs with a cache get one that holds the whole tree (the
+        // warm-up render fills it).
+        let options = AnyOptions::default().with_cache_budget(usize::MAX);
+        let mut owned: Vec<(Box<dyn RayTarget>, f64)> = CodecKind::ALL
+            .iter()
+            .map(|&k| {
+                let t0 = Instant::now();
+                let codec = AnyCodec::encode(k, &bvh, &mesh, &options).expect("encode");
+                (any_target(codec), tree_build + t0.elapsed().as_secs_f64())
+            })
+            .collect();
         drop(bvh);
         let t0 = Instant::now();
         let parry = cbvh::parry::parry_trimesh(&mesh).expect("parry TriMesh");
-        let parry_build = t0.elapsed().as_secs_f64();
+        owned.push((Box::new(parry), t0.elapsed().as_secs_f64()));
         let normals = VertexNormals::from_mesh(&mesh);
         let n = mesh.triangle_count();
         drop(mesh);
-        let targets: [(&dyn RayTarget, f64); 3] = [
-            (&plain, plain_build),
-            (&rac, rac_build),
-            (&parry, parry_build),
-        ];
+        let targets: Vec<(&dyn RayTarget, f64)> =
+            owned.iter().map(|(t, s)| (t.as_ref(), *s)).collect();
         let base = RenderOptions {
             width: a.width,
             height: a.height,
@@ -146,7 +143,7 @@ fn main() {
             ("whitted", base.clone()),
         ] {
             for &threads in &a.threads {
-                for (target, build_seconds) in targets {
+                for &(target, build_seconds) in &targets {
                     let scene = Scene::single(target, Some(&normals));
                     let (s, per_cpu) = best_of(&scene, &opts, threads, a.repeat);
                     let rays = s.rays.total();

@@ -10,14 +10,20 @@
 //! - [`scene`]: deterministic procedural scenes standing in for the papers' models.
 //! - [`build`]: the one builder, producing a [`CanonicalBvh`] in a chosen layout.
 //! - [`cursor`]: [`NodeCursor`], the traversal trait every codec implements.
-//! - [`codec`]: storage forms (`plain` now; compressed codecs later).
+//! - [`codec`]: the storage forms, the [`Codec`](codec::Codec) contract they
+//!   implement, and the registry ([`codec::any`]) that names every codec once.
 //! - [`query`]: ray, overlap, closest-point and tree-vs-tree queries over any cursor.
-//! - [`parry`]: the parry3d / rapier3d integration (the only folder importing them).
+//! - [`parry`]: the parry3d / rapier3d integration.
+//! - [`sim`]: the rapier drop-test harness behind the sims.
 //! - [`render`]: a Whitted-style ray tracer over any cursor (and parry's `TriMesh`).
 //! - [`plot`]: PNG line plots for the sims.
 //! - [`geom`]: the small geometry types (glam-based) shared by all of them.
 //! - [`logger`]: a minimal stderr logger for the binaries (the library logs
 //!   warnings through the `log` crate).
+//!
+//! parry3d and rapier3d are imported only in [`parry`] and in the harness
+//! [`sim`] that drives rapier; the rest of the crate speaks its own small
+//! geometry types (or parry's glam re-exports), and [`codec`] knows neither.
 #![warn(missing_docs)]
 
 pub mod build;
@@ -32,6 +38,7 @@ pub mod parry;
 pub mod plot;
 pub mod query;
 pub mod render;
+pub mod sim;
 // The folder is src/gen; the module is `scene` because `gen` is a reserved
 // word in edition 2024.
 #[path = "gen/mod.rs"]

@@ -10,7 +10,8 @@ use std::process::Command;
 
 use cbvh::build::{BuildOptions, build};
 use cbvh::codec::racbvh::{RacBvh, RacOptions};
-use cbvh::parry::{CbvhShape, Codec, CodecFileError, OpenOptions, open_codec};
+use cbvh::codec::{AnyCodec, AnyOptions, CodecFileError, CodecKind, OpenOptions};
+use cbvh::parry::CbvhShape;
 use cbvh::query;
 use cbvh::{Mesh, NodeCursor, TraversalStats};
 use common::*;
@@ -26,22 +27,20 @@ fn statue(tris: usize) -> Mesh {
     cbvh::scene::generate(cbvh::scene::Kind::Statue, tris, 3, &mut |_, _| {}).unwrap()
 }
 
-fn codecs(mesh: &Mesh) -> Vec<Codec> {
+/// Every codec of the registry over `mesh`.
+fn codecs(mesh: &Mesh) -> Vec<AnyCodec> {
     let bvh = build(mesh, &BuildOptions::default(), &|_, _| {}).unwrap();
-    vec![
-        Codec::Plain(cbvh::codec::plain::PlainBvh::new(&bvh, mesh)),
-        Codec::Racbvh(Box::new(
-            RacBvh::encode(
-                &bvh,
-                mesh,
-                &RacOptions {
-                    cluster_nodes: 256,
-                    ..Default::default()
-                },
-            )
-            .unwrap(),
-        )),
-    ]
+    let options = AnyOptions {
+        racbvh: RacOptions {
+            cluster_nodes: 256,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    CodecKind::ALL
+        .iter()
+        .map(|&k| AnyCodec::encode(k, &bvh, mesh, &options).unwrap())
+        .collect()
 }
 
 fn hits<C: NodeCursor>(c: &C, mesh: &Mesh) -> Vec<Option<(u32, u32)>> {
@@ -54,11 +53,8 @@ fn hits<C: NodeCursor>(c: &C, mesh: &Mesh) -> Vec<Option<(u32, u32)>> {
         .collect()
 }
 
-fn codec_hits(c: &Codec, mesh: &Mesh) -> Vec<Option<(u32, u32)>> {
-    match c {
-        Codec::Plain(p) => hits(p, mesh),
-        Codec::Racbvh(r) => hits(r.as_ref(), mesh),
-    }
+fn codec_hits(c: &AnyCodec, mesh: &Mesh) -> Vec<Option<(u32, u32)>> {
+    cbvh::with_codec!(c, |c| hits(c, mesh))
 }
 
 #[test]
@@ -77,7 +73,7 @@ fn every_codec_file_opens_by_content_into_a_shape_without_the_mesh() {
         // A name that says nothing: the content decides.
         let path = temp(&format!("{}.bin", codec.name()));
         codec.save(&path).unwrap();
-        let opened = open_codec(&path, &OpenOptions::default()).unwrap();
+        let opened = AnyCodec::open(&path, &OpenOptions::default()).unwrap();
         assert_eq!(opened.name(), codec.name());
         let dm = codec.decoded_mesh();
         assert_eq!(opened.decoded_mesh(), dm);
@@ -97,11 +93,11 @@ fn every_codec_file_opens_by_content_into_a_shape_without_the_mesh() {
 fn opening_a_non_codec_file_or_a_missing_one_says_what_to_give() {
     let path = temp("mesh.rac");
     std::fs::write(&path, b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n").unwrap();
-    let e = open_codec(&path, &OpenOptions::default()).unwrap_err();
+    let e = AnyCodec::open(&path, &OpenOptions::default()).unwrap_err();
     assert!(matches!(e, CodecFileError::NotACodecFile { .. }), "{e}");
     assert!(e.to_string().contains("cbvh build"), "{e}");
     std::fs::remove_file(&path).unwrap();
-    let e = open_codec(&path, &OpenOptions::default()).unwrap_err();
+    let e = AnyCodec::open(&path, &OpenOptions::default()).unwrap_err();
     assert!(matches!(e, CodecFileError::Io { .. }), "{e}");
 }
 

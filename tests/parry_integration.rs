@@ -5,8 +5,9 @@ use std::collections::BTreeMap;
 
 use cbvh::Mesh;
 use cbvh::build::BuildOptions;
-use cbvh::parry::droptest::{self, DropScene, Placement, RunSpec, ShapeKind};
+use cbvh::codec::{AnyOptions, CodecKind};
 use cbvh::parry::{CbvhShape, ContactMode, Dispatcher, parry_trimesh};
+use cbvh::sim::droptest::{self, DropScene, Placement, RunSpec, ShapeKind};
 
 /// The per-triangle-pair mode: parry's own contacts, pair by pair.
 fn pairs() -> Dispatcher {
@@ -306,17 +307,27 @@ fn drop_test_steps_without_the_fallback_and_agrees_with_parry() {
         steps: 60,
         dt: 1.0 / 60.0,
         contact_recycling: false,
-        cluster_nodes: 4096,
+        codec_options: AnyOptions::default(),
     };
     let spec = |kind| RunSpec {
         kind,
         mode: ContactMode::default(),
     };
     let parry = droptest::run(&scene, spec(ShapeKind::Parry), &mut |_, _| {}).unwrap();
-    let plain = droptest::run(&scene, spec(ShapeKind::Plain), &mut |_, _| {}).unwrap();
+    let plain = droptest::run(
+        &scene,
+        spec(ShapeKind::Cbvh(CodecKind::Plain)),
+        &mut |_, _| {},
+    )
+    .unwrap();
     // RACBVH with a cache of a tenth of its decompressed size lands the same
     // way, on its own traversals.
-    let rac = droptest::run(&scene, spec(ShapeKind::Racbvh10), &mut |_, _| {}).unwrap();
+    let rac = droptest::run(
+        &scene,
+        spec(ShapeKind::CbvhTenthCache(CodecKind::Racbvh)),
+        &mut |_, _| {},
+    )
+    .unwrap();
     assert!(!rac.fallback_bvh_built);
     assert!(rac.bytes_per_triangle < plain.bytes_per_triangle / 3.0);
     assert!((rac.final_translation[1] - plain.final_translation[1]).abs() < 0.1 * 2.0);

@@ -31,7 +31,7 @@ fn plain(mesh: &Mesh, layout: Layout, leaf: usize) -> CursorTarget<PlainBvh> {
         max_leaf_triangles: leaf,
         ..Default::default()
     };
-    CursorTarget::plain(PlainBvh::new(
+    CursorTarget::new(PlainBvh::new(
         &build(mesh, &opts, &|_, _| {}).expect("build"),
         mesh,
     ))
@@ -192,7 +192,7 @@ fn racbvh_renders_the_plain_image_exactly_when_lossless_and_nearly_when_lossy() 
             cache_budget_bytes: budget,
             ..Default::default()
         };
-        CursorTarget::racbvh(RacBvh::encode(&tree, m, &o).expect("encode"))
+        CursorTarget::new(RacBvh::encode(&tree, m, &o).expect("encode"))
     };
     for (vertex_bits, budget, bound) in [
         (None, usize::MAX, 0.0),
@@ -444,13 +444,11 @@ fn smooth_normals_change_the_shading_and_face_normals_remain_for_opaque_targets(
     let s = statue();
     let normals = VertexNormals::from_mesh(&s);
     let smooth = plain(&s, Layout::DepthFirst, 1);
-    let flat = CursorTarget::new(
-        PlainBvh::new(
-            &build(&s, &BuildOptions::default(), &|_, _| {}).unwrap(),
-            &s,
-        ),
-        "flat",
-    );
+    let flat = CursorTarget::new(PlainBvh::new(
+        &build(&s, &BuildOptions::default(), &|_, _| {}).unwrap(),
+        &s,
+    ))
+    .flat();
     assert!(flat.vertex_indices(0).is_none() && smooth.vertex_indices(0).is_some());
     let opts = small();
     let a = render(&Scene::single(&smooth, Some(&normals)), &opts, &|_, _| {})

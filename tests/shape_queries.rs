@@ -5,6 +5,7 @@
 use cbvh::Mesh;
 use cbvh::build::BuildOptions;
 use cbvh::codec::racbvh::RacOptions;
+use cbvh::codec::{AnyOptions, CodecKind};
 use cbvh::parry::{CbvhShape, parry_trimesh};
 use cbvh::scene::{Kind, generate};
 use parry3d::math::Vector;
@@ -15,18 +16,21 @@ fn mesh_of(kind: Kind, tris: usize, seed: u64) -> Mesh {
     generate(kind, tris, seed, &mut |_, _| {}).expect("generate")
 }
 
-/// The shapes under test: plain and (with `f32` vertices, so that its
-/// triangles are the mesh's) RACBVH.
+/// The shapes under test: every codec of the registry (RACBVH with `f32`
+/// vertices, so that its triangles are the mesh's).
 fn cbvh_shapes(mesh: &Mesh) -> Vec<CbvhShape> {
-    let rac = RacOptions {
-        vertex_bits: None,
-        cluster_nodes: 256,
+    let options = AnyOptions {
+        racbvh: RacOptions {
+            vertex_bits: None,
+            cluster_nodes: 256,
+            ..Default::default()
+        },
         ..Default::default()
     };
-    vec![
-        CbvhShape::plain(mesh, &BuildOptions::default()).unwrap(),
-        CbvhShape::racbvh(mesh, &BuildOptions::default(), &rac).unwrap(),
-    ]
+    CodecKind::ALL
+        .iter()
+        .map(|&k| CbvhShape::build(mesh, &BuildOptions::default(), k, &options).unwrap())
+        .collect()
 }
 
 /// Query points around a closed mesh, by kind: on triangles (inside a
@@ -105,8 +109,10 @@ fn check_projection(
 fn point_projection_subshape_feature_and_is_inside_match_trimesh() {
     for (kind, seed) in [(Kind::Statue, 4), (Kind::Robot, 7)] {
         let mesh = mesh_of(kind, 1500, seed);
-        let t = parry_trimesh(&mesh).unwrap();
         for c in cbvh_shapes(&mesh) {
+            // Against the mesh in the codec's triangle ids (hcc numbers
+            // its implicit triangles by storage order).
+            let t = parry_trimesh(&c.codec().decoded_mesh()).unwrap();
             let mut same_triangle = 0;
             let mut inside = 0;
             for (what, p) in probe_points(&mesh) {

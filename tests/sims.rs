@@ -148,6 +148,35 @@ fn contact_modes_follow_the_flag_and_the_shape_names() {
             ("racbvh-pairs", "pairs")
         ]
     );
+    // Both modes for `plain` already include `plain-pairs`: named again, it
+    // runs once.
+    let json = temp("modes_dedup.json");
+    let (ok, stderr) = run(
+        env!("CARGO_BIN_EXE_lucy-on-turbine"),
+        &[
+            "--statue-tris",
+            "1000",
+            "--turbine-tris",
+            "1000",
+            "--steps",
+            "1",
+            "--shapes",
+            "plain,plain-pairs",
+            "--json",
+            json.to_str().unwrap(),
+        ],
+    );
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    std::fs::remove_file(&json).ok();
+    let names: Vec<&str> = v["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["shape"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["plain", "plain-pairs"]);
     let (ok, stderr) = run(
         env!("CARGO_BIN_EXE_lucy-on-turbine"),
         &["--steps", "1", "--shapes", "parry-pairs"],

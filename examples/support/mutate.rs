@@ -20,10 +20,9 @@
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use cbvh::TraversalStats;
-use cbvh::codec::plain::PlainBvh;
 use cbvh::codec::racbvh::RacBvh;
+use cbvh::codec::{AnyCodec, OpenOptions};
 use cbvh::geom::{Aabb, Ray};
-use cbvh::parry::Codec;
 use glam::Vec3A;
 use xxhash_rust::xxh3::xxh3_64;
 
@@ -122,11 +121,8 @@ fn answers_of<C: cbvh::NodeCursor>(c: &C, rays: &[Ray], boxes: &[Aabb]) -> Answe
     Answers(hits, overlaps, c.triangle_count())
 }
 
-fn answers(c: &Codec, rays: &[Ray], boxes: &[Aabb]) -> Answers {
-    match c {
-        Codec::Plain(p) => answers_of(p, rays, boxes),
-        Codec::Racbvh(r) => answers_of(r.as_ref(), rays, boxes),
-    }
+fn answers(c: &AnyCodec, rays: &[Ray], boxes: &[Aabb]) -> Answers {
+    cbvh::with_codec!(c, |c| answers_of(c, rays, boxes))
 }
 
 /// A codec file under attack.
@@ -138,15 +134,13 @@ pub struct Subject {
     want: Answers,
 }
 
-fn open(codec: &str, b: &[u8]) -> Result<Codec, String> {
-    match codec {
-        "plain" => PlainBvh::from_bytes(b)
-            .map(Codec::Plain)
-            .map_err(|e| e.to_string()),
-        _ => RacBvh::from_bytes(b, 1 << 20)
-            .map(|r| Codec::Racbvh(Box::new(r)))
-            .map_err(|e| e.to_string()),
-    }
+fn open(codec: &str, b: &[u8]) -> Result<AnyCodec, String> {
+    let kind = codec.parse().map_err(|e| format!("{e}"))?;
+    let options = OpenOptions {
+        verify: false,
+        cache_budget_bytes: 1 << 20,
+    };
+    AnyCodec::from_bytes(kind, b, &options).map_err(|e| e.to_string())
 }
 
 impl Subject {
@@ -155,7 +149,7 @@ impl Subject {
     pub fn new(codec: &'static str, bytes: Vec<u8>) -> Self {
         let c = open(codec, &bytes).expect("the original opens");
         c.verify().expect("the original verifies");
-        let b = PlainProbe(&c).root_box();
+        let b = cbvh::with_codec!(&c, |c| cbvh::NodeCursor::root(c).1);
         let (lo, hi) = (b.min, b.max);
         let mut rng = Rng(0x5eed);
         let pt = |rng: &mut Rng| {
@@ -463,18 +457,6 @@ impl Subject {
             out.push(b);
         }
         out
-    }
-}
-
-/// A cursor view of a codec, for its root box.
-struct PlainProbe<'a>(&'a Codec);
-
-impl PlainProbe<'_> {
-    fn root_box(&self) -> Aabb {
-        match self.0 {
-            Codec::Plain(p) => cbvh::NodeCursor::root(p).1,
-            Codec::Racbvh(r) => cbvh::NodeCursor::root(r.as_ref()).1,
-        }
     }
 }
 

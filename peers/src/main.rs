@@ -325,7 +325,7 @@ fn main() {
         let bvh = cbvh::build::build(&mesh, &cbvh::build::BuildOptions::default(), &|_, _| {})
             .unwrap_or_else(|e| die(&format!("cbvh build: {e}")));
         let plain_target =
-            cbvh::render::CursorTarget::new(PlainBvh::new(&bvh, &mesh), "cbvh plain");
+            cbvh::render::CursorTarget::new(PlainBvh::new(&bvh, &mesh)).with_name("cbvh plain");
         let build = t0.elapsed();
         drop(bvh);
         let plain_ref = plain_target.cursor();
@@ -388,7 +388,7 @@ fn main() {
         .unwrap_or_else(|e| die(&format!("racbvh: {e}")));
         let build = t0.elapsed();
         drop(bvh);
-        let rac_target = cbvh::render::CursorTarget::new(rac, "cbvh racbvh");
+        let rac_target = cbvh::render::CursorTarget::new(rac).with_name("cbvh racbvh");
         let rac_ref = rac_target.cursor();
         let rac = rac_ref;
         let p_rac = Peer {
@@ -475,12 +475,62 @@ fn main() {
             packet: None,
         };
 
+
+        // cbvh CLBVH, fast and compact leaves (issue 12), from the same
+        // canonical tree (built again: its build time counts for each).
+        let t0 = Instant::now();
+        let bvh = cbvh::build::build(&mesh, &cbvh::build::BuildOptions::default(), &|_, _| {})
+            .unwrap_or_else(|e| die(&format!("cbvh build: {e}")));
+        let canonical = t0.elapsed();
+        let t0 = Instant::now();
+        let clb = cbvh::codec::clbvh::ClBvh::encode(&bvh, &mesh, &Default::default())
+            .unwrap_or_else(|e| die(&format!("clbvh: {e}")));
+        let clb_build = canonical + t0.elapsed();
+        let t0 = Instant::now();
+        let clc = cbvh::codec::clbvh::ClBvhCompact::encode(&bvh, &mesh, &Default::default())
+            .unwrap_or_else(|e| die(&format!("clbvh-compact: {e}")));
+        let clc_build = canonical + t0.elapsed();
+        drop(bvh);
+        let clb_target = cbvh::render::CursorTarget::new(clb).with_name("cbvh clbvh");
+        let clc_target = cbvh::render::CursorTarget::new(clc).with_name("cbvh clbvh-compact");
+        let (clb_ref, clc_ref) = (clb_target.cursor(), clc_target.cursor());
+        // The peers borrow the targets above, so the list is made after them.
         #[cfg(feature = "embree")]
         let embree = embree_peer::Embree::new(&mesh);
         #[allow(unused_mut)]
         let mut peers: Vec<Peer> = vec![p_cbvh, p_packets, p_rac, p_parry, p_obvhs];
         #[cfg(feature = "embree")]
         peers.push(embree.peer());
+        peers.push(Peer {
+            name: "cbvh clbvh",
+            bytes: clb_ref.bytes_total(),
+            build: clb_build,
+            cast: Box::new(move |o, d| {
+                cbvh::query::closest_hit(
+                    clb_ref,
+                    &cbvh::geom::Ray::new(o, d),
+                    f32::INFINITY,
+                    &mut cbvh::TraversalStats::default(),
+                )
+                .map(|h| h.t)
+            }),
+            packet: None,
+        });
+        peers.push(Peer {
+            name: "cbvh clbvh-compact",
+            bytes: clc_ref.bytes_total(),
+            build: clc_build,
+            cast: Box::new(move |o, d| {
+                cbvh::query::closest_hit(
+                    clc_ref,
+                    &cbvh::geom::Ray::new(o, d),
+                    f32::INFINITY,
+                    &mut cbvh::TraversalStats::default(),
+                )
+                .map(|h| h.t)
+            }),
+            packet: None,
+        });
 
         let mut ray_sets = vec![camera_rays(lo, hi, args.width)];
         if args.random > 0 {
@@ -643,6 +693,9 @@ fn main() {
             let et = embree.target(&mesh);
             #[cfg(feature = "embree")]
             targets.push((&et, "embree", peers[5].build));
+            let last = peers.len() - 2;
+            targets.push((&clb_target, "cbvh clbvh", peers[last].build));
+            targets.push((&clc_target, "cbvh clbvh-compact", peers[last + 1].build));
             for (threads, pool) in &pools {
                 for &(t, name, build) in &targets {
                     let (rays, secs) = whitted::best_render(t, &whitted_opts, pool, 3);

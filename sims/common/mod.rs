@@ -5,9 +5,11 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 
 use cbvh::Mesh;
+use cbvh::codec::racbvh::RacOptions;
+use cbvh::codec::{AnyCodec, AnyOptions, CodecKind, OpenOptions};
 use cbvh::parry::ContactMode;
-use cbvh::parry::droptest::{self, DropScene, Placement, RunReport, RunSpec, ShapeKind};
 use cbvh::scene::Kind;
+use cbvh::sim::droptest::{self, DropScene, Placement, RunReport, RunSpec, ShapeKind};
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Options common to the sims.
@@ -16,13 +18,15 @@ pub struct SimArgs {
     /// Number of steps at 60 Hz.
     #[arg(long, default_value_t = 215)]
     pub steps: usize,
-    /// Comma-separated shapes to run: parry, plain, racbvh (cache holds the
-    /// whole tree), racbvh-10pct (cache of 10 % of the decompressed tree).
+    /// Comma-separated shapes to run (default: all of them): parry
+    /// (parry's TriMesh), a codec's name (a decode cache, if the codec has
+    /// one, holds the whole tree), or a cached codec's name with -10pct
+    /// (a cache of 10 % of the decompressed tree).
     /// A cbvh name may end in -pairs or -patches to fix its contact mode
     /// (plain-pairs); bare cbvh names run in the modes of --contacts.
     #[arg(
         long,
-        default_value = "parry,plain,racbvh,racbvh-10pct",
+        default_values_t = ShapeKind::all().into_iter().map(ShapeKind::name),
         value_delimiter = ','
     )]
     pub shapes: Vec<String>,
@@ -191,6 +195,9 @@ pub fn run_specs(args: &SimArgs) -> Result<Vec<RunSpec>, String> {
     if specs.is_empty() {
         return Err("--shapes names no shape".into());
     }
+    // `plain,plain-pairs` with both modes names plain-pairs twice: run it once.
+    let mut seen = std::collections::HashSet::new();
+    specs.retain(|s| seen.insert(s.name()));
     Ok(specs)
 }
 
@@ -206,9 +213,8 @@ pub fn mesh_from(
     match file {
         // A cbvh codec file (recognised by its magic): opened, verified, and
         // its stored mesh used; each shape is then built from it.
-        Some(p) if cbvh::parry::codec_file_kind(p).is_some() => {
-            let codec = cbvh::parry::open_codec(p, &cbvh::parry::OpenOptions::default())
-                .map_err(|e| e.to_string())?;
+        Some(p) if CodecKind::of_file(p).is_some() => {
+            let codec = AnyCodec::open(p, &OpenOptions::default()).map_err(|e| e.to_string())?;
             Ok((
                 codec.decoded_mesh(),
                 format!("{} ({} file)", p.display(), codec.name()),
@@ -290,7 +296,13 @@ pub fn run_sim(
         steps: args.steps,
         dt: 1.0 / 60.0,
         contact_recycling: args.contact_recycling,
-        cluster_nodes: args.cluster_nodes,
+        codec_options: AnyOptions {
+            racbvh: RacOptions {
+                cluster_nodes: args.cluster_nodes,
+                ..Default::default()
+            },
+            ..Default::default()
+        },
     };
     let threads = rayon::current_num_threads();
     eprintln!(
@@ -325,7 +337,7 @@ pub fn run_sim(
         "base_bounds": [blo, bhi],
         "steps": scene.steps,
         "dt": scene.dt,
-        "racbvh_cluster_nodes": scene.cluster_nodes,
+        "racbvh_cluster_nodes": scene.codec_options.racbvh.cluster_nodes,
         "threads": threads,
         "machine": machine(),
     });
@@ -409,7 +421,7 @@ pub fn machine() -> String {
 fn print_table(runs: &[RunReport], size: f32) {
     println!();
     println!(
-        "{:<19} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9} {:>7} {:>8} {:>9} {:>8}",
+        "{:<19} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9} {:>7} {:>7} {:>8} {:>9} {:>8}",
         "shape",
         "np median",
         "np p95",
@@ -422,18 +434,33 @@ fn print_table(runs: &[RunReport], size: f32) {
         "points",
         "interf",
         "max pen",
+        "E gain",
         "B/tri",
         "RSS",
         "final y",
         "fallback"
     );
     println!(
-        "{:<19} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9} {:>7} {:>8}",
-        "", "ms", "ms", "ms", "ms", "med ms", "steps", "max", "max", "max", "pairs", "", "", "MB"
+        "{:<19} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9} {:>7} {:>7} {:>8}",
+        "",
+        "ms",
+        "ms",
+        "ms",
+        "ms",
+        "med ms",
+        "steps",
+        "max",
+        "max",
+        "max",
+        "pairs",
+        "",
+        "%",
+        "",
+        "MB"
     );
     for r in runs {
         println!(
-            "{:<19} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9.5} {:>7.1} {:>8} {:>9.4} {:>8}",
+            "{:<19} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9.5} {:>7.2} {:>7.1} {:>8} {:>9.4} {:>8}",
             r.shape,
             r.narrow_phase_ms.median,
             r.narrow_phase_ms.p95,
@@ -446,6 +473,7 @@ fn print_table(runs: &[RunReport], size: f32) {
             r.max_contact_points,
             r.max_interference_pairs,
             r.max_penetration,
+            100.0 * r.energy_gain,
             r.bytes_per_triangle,
             r.peak_rss_bytes
                 .map(|b| format!("{:.0}", b as f64 / 1e6))
@@ -454,6 +482,11 @@ fn print_table(runs: &[RunReport], size: f32) {
             if r.fallback_bvh_built { "BUILT" } else { "no" }
         );
     }
+    println!(
+        "E gain: the largest rise of the dropped body's energy after its first contact, in % of \
+         its weight × size; contacts without restitution only take energy out, so a rise is \
+         energy the contacts put in"
+    );
     if let Some(base) = runs.iter().find(|r| r.shape == "parry") {
         println!();
         for r in runs.iter().filter(|r| r.shape != "parry") {

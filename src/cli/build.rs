@@ -3,32 +3,10 @@
 use std::time::Instant;
 
 use cbvh::build::{BuildOptions, Layout, build};
-use cbvh::codec::ByteSize;
-use cbvh::codec::plain::PlainBvh;
-use cbvh::codec::racbvh::{RacBvh, RacOptions};
+use cbvh::codec::racbvh::RacOptions;
+use cbvh::codec::{AnyCodec, AnyOptions, ByteSize, CodecKind, OpenOptions};
 
-use super::{CliResult, MeshSource, progress_bar};
-
-/// The storage forms `cbvh build` can produce.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CodecName {
-    /// Uncompressed 32-byte nodes, f32 vertices, u32 indices.
-    Plain,
-    /// parry3d's own TriMesh, for comparison.
-    Parry,
-    /// RACBVH: clusters of consecutive nodes compressed independently.
-    Racbvh,
-}
-
-impl CodecName {
-    fn name(self) -> &'static str {
-        match self {
-            CodecName::Plain => "plain",
-            CodecName::Parry => "parry",
-            CodecName::Racbvh => "racbvh",
-        }
-    }
-}
+use super::{CliResult, MeshSource, Structure, progress_bar};
 
 /// Arguments of `cbvh build`.
 #[derive(clap::Args, Debug)]
@@ -36,8 +14,8 @@ pub struct BuildArgs {
     #[command(flatten)]
     pub source: MeshSource,
     /// The codec to build.
-    #[arg(long, value_enum, default_value_t = CodecName::Plain)]
-    pub codec: CodecName,
+    #[arg(long, value_parser = Structure::parser(), default_value_t = Structure::Codec(CodecKind::Plain))]
+    pub codec: Structure,
     /// Node layout: depth-first, van-emde-boas or cache-efficient.
     #[arg(long, default_value = "depth-first")]
     pub layout: Layout,
@@ -53,9 +31,10 @@ pub struct BuildArgs {
     /// RACBVH: bits per quantized vertex coordinate; 0 keeps vertices as f32.
     #[arg(long, default_value_t = 16)]
     pub vertex_bits: u32,
-    /// Write the codec's self-contained file (plain or racbvh) here; `cbvh
-    /// info`, `cbvh render`, `cbvh build` and the sims open it like a mesh,
-    /// and `cbvh::parry::open_codec` / `CbvhShape::open` in a program.
+    /// Write the codec's self-contained file here (any codec but parry);
+    /// `cbvh info`, `cbvh render`, `cbvh build` and the sims open it like a
+    /// mesh, and `cbvh::codec::AnyCodec::open` / `CbvhShape::open` in a
+    /// program.
     #[arg(short, long)]
     pub output: Option<std::path::PathBuf>,
     /// Print JSON instead of text.
@@ -93,11 +72,12 @@ fn build_with_progress(
 
 /// Runs `cbvh build`.
 pub fn run(a: BuildArgs) -> CliResult {
-    if a.output.is_some() && a.codec == CodecName::Parry {
-        return Err(
-            "--codec parry has no cbvh file to write: choose --codec plain or racbvh with -o"
-                .into(),
-        );
+    if a.output.is_some() && a.codec == Structure::Parry {
+        return Err(format!(
+            "--codec parry has no cbvh file to write: choose --codec {} with -o",
+            CodecKind::names(" or ")
+        )
+        .into());
     }
     let (mesh, name) = a.source.load()?;
     let tris = mesh.triangle_count();
@@ -105,62 +85,40 @@ pub fn run(a: BuildArgs) -> CliResult {
     let t0 = Instant::now();
     let (parts, layout, extra): (Vec<(&str, usize)>, Option<Layout>, serde_json::Value) =
         match a.codec {
-            CodecName::Plain => {
+            Structure::Codec(kind) => {
                 let bvh = build_with_progress(&mesh, &a)?;
-                let height = bvh.height();
-                let nodes = bvh.node_count();
-                let plain = PlainBvh::new(&bvh, &mesh);
-                drop(bvh);
-                if let Some(path) = &a.output {
-                    plain.save(path)?;
-                    // Read it back so that a bad file is caught here.
-                    PlainBvh::open(path)?.verify()?;
-                }
-                (
-                    plain.bytes_by_part(),
-                    Some(a.layout),
-                    serde_json::json!({ "nodes": nodes, "height": height }),
-                )
-            }
-            CodecName::Racbvh => {
-                let bvh = build_with_progress(&mesh, &a)?;
-                let rac_opts = RacOptions {
-                    cluster_nodes: a.cluster_nodes,
-                    bits: a.bits,
-                    vertex_bits: (a.vertex_bits != 0).then_some(a.vertex_bits),
+                let options = AnyOptions {
+                    racbvh: RacOptions {
+                        cluster_nodes: a.cluster_nodes,
+                        bits: a.bits,
+                        vertex_bits: (a.vertex_bits != 0).then_some(a.vertex_bits),
+                        ..Default::default()
+                    },
                     ..Default::default()
                 };
-                let pb = progress_bar("compressing", 0);
-                let rac = RacBvh::encode_with_progress(&bvh, &mesh, &rac_opts, &|done, total| {
-                    pb.set_length(total);
-                    pb.set_position(done);
-                });
+                let pb = progress_bar("encoding", 0);
+                let codec =
+                    AnyCodec::encode_with_progress(kind, &bvh, &mesh, &options, &|done, total| {
+                        pb.set_length(total);
+                        pb.set_position(done);
+                    });
                 pb.finish_and_clear();
-                let rac = rac?;
+                let codec = codec?;
+                drop(bvh);
                 if let Some(path) = &a.output {
-                    rac.save(path)?;
-                    // Read it back so that a bad file is caught here.
-                    let back = RacBvh::open(path, rac_opts.cache_budget_bytes)?;
-                    back.verify()?;
+                    codec.save(path)?;
+                    // Read it back (and verify it) so that a bad file is
+                    // caught here.
+                    AnyCodec::open(path, &OpenOptions::default())?;
                 }
-                let st = rac.stats();
-                (
-                    rac.bytes_by_part(),
-                    Some(a.layout),
-                    serde_json::json!({
-                        "nodes": st.nodes,
-                        "clusters": st.cluster_count,
-                        "cluster_nodes": a.cluster_nodes,
-                        "bits": a.bits,
-                        "bits_per_node_tree": st.bits_per_node_tree,
-                        "bits_per_node_bv": st.bits_per_node_bv,
-                        "compression_ratio_vs_plain": st.compression_ratio_vs_plain,
-                        "mesh_bytes_per_triangle": st.mesh_bytes_per_triangle,
-                        "compression_seconds": st.compression_seconds,
-                    }),
-                )
+                let extra: serde_json::Map<String, serde_json::Value> = codec
+                    .build_fields()
+                    .into_iter()
+                    .map(|(k, v)| (k.to_string(), v))
+                    .collect();
+                (codec.bytes_by_part(), Some(a.layout), extra.into())
             }
-            CodecName::Parry => {
+            Structure::Parry => {
                 let t = cbvh::parry::parry_trimesh(&mesh)
                     .map_err(|e| format!("parry could not build a TriMesh: {e:?}"))?;
                 (

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use cbvh::codec::{AnyCodec, ByteSize, CodecKind, OpenOptions};
 use cbvh::mesh::{MeshStats, load_with_detail};
 
 use super::CliResult;
@@ -25,7 +26,7 @@ pub struct InfoArgs {
 
 /// Runs `cbvh info`.
 pub fn run(a: InfoArgs) -> CliResult {
-    if cbvh::parry::codec_file_kind(&a.file).is_some() {
+    if CodecKind::of_file(&a.file).is_some() {
         return codec_info(&a);
     }
     let (mesh, detail) = load_with_detail(&a.file)?;
@@ -72,11 +73,11 @@ fn codec_info(a: &InfoArgs) -> CliResult {
     let t0 = Instant::now();
     // A cache that holds the whole decompressed tree (1 GiB at most), so
     // verify decodes each cluster once.
-    let opts = cbvh::parry::OpenOptions {
+    let opts = OpenOptions {
         verify: false,
         cache_budget_bytes: 1 << 30,
     };
-    let codec = cbvh::parry::open_codec(&a.file, &opts)?;
+    let codec = AnyCodec::open(&a.file, &opts)?;
     let open_s = t0.elapsed().as_secs_f64();
     let verify_s = if a.no_verify {
         None

@@ -9,6 +9,7 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 
 use cbvh::Mesh;
+use cbvh::codec::{AnyCodec, CodecKind, OpenOptions};
 use cbvh::scene::Kind;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -58,14 +59,14 @@ impl MeshSource {
     /// generates a mesh.
     pub fn load_any(&self) -> Result<Loaded, Box<dyn std::error::Error>> {
         if let Some(path) = &self.mesh
-            && cbvh::parry::codec_file_kind(path).is_some()
+            && CodecKind::of_file(path).is_some()
         {
-            let opts = cbvh::parry::OpenOptions {
+            let opts = OpenOptions {
                 verify: !self.no_verify,
                 cache_budget_bytes: 1 << 30,
             };
-            let codec = cbvh::parry::open_codec(path, &opts)?;
-            return Ok(Loaded::Codec(codec, path.display().to_string()));
+            let codec = AnyCodec::open(path, &opts)?;
+            return Ok(Loaded::Codec(Box::new(codec), path.display().to_string()));
         }
         let (mesh, name) = self.load()?;
         Ok(Loaded::Mesh(mesh, name))
@@ -76,7 +77,7 @@ impl MeshSource {
     /// reports.
     pub fn load(&self) -> Result<(Mesh, String), Box<dyn std::error::Error>> {
         if let Some(path) = &self.mesh
-            && cbvh::parry::codec_file_kind(path).is_some()
+            && CodecKind::of_file(path).is_some()
         {
             let Loaded::Codec(codec, name) = self.load_any()? else {
                 unreachable!("a codec file loads as a codec")
@@ -103,7 +104,59 @@ pub enum Loaded {
     /// A mesh (loaded or generated).
     Mesh(Mesh, String),
     /// A codec file.
-    Codec(cbvh::parry::Codec, String),
+    Codec(Box<AnyCodec>, String),
+}
+
+/// What `cbvh build` and `cbvh render` make: a codec of the registry, or
+/// parry's own `TriMesh` for comparison. Parsed from the codecs' names and
+/// `parry`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Structure {
+    /// A cbvh codec.
+    Codec(CodecKind),
+    /// parry3d's own TriMesh.
+    Parry,
+}
+
+impl Structure {
+    /// The name on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Structure::Codec(k) => k.name(),
+            Structure::Parry => "parry",
+        }
+    }
+
+    /// Every structure: the codecs in registry order, then parry.
+    fn all() -> impl Iterator<Item = Structure> {
+        CodecKind::ALL
+            .iter()
+            .map(|&k| Structure::Codec(k))
+            .chain([Structure::Parry])
+    }
+
+    /// clap's parser for `--codec`: the names of [`Structure::all`], each
+    /// with its summary in `--help`.
+    pub fn parser() -> impl clap::builder::TypedValueParser<Value = Structure> {
+        use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+        let values = Structure::all().map(|s| {
+            PossibleValue::new(s.name()).help(match s {
+                Structure::Codec(k) => k.summary(),
+                Structure::Parry => "parry3d's own TriMesh, for comparison",
+            })
+        });
+        PossibleValuesParser::new(values).map(|name| {
+            Structure::all()
+                .find(|s| s.name() == name)
+                .expect("clap accepts only the possible values")
+        })
+    }
+}
+
+impl std::fmt::Display for Structure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
 /// Generates a mesh with a progress bar on a terminal.

@@ -7,42 +7,13 @@ use std::time::Instant;
 
 use cbvh::Mesh;
 use cbvh::build::{BuildOptions, Layout, build};
-use cbvh::codec::plain::PlainBvh;
+use cbvh::codec::{AnyCodec, AnyOptions, CodecKind};
 use cbvh::render::{
-    CursorTarget, Image, RayTarget, RenderOptions, RenderStats, Scene, VertexNormals, render,
+    Image, RayTarget, RenderOptions, RenderStats, Scene, VertexNormals, any_target, render,
     render_turntable, save_animation,
 };
 
-use super::{CliResult, Loaded, MeshSource, progress_bar};
-
-/// The structures `cbvh render` can trace.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum RenderCodec {
-    /// cbvh's uncompressed BVH (32-byte nodes), traversed by `cbvh::query::ray`.
-    Plain,
-    /// parry3d's own TriMesh and its ray casting, for comparison.
-    Parry,
-    /// RACBVH: compressed clusters decoded on demand into an LRU cache
-    /// (16-bit boxes and vertices, 4096-node clusters, a cache that holds
-    /// the whole tree).
-    Racbvh,
-}
-
-impl RenderCodec {
-    fn name(self) -> &'static str {
-        match self {
-            RenderCodec::Plain => "plain",
-            RenderCodec::Parry => "parry",
-            RenderCodec::Racbvh => "racbvh",
-        }
-    }
-
-    fn from_name(name: &str) -> Option<Self> {
-        [Self::Plain, Self::Parry, Self::Racbvh]
-            .into_iter()
-            .find(|c| c.name() == name)
-    }
-}
+use super::{CliResult, Loaded, MeshSource, Structure, progress_bar};
 
 /// Arguments of `cbvh render`.
 #[derive(clap::Args, Debug)]
@@ -52,8 +23,8 @@ pub struct RenderArgs {
     /// The structure to trace rays through (default: a codec file's own
     /// codec, plain for a mesh; a codec file given another codec is
     /// re-encoded from its stored mesh).
-    #[arg(long, value_enum)]
-    pub codec: Option<RenderCodec>,
+    #[arg(long, value_parser = Structure::parser())]
+    pub codec: Option<Structure>,
     /// Node layout of cbvh codecs: depth-first, van-emde-boas or cache-efficient.
     #[arg(long, default_value = "depth-first")]
     pub layout: Layout,
@@ -101,29 +72,27 @@ pub struct RenderArgs {
     pub json: bool,
 }
 
-/// Builds the structure `codec` over `mesh`: one match arm per codec.
+/// Builds the structure `codec` over `mesh` (codecs with a cache get one
+/// that holds the whole tree).
 fn make_target(
-    codec: RenderCodec,
+    codec: Structure,
     mesh: &Mesh,
     layout: Layout,
 ) -> Result<Box<dyn RayTarget>, Box<dyn std::error::Error>> {
     Ok(match codec {
-        RenderCodec::Plain => Box::new(CursorTarget::plain(PlainBvh::new(
-            &build_tree(mesh, layout)?,
-            mesh,
-        ))),
-        RenderCodec::Parry => Box::new(
+        Structure::Codec(kind) => {
+            let options = AnyOptions::default().with_cache_budget(usize::MAX);
+            any_target(AnyCodec::encode(
+                kind,
+                &build_tree(mesh, layout)?,
+                mesh,
+                &options,
+            )?)
+        }
+        Structure::Parry => Box::new(
             cbvh::parry::parry_trimesh(mesh)
                 .map_err(|e| format!("parry could not build a TriMesh: {e:?}"))?,
         ),
-        RenderCodec::Racbvh => {
-            let opts = cbvh::codec::racbvh::RacOptions {
-                cache_budget_bytes: usize::MAX,
-                ..Default::default()
-            };
-            let rac = cbvh::codec::racbvh::RacBvh::encode(&build_tree(mesh, layout)?, mesh, &opts)?;
-            Box::new(CursorTarget::racbvh(rac))
-        }
     })
 }
 
@@ -195,10 +164,12 @@ pub fn run(mut a: RenderArgs) -> CliResult {
     }
     let t0 = Instant::now();
     let (mesh, name, target) = match a.source.load_any()? {
-        Loaded::Codec(codec, name) if a.codec.is_none_or(|c| c.name() == codec.name()) => {
+        Loaded::Codec(codec, name)
+            if a.codec.is_none_or(|c| c == Structure::Codec(codec.kind())) =>
+        {
             // The file's own codec, as stored: nothing is rebuilt.
-            a.codec = RenderCodec::from_name(codec.name());
-            (codec.decoded_mesh(), name, codec.into_ray_target())
+            a.codec = Some(Structure::Codec(codec.kind()));
+            (codec.decoded_mesh(), name, any_target(*codec))
         }
         loaded => {
             let (mesh, name) = match loaded {
@@ -206,7 +177,7 @@ pub fn run(mut a: RenderArgs) -> CliResult {
                 Loaded::Mesh(mesh, name) => (mesh, name),
             };
             mesh.validate(&name)?;
-            let codec = *a.codec.get_or_insert(RenderCodec::Plain);
+            let codec = *a.codec.get_or_insert(Structure::Codec(CodecKind::Plain));
             let target = make_target(codec, &mesh, a.layout)?;
             (mesh, name, target)
         }
@@ -289,7 +260,7 @@ fn report(
     s: &RenderStats,
     turntable: Option<(&RenderStats, usize, &PathBuf)>,
 ) -> CliResult {
-    let codec = a.codec.unwrap_or(RenderCodec::Plain);
+    let codec = a.codec.unwrap_or(Structure::Codec(CodecKind::Plain));
     let rays = s.rays.total();
     let steps = per_ray(target, s.rays.traversal.nodes_visited, rays);
     let prims = per_ray(target, s.rays.traversal.primitive_tests, rays);
@@ -298,7 +269,7 @@ fn report(
             "mesh": name,
             "triangles": tris,
             "codec": codec.name(),
-            "layout": (codec != RenderCodec::Parry).then(|| a.layout.name()),
+            "layout": (codec != Structure::Parry).then(|| a.layout.name()),
             "width": a.width,
             "height": a.height,
             "lights": a.lights,

@@ -1,18 +1,74 @@
 //! Codecs: each turns a [`CanonicalBvh`](crate::build::CanonicalBvh) and its
 //! mesh into one storage form, owns that form's bit layouts, and implements
-//! [`NodeCursor`](crate::cursor::NodeCursor) over it.
+//! the [`Codec`] contract (traversal through
+//! [`NodeCursor`](crate::cursor::NodeCursor), sizes by part, vertex indices,
+//! the decoded mesh, mass properties, its self-contained file).
 //!
+//! - [`any`]: the registry, the one place that names every codec:
+//!   [`CodecKind`] (the names the CLI, the sims and JSON use), [`AnyCodec`]
+//!   (an encoded codec, whichever it is), [`AnyOptions`], opening any codec
+//!   file by its magic, and [`with_codec!`](crate::with_codec), which binds
+//!   the concrete codec so that traversals stay monomorphized. The parry
+//!   shape, the renderer, the CLI and the sims ask it; none lists codecs.
 //! - [`plain`]: the uncompressed reference (the papers' "Ori."): 32-byte
 //!   nodes, an `f32` vertex array and `u32` triangle indices.
+//! - [`hcc`]: HCCMesh (Kim et al. 2010): a high-level tree over low-level
+//!   trees of fewer than 512 vertices, 4-byte nodes whose boxes come from
+//!   vertex indices and the parent's box, tree templates, per-tree vertex
+//!   arrays (i-HCCMesh), with an optional multi-triangle-leaf form.
 //! - [`racbvh`]: RACBVH (Kim et al. 2010): clusters of consecutive nodes,
 //!   front-based structure coding, predicted quantized boxes, a dictionary
 //!   coder and a cache of decompressed clusters.
-//! - [`common`]: what several codecs share (atomic saves, stored mass
-//!   properties, file magic).
+//! - [`clbvh`]: CLBVH (Benthin et al. 2018): an 8-wide tree with float
+//!   inner nodes and 72-byte compressed multi-leaf nodes whose leaf data
+//!   follows them; `clbvh` (pre-gathered leaves) and `clbvh-compact`
+//!   (de-duplicated vertex indices).
+//! - [`common`]: machinery more than one codec uses (bit streams, the
+//!   dictionary coder, the conservative quantizer, owned-or-mapped storage,
+//!   packed arrays, little-endian readers, [`FormatError`](common::FormatError),
+//!   atomic saves, stored mass properties, file magic).
+//!
+//! A codec's folder holds what is its own: its layouts and constants
+//! (`node.rs`, `file.rs`), `encode.rs`, `decode.rs`, its error type, and
+//! whatever else only it needs. In RACBVH: `context.rs` (coder contexts),
+//! `mesh.rs` (the stored mesh), `tree.rs` (the tree and its figures),
+//! `cache.rs` (decompressed clusters), `complete.rs` (BV completion),
+//! `access.rs` (the random-access API), `tricache.rs` (each thread's decoded
+//! triangles), `cursor.rs` and `verify.rs`. `common` imports nothing from a
+//! codec, and no codec imports another.
+//!
+//! This folder knows neither parry nor rapier.
+//!
+//! # What a new codec adds
+//!
+//! 1. Its folder, `codec/<name>/`: `encode.rs` (from `&CanonicalBvh` and the
+//!    mesh into a `Result`; a value that does not fit is an error), the
+//!    cursor (`decode.rs`, [`NodeCursor`](crate::cursor::NodeCursor) with
+//!    conservative boxes), `file.rs` (its self-contained file: magic,
+//!    version, two-tier validation, atomic save), `error.rs` (a `thiserror`
+//!    enum with fields), [`ByteSize`], and `mod.rs` with the module docs
+//!    (the paper's choices and ours).
+//! 2. `impl Codec` in `codec/<name>/contract.rs`, thin: delegating to the
+//!    codec's own methods.
+//! 3. One entry in the `registry!` invocation in [`any`] (variant, type,
+//!    options field, name, summary) and one arm in
+//!    [`with_codec!`](crate::with_codec); the compiler points at the arm if
+//!    it is missing. The CLI's `--codec`, the sims' `--shapes`, the
+//!    renderer, `cbvh info` and the parry shape then know the codec.
+//! 4. One line in the shared codec test suite (`tests/codec_suite.rs`),
+//!    which runs every test on every codec.
+//! 5. Its name and paper in the README's list of codecs.
 
+pub mod any;
+pub mod clbvh;
 pub mod common;
+mod contract;
+pub mod hcc;
 pub mod plain;
 pub mod racbvh;
+
+pub use any::{AnyCodec, AnyOptions, CodecError, CodecFileError, CodecKind, UnknownCodec};
+pub use contract::{Codec, OpenOptions};
 
 /// Memory of a stored structure, by component.
 pub trait ByteSize {

@@ -11,10 +11,11 @@ use parry3d::query::details::{
 use parry3d::query::{NonlinearRigidMotion, QueryDispatcher, ShapeCastHit, ShapeCastStatus};
 use parry3d::shape::{Ball, Shape};
 
-use super::shape::{CbvhShape, to_parry_triangle, with_cursor};
+use super::shape::{CbvhShape, to_parry_triangle};
 use crate::cursor::TraversalStats;
 use crate::geom::Aabb;
 use crate::query::find_best;
+use crate::with_codec;
 
 /// Time at which the ball around `b` (moving with `m1`) meets the ball of
 /// `other` (moving with `m2`), or `f32::MAX`.
@@ -64,7 +65,7 @@ pub fn cast_nonlinear<D: ?Sized + QueryDispatcher>(
 ) -> Option<ShapeCastHit> {
     let sphere = other.compute_local_bounding_sphere();
     let mut stats = TraversalStats::default();
-    let found = with_cursor!(mesh.codec(), |c| find_best(
+    let found = with_codec!(mesh.codec(), |c| find_best(
         c,
         end,
         &mut stats,

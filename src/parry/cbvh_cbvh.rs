@@ -15,12 +15,13 @@ use parry3d::query::{
 };
 
 use super::patches::{ContactCounters, ContactMode, count_pair_manifolds, patch_manifolds};
-use super::shape::{CbvhShape, pose_from_parry, to_parry_triangle, with_cursor};
+use super::shape::{CbvhShape, pose_from_parry, to_parry_triangle};
 use super::workspace::ManifoldUpdate;
 use crate::contact::{Interference, PairKernel, PatchOptions, PatchSet};
 use crate::cursor::TraversalStats;
 use crate::geom::Triangle;
 use crate::query::{bvtt, bvtt_min, bvtt_par};
+use crate::with_codec;
 
 /// Node pairs the parallel traversal starts from: enough tasks to balance
 /// two to a few dozen threads, few enough that a small contact costs little.
@@ -52,6 +53,7 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
                 opts,
                 workspace,
                 pos12,
+                &s1.local_aabb(),
                 &box2,
                 prediction,
                 false,
@@ -82,7 +84,7 @@ pub fn patches(
     let size = smaller_size(s1, s2);
     let mut merged = PatchSet::new(opts, size, record);
     let (mut candidates, mut contacts) = (0u64, 0u64);
-    with_cursor!(s1.codec(), |a| with_cursor!(s2.codec(), |b| {
+    with_codec!(s1.codec(), |a| with_codec!(s2.codec(), |b| {
         let (states, _stats) = bvtt_par(
             a,
             b,
@@ -118,7 +120,7 @@ pub fn patches(
 /// two-tree traversal and an exact triangle-triangle test, with no contacts.
 pub fn interference(pos12: &PPose, s1: &CbvhShape, s2: &CbvhShape) -> u64 {
     let pose = pose_from_parry(pos12);
-    with_cursor!(s1.codec(), |a| with_cursor!(s2.codec(), |b| {
+    with_codec!(s1.codec(), |a| with_codec!(s2.codec(), |b| {
         let (states, _) = bvtt_par(
             a,
             b,
@@ -152,7 +154,7 @@ pub fn for_each_pair(
     mut f: impl FnMut(u32, &Triangle, u32, &Triangle) -> ControlFlow<()>,
 ) {
     let pose = pose_from_parry(pos12);
-    with_cursor!(s1.codec(), |a| with_cursor!(s2.codec(), |b| {
+    with_codec!(s1.codec(), |a| with_codec!(s2.codec(), |b| {
         bvtt(a, b, &pose, prediction, stats, &mut f);
     }));
 }
@@ -251,7 +253,7 @@ pub fn contact(pos12: &PPose, s1: &CbvhShape, s2: &CbvhShape, prediction: Real) 
 pub fn distance(pos12: &PPose, s1: &CbvhShape, s2: &CbvhShape) -> ShapeDistance {
     let pose = pose_from_parry(pos12);
     let mut stats = TraversalStats::default();
-    let found = with_cursor!(s1.codec(), |a| with_cursor!(s2.codec(), |b| bvtt_min(
+    let found = with_codec!(s1.codec(), |a| with_codec!(s2.codec(), |b| bvtt_min(
         a,
         b,
         &pose,
@@ -280,7 +282,7 @@ pub fn closest_points(
     let pose = pose_from_parry(pos12);
     let mut stats = TraversalStats::default();
     let bound = max_dist + max_dist.abs() * 1e-6 + 1e-7;
-    let found = with_cursor!(s1.codec(), |a| with_cursor!(s2.codec(), |b| bvtt_min(
+    let found = with_codec!(s1.codec(), |a| with_codec!(s2.codec(), |b| bvtt_min(
         a,
         b,
         &pose,

@@ -14,12 +14,13 @@ use parry3d::query::{
 use parry3d::shape::Shape;
 
 use super::patches::{ContactCounters, ContactMode, count_pair_manifolds, patch_manifolds};
-use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle, with_cursor};
+use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle};
 use super::workspace::ManifoldUpdate;
 use crate::contact::{PatchOptions, PatchPoint, PatchSet};
 use crate::cursor::TraversalStats;
 use crate::geom::Triangle;
 use crate::query::overlap;
+use crate::with_codec;
 
 /// Calls `f` for each triangle of `mesh` whose box comes within
 /// `prediction` of the box of `convex` placed at `pose` (in the mesh's frame).
@@ -32,7 +33,7 @@ fn for_each_triangle_near(
 ) {
     let query = from_parry_aabb(&convex.compute_aabb(pose)).loosened(prediction);
     let mut stats = TraversalStats::default();
-    with_cursor!(mesh.codec(), |c| {
+    with_codec!(mesh.codec(), |c| {
         overlap(c, &query, &mut stats, &mut f);
     });
 }
@@ -60,6 +61,7 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
                 opts,
                 workspace,
                 &pose,
+                &mesh.local_aabb(),
                 &convex_box,
                 prediction,
                 flipped,

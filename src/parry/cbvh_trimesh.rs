@@ -17,11 +17,12 @@ use parry3d::query::{
 use parry3d::shape::{CompositeShape, Shape, TriMesh};
 
 use super::patches::{ContactCounters, ContactMode, count_pair_manifolds, patch_manifolds};
-use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle, with_cursor};
+use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle};
 use super::workspace::ManifoldUpdate;
 use crate::contact::{PairKernel, PatchOptions, PatchSet};
 use crate::cursor::TraversalStats;
 use crate::query::overlap;
+use crate::with_codec;
 
 /// Contact manifolds in the dispatcher's `mode`; `flipped` says the cbvh
 /// shape is the second shape of the pair.
@@ -45,6 +46,7 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
                 opts,
                 workspace,
                 &tm_in_mesh,
+                &mesh.local_aabb(),
                 &tm_box,
                 prediction,
                 flipped,
@@ -83,7 +85,7 @@ pub fn patches(
     let query = from_parry_aabb(&tm.compute_aabb(tm_in_mesh)).loosened(prediction);
     let mut stats = TraversalStats::default();
     let to_mesh = |p: parry3d::math::Vector| glam::Vec3A::from((*tm_in_mesh * p).to_array());
-    with_cursor!(mesh.codec(), |c| {
+    with_codec!(mesh.codec(), |c| {
         overlap(c, &query, &mut stats, |i, tri| {
             let ptri = to_parry_triangle(tri);
             let b = ptri.compute_aabb(&mesh_in_tm).loosened(prediction);
@@ -123,7 +125,7 @@ pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + S
     let mesh_in_tm = tm_in_mesh.inverse();
     let query = from_parry_aabb(&tm.compute_aabb(&tm_in_mesh)).loosened(prediction);
     let mut stats = TraversalStats::default();
-    with_cursor!(mesh.codec(), |c| {
+    with_codec!(mesh.codec(), |c| {
         overlap(c, &query, &mut stats, |i, tri| {
             let ptri = to_parry_triangle(tri);
             let b = ptri.compute_aabb(&mesh_in_tm).loosened(prediction);

@@ -117,10 +117,17 @@ impl WorkspaceData for PatchWorkspace {
 /// Sets `workspace` to a [`PatchWorkspace`] (see there why it must exist)
 /// and returns the prediction distance to use at `pos12`: `prediction`,
 /// or less when the options bound it by the pair's motion since the last
-/// step (`local_box2` is shape 2's box in its own frame).
+/// step (`local_box1`, `local_box2`: each shape's box in its own frame).
+///
+/// The motion that matters is that of the points of shape 2 that can be in
+/// contact: those inside shape 1's box (placed in shape 2's frame) grown by
+/// the prediction. A statue tipping over an edge turns about the contact,
+/// so its head moves far more than the region at the edge; bounding by the
+/// whole box would take the head's move.
 pub fn patch_workspace(
     workspace: &mut Option<ContactManifoldsWorkspace>,
     pos12: &PPose,
+    local_box1: &crate::geom::Aabb,
     local_box2: &crate::geom::Aabb,
     prediction: f32,
     opts: &PatchOptions,
@@ -140,9 +147,21 @@ pub fn patch_workspace(
     let last = ws.last_pos12.replace(*pos12);
     match (opts.motion_factor, last) {
         (Some(k), Some(last)) if !local_box2.is_empty() => {
+            let box1_in_2 = local_box1
+                .transformed(&super::pose_from_parry(&pos12.inverse()))
+                .loosened(prediction);
+            let region = crate::geom::Aabb::new(
+                box1_in_2.min.max(local_box2.min),
+                box1_in_2.max.min(local_box2.max),
+            );
+            if region.is_empty() {
+                // Nothing of shape 2 can be in contact: no pair survives any
+                // prediction, so the smallest does.
+                return 0.1 * prediction;
+            }
             // A rigid motion moves points affinely: the largest move over
-            // the box is at a corner.
-            let moved = local_box2
+            // the region is at one of its corners.
+            let moved = region
                 .corners()
                 .iter()
                 .map(|c| {
@@ -158,21 +177,29 @@ pub fn patch_workspace(
 
 /// One step of patch contacts for a pair whose patches are computed in the
 /// frame of side A (the cbvh shape): sets up the pair's workspace, bounds
-/// the prediction by the pair's motion (`b_in_a` places side B, whose own
-/// box is `local_box_b`), computes the patches with `compute(prediction)`
+/// the prediction by the pair's motion (`b_in_a` places side B; `local_box_a`
+/// and `local_box_b` are each side's own box), computes the patches with `compute(prediction)`
 /// and replaces `manifolds` with them (`flipped`: A is parry's shape 2).
 #[allow(clippy::too_many_arguments)]
 pub fn patch_manifolds<M: Default + Clone, C: Default + Copy>(
     opts: &PatchOptions,
     workspace: &mut Option<ContactManifoldsWorkspace>,
     b_in_a: &PPose,
+    local_box_a: &crate::geom::Aabb,
     local_box_b: &crate::geom::Aabb,
     prediction: f32,
     flipped: bool,
     manifolds: &mut Vec<ContactManifold<M, C>>,
     compute: impl FnOnce(f32) -> PatchSet,
 ) {
-    let prediction = patch_workspace(workspace, b_in_a, local_box_b, prediction, opts);
+    let prediction = patch_workspace(
+        workspace,
+        b_in_a,
+        local_box_a,
+        local_box_b,
+        prediction,
+        opts,
+    );
     let set = compute(prediction);
     emit(
         &set,
@@ -312,4 +339,42 @@ pub fn emit<M: Default + Clone, C: Default + Copy>(
         manifolds.push(m);
     }
     old.clear();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::Aabb;
+    use parry3d::math::Rotation;
+
+    /// Shape 2, a pole 10 tall standing on shape 1's unit box, tipping by
+    /// 0.01 rad about its foot: its head moves 0.1, the part that can touch
+    /// shape 1 about 0.012. The bound follows the part that can touch.
+    #[test]
+    fn motion_bound_follows_the_region_that_can_touch() {
+        let box1 = Aabb::new(Vec3A::ZERO, Vec3A::ONE);
+        let box2 = Aabb::new(Vec3A::new(0.0, 1.0, 0.0), Vec3A::new(1.0, 11.0, 1.0));
+        let opts = PatchOptions::default();
+        let prediction = 1.0;
+        let pivot = Vector::new(0.5, 1.0, 0.5);
+        let tip = |angle: f32| {
+            let r = PPose::from_parts(Vector::ZERO, Rotation::from_rotation_z(angle));
+            PPose::from_translation(pivot) * r * PPose::from_translation(-pivot)
+        };
+        let mut ws = None;
+        let first = patch_workspace(&mut ws, &tip(0.0), &box1, &box2, prediction, &opts);
+        assert_eq!(first, prediction, "no previous pose: the full prediction");
+        let tipped = patch_workspace(&mut ws, &tip(0.01), &box1, &box2, prediction, &opts);
+        // 2 × 0.0122 is under the floor of a tenth of the prediction; the
+        // whole pole's move would have given 2 × 0.1.
+        assert_eq!(tipped, 0.1 * prediction);
+        // A translation moves every point alike: 2 × 0.3.
+        let moved = PPose::from_translation(Vector::new(0.3, 0.0, 0.0)) * tip(0.01);
+        let slid = patch_workspace(&mut ws, &moved, &box1, &box2, prediction, &opts);
+        assert!((slid - 0.6).abs() < 1e-3, "{slid}");
+        // Far apart: nothing can touch, the smallest prediction.
+        let away = PPose::from_translation(Vector::new(50.0, 0.0, 0.0));
+        let far = patch_workspace(&mut ws, &away, &box1, &box2, prediction, &opts);
+        assert_eq!(far, 0.1 * prediction);
+    }
 }

@@ -18,131 +18,35 @@ use parry3d::shape::{
 };
 
 use crate::build::{BuildError, BuildOptions, build};
-use crate::codec::ByteSize;
 use crate::codec::common::MassProps;
-use crate::codec::plain::PlainBvh;
-use crate::codec::racbvh::{RacBvh, RacOptions};
+use crate::codec::{
+    AnyCodec, AnyOptions, ByteSize, CodecError, CodecFileError, CodecKind, OpenOptions,
+};
 use crate::cursor::{NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Pose, Ray, TriHit, Triangle};
 use crate::mesh::Mesh;
 use crate::query;
+use crate::with_codec;
 
-/// The codecs a [`CbvhShape`] can hold.
-pub enum Codec {
-    /// Uncompressed 32-byte nodes.
-    Plain(PlainBvh),
-    /// RACBVH: compressed clusters decoded on demand into an LRU cache.
-    Racbvh(Box<RacBvh>),
+/// What can go wrong building a [`CbvhShape`] from a mesh.
+#[derive(Debug, thiserror::Error)]
+pub enum ShapeBuildError {
+    /// The tree could not be built over the mesh.
+    #[error("building the tree: {0}")]
+    Build(#[from] BuildError),
+    /// The codec could not encode the tree.
+    #[error("encoding the {codec} codec: {source}")]
+    Encode {
+        /// The codec.
+        codec: CodecKind,
+        /// The codec's error.
+        #[source]
+        source: CodecError,
+    },
 }
-
-impl std::fmt::Debug for Codec {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl Codec {
-    /// The codec's name, as used by the sims' `--shapes` and reports.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Codec::Plain(_) => "plain",
-            Codec::Racbvh(_) => "racbvh",
-        }
-    }
-
-    /// Memory by part.
-    pub fn bytes_by_part(&self) -> Vec<(&'static str, usize)> {
-        match self {
-            Codec::Plain(c) => c.bytes_by_part(),
-            Codec::Racbvh(c) => c.bytes_by_part(),
-        }
-    }
-
-    /// Mass properties at density 1, as stored with the codec.
-    pub fn mass(&self) -> MassProps {
-        match self {
-            Codec::Plain(c) => c.mass(),
-            Codec::Racbvh(c) => c.mass(),
-        }
-    }
-
-    /// Proves everything a query relies on (see each codec's `verify`).
-    pub fn verify(&self) -> Result<(), super::CodecError> {
-        match self {
-            Codec::Plain(c) => Ok(c.verify()?),
-            Codec::Racbvh(c) => Ok(c.verify()?),
-        }
-    }
-
-    /// Writes the codec's self-contained file (atomically).
-    pub fn save(&self, path: &std::path::Path) -> Result<(), super::CodecError> {
-        match self {
-            Codec::Plain(c) => Ok(c.save(path)?),
-            Codec::Racbvh(c) => Ok(c.save(path)?),
-        }
-    }
-
-    /// The mesh as stored (quantized vertices decoded), triangles in their
-    /// original order.
-    pub fn decoded_mesh(&self) -> Mesh {
-        match self {
-            Codec::Plain(c) => Mesh::new(c.vertices().to_vec(), c.triangles().to_vec()),
-            Codec::Racbvh(c) => c.decoded_mesh(),
-        }
-    }
-
-    /// Number of triangles.
-    pub fn triangle_count(&self) -> usize {
-        with_cursor!(self, |c| c.triangle_count())
-    }
-
-    /// The codec as a ray-tracing target (for the renderer), smooth-shaded
-    /// through its vertex indices.
-    pub fn into_ray_target(self) -> Box<dyn crate::render::RayTarget> {
-        use crate::render::CursorTarget;
-        match self {
-            Codec::Plain(c) => Box::new(CursorTarget::plain(c)),
-            Codec::Racbvh(c) => Box::new(CursorTarget::racbvh(*c)),
-        }
-    }
-
-    /// The codec's header fields, for `cbvh info`.
-    pub fn header_fields(&self) -> Vec<(&'static str, String)> {
-        let mut out = vec![("codec", self.name().to_string())];
-        match self {
-            Codec::Plain(c) => {
-                out.push(("nodes", c.nodes().len().to_string()));
-                out.push(("vertices", c.vertices().len().to_string()));
-            }
-            Codec::Racbvh(c) => out.extend(c.header_fields()),
-        }
-        out.push(("triangles", self.triangle_count().to_string()));
-        let m = self.mass();
-        out.push((
-            "mass (density 1)",
-            format!("{} at ({}, {}, {})", m.mass, m.com[0], m.com[1], m.com[2]),
-        ));
-        out
-    }
-}
-
-/// Runs `$body` with `$c` bound to the codec's concrete cursor, so that
-/// every traversal is monomorphized per codec.
-macro_rules! with_cursor {
-    ($codec:expr, |$c:ident| $body:expr) => {
-        match $codec {
-            $crate::parry::shape::Codec::Plain($c) => $body,
-            $crate::parry::shape::Codec::Racbvh($c) => {
-                let $c: &$crate::codec::racbvh::RacBvh = $c;
-                $body
-            }
-        }
-    };
-}
-pub(crate) use with_cursor;
 
 struct Inner {
-    codec: Codec,
+    codec: AnyCodec,
     aabb: Aabb,
     /// Mass properties at density 1.
     unit_mass: MassProperties,
@@ -211,28 +115,35 @@ pub(crate) fn from_parry_aabb(b: &PAabb) -> Aabb {
 }
 
 impl CbvhShape {
-    /// Builds the plain codec over `mesh` with `options`.
-    pub fn plain(mesh: &Mesh, options: &BuildOptions) -> Result<Self, BuildError> {
+    /// Builds the tree over `mesh` with `options`, then encodes it with the
+    /// codec `kind` and its options in `codec_options`.
+    pub fn build(
+        mesh: &Mesh,
+        options: &BuildOptions,
+        kind: CodecKind,
+        codec_options: &AnyOptions,
+    ) -> Result<Self, ShapeBuildError> {
         let bvh = build(mesh, options, &|_, _| {})?;
-        Ok(Self::from_codec(
-            Codec::Plain(PlainBvh::new(&bvh, mesh)),
-            mesh,
-        ))
+        let codec = AnyCodec::encode(kind, &bvh, mesh, codec_options).map_err(|source| {
+            ShapeBuildError::Encode {
+                codec: kind,
+                source,
+            }
+        })?;
+        Ok(Self::new(codec))
     }
 
-    /// Builds the RACBVH codec over `mesh`: the tree with `options`, then
-    /// compressed with `rac`.
-    pub fn racbvh(mesh: &Mesh, options: &BuildOptions, rac: &RacOptions) -> Result<Self, String> {
-        let bvh = build(mesh, options, &|_, _| {}).map_err(|e| e.to_string())?;
-        let codec = RacBvh::encode(&bvh, mesh, rac).map_err(|e| e.to_string())?;
-        Ok(Self::from_codec(Codec::Racbvh(Box::new(codec)), mesh))
+    /// [`CbvhShape::build`] with the plain codec (the uncompressed
+    /// reference, which has no options).
+    pub fn plain(mesh: &Mesh, options: &BuildOptions) -> Result<Self, ShapeBuildError> {
+        Self::build(mesh, options, CodecKind::Plain, &AnyOptions::default())
     }
 
     /// Wraps an already encoded codec built from `mesh`. The codec carries
     /// its own mass properties, so the mesh is only checked against it (a
     /// warning is logged if the triangle counts differ); prefer
     /// [`CbvhShape::new`].
-    pub fn from_codec(codec: Codec, mesh: &Mesh) -> Self {
+    pub fn from_codec(codec: AnyCodec, mesh: &Mesh) -> Self {
         if mesh.triangles.len() != codec.triangle_count() {
             log::warn!(
                 "cbvh: from_codec was given a mesh of {} triangles for a codec of {}; \
@@ -245,20 +156,17 @@ impl CbvhShape {
     }
 
     /// Opens any cbvh codec file (chosen by its magic) as a shape, verified
-    /// (see [`open_codec`](super::open_codec)). No mesh is needed: the file
-    /// holds the mass properties.
-    pub fn open(path: &std::path::Path) -> Result<Self, super::CodecFileError> {
-        Ok(Self::new(super::open_codec(
-            path,
-            &super::OpenOptions::default(),
-        )?))
+    /// (see [`AnyCodec::open`]). No mesh is needed: the file holds the mass
+    /// properties.
+    pub fn open(path: &std::path::Path) -> Result<Self, CodecFileError> {
+        Ok(Self::new(AnyCodec::open(path, &OpenOptions::default())?))
     }
 
     /// Wraps an encoded codec (built, or opened from its file), with the
     /// mass properties it stores.
-    pub fn new(codec: Codec) -> Self {
+    pub fn new(codec: AnyCodec) -> Self {
         let unit_mass = parry_mass(&codec.mass());
-        let aabb = with_cursor!(&codec, |c| c.root().1);
+        let aabb = with_codec!(&codec, |c| c.root().1);
         Self {
             inner: Arc::new(Inner {
                 triangles: codec.triangle_count(),
@@ -272,7 +180,7 @@ impl CbvhShape {
     }
 
     /// The codec inside.
-    pub fn codec(&self) -> &Codec {
+    pub fn codec(&self) -> &AnyCodec {
         &self.inner.codec
     }
 
@@ -283,7 +191,7 @@ impl CbvhShape {
 
     /// Memory of the codec in bytes (all parts).
     pub fn bytes_total(&self) -> usize {
-        self.inner.codec.bytes_by_part().iter().map(|p| p.1).sum()
+        self.inner.codec.bytes_total()
     }
 
     /// The local box, as cbvh's type.
@@ -305,7 +213,7 @@ impl CbvhShape {
 
     /// Triangle `id` as a parry triangle.
     pub fn parry_triangle(&self, id: u32) -> PTriangle {
-        with_cursor!(&self.inner.codec, |c| to_parry_triangle(&c.triangle(id)))
+        with_codec!(&self.inner.codec, |c| to_parry_triangle(&c.triangle(id)))
     }
 }
 
@@ -321,7 +229,7 @@ impl RayCast for CbvhShape {
         let mut best: Option<RayIntersection> = None;
         // The primitive test is parry's own triangle ray cast, so hits,
         // normals and features are exactly parry's TriMesh's.
-        with_cursor!(&self.inner.codec, |c| query::closest_hit_with(
+        with_codec!(&self.inner.codec, |c| query::closest_hit_with(
             c,
             &r,
             max_time_of_impact,
@@ -348,7 +256,7 @@ impl CbvhShape {
     /// cbvh tree, with its id.
     fn closest_triangle(&self, pt: Vector) -> Option<(u32, PTriangle)> {
         let mut stats = TraversalStats::default();
-        let hit = with_cursor!(&self.inner.codec, |c| query::closest_point(
+        let hit = with_codec!(&self.inner.codec, |c| query::closest_point(
             c,
             pt.into(),
             f32::INFINITY,
@@ -477,7 +385,7 @@ impl CompositeShape for CbvhShape {
                 self.inner.triangles,
                 self.inner.codec.name()
             );
-            let leaves: Vec<PAabb> = with_cursor!(&self.inner.codec, |c| (0..c.triangle_count()
+            let leaves: Vec<PAabb> = with_codec!(&self.inner.codec, |c| (0..c.triangle_count()
                 as u32)
                 .map(|id| to_parry_aabb(&Aabb::of_triangle(&c.triangle(id))))
                 .collect());

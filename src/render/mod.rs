@@ -4,7 +4,8 @@
 //! behind one small trait, [`RayTarget`].
 //!
 //! - [`target`]: [`RayTarget`] and [`CursorTarget`], the adapter for every
-//!   codec. A new codec renders with `CursorTarget::new(codec, "name")`.
+//!   [`Codec`](crate::codec::Codec) (any codec of the registry through
+//!   [`any_target`]), so a new codec renders with nothing added here.
 //! - [`scene`]: [`Scene`]s of [`Instance`]s (a target placed with a
 //!   [`Pose`](crate::geom::Pose), a [`Material`], optional smooth
 //!   [`VertexNormals`]); a single mesh is a scene of one.
@@ -46,7 +47,7 @@ pub use error::RenderError;
 pub use image::{Image, save_animation, save_apng, save_gif};
 pub use scene::{Instance, Material, Scene, SceneHit, Surface, VertexNormals};
 pub use shade::{Light, RayCounts, Shading, auto_lights, background};
-pub use target::{CursorTarget, RayTarget};
+pub use target::{CursorTarget, RayTarget, any_target};
 pub use trace::{
     RenderOptions, RenderStats, View, render, render_meshes, render_turntable, render_view,
 };

@@ -1,14 +1,13 @@
 //! [`RayTarget`]: what the ray tracer needs from an acceleration structure,
-//! and [`CursorTarget`], its implementation for every
-//! [`NodeCursor`] through [`crate::query::ray`].
+//! and [`CursorTarget`], its implementation for every [`Codec`] (a
+//! [`NodeCursor`](crate::cursor::NodeCursor) traversed through
+//! [`crate::query::ray`]).
 //!
 //! parry's `TriMesh` implements the trait in `crate::parry::raycast_target`
 //! (only `src/parry/` may import parry3d).
 
-use crate::codec::ByteSize;
-use crate::codec::plain::PlainBvh;
-use crate::codec::racbvh::RacBvh;
-use crate::cursor::{NodeCursor, TraversalStats};
+use crate::codec::{AnyCodec, Codec};
+use crate::cursor::TraversalStats;
 use crate::geom::{Aabb, Ray, Triangle};
 use crate::query::packet::closest_hits_within;
 use crate::query::ray::{RayHit, any_hit, closest_hit};
@@ -71,62 +70,57 @@ pub trait RayTarget: Sync {
     fn name(&self) -> &str;
 }
 
-/// A [`NodeCursor`] as a [`RayTarget`]: rays go through
-/// [`closest_hit`] and [`any_hit`], monomorphized for `C`.
+/// A codec as a [`RayTarget`]: rays go through [`closest_hit`] and
+/// [`any_hit`], monomorphized for `C`; shaded smoothly through the codec's
+/// vertex indices ([`Codec::triangle_vertices`]).
 pub struct CursorTarget<C> {
     cursor: C,
     name: &'static str,
     bytes: usize,
     bounds: Aabb,
-    indices: Option<fn(&C, u32) -> [u32; 3]>,
+    smooth: bool,
 }
 
-impl<C: NodeCursor + ByteSize> CursorTarget<C> {
-    /// Wraps `cursor`, reported as `name`. Without
-    /// [`CursorTarget::with_vertex_indices`] it is shaded with face normals.
-    pub fn new(cursor: C, name: &'static str) -> Self {
-        let bytes = cursor.bytes_total();
-        let bounds = cursor.root().1;
+impl<C: Codec> CursorTarget<C> {
+    /// Wraps `codec`, reported under its registry name, smooth-shaded.
+    pub fn new(codec: C) -> Self {
+        let bytes = codec.bytes_total();
+        let bounds = codec.root().1;
         Self {
-            cursor,
-            name,
+            cursor: codec,
+            name: C::KIND.name(),
             bytes,
             bounds,
-            indices: None,
+            smooth: true,
         }
     }
-}
 
-impl<C> CursorTarget<C> {
-    /// Lets the renderer look up a triangle's vertex indices (for smooth
-    /// normals) with `f`.
-    pub fn with_vertex_indices(mut self, f: fn(&C, u32) -> [u32; 3]) -> Self {
-        self.indices = Some(f);
+    /// Reports the target as `name` instead of the codec's name.
+    pub fn with_name(mut self, name: &'static str) -> Self {
+        self.name = name;
         self
     }
 
-    /// The wrapped cursor.
+    /// Hides the vertex indices, so that the renderer shades with face
+    /// normals.
+    pub fn flat(mut self) -> Self {
+        self.smooth = false;
+        self
+    }
+
+    /// The wrapped codec.
     pub fn cursor(&self) -> &C {
         &self.cursor
     }
 }
 
-impl CursorTarget<RacBvh> {
-    /// The RACBVH codec, with vertex indices (smooth shading, like
-    /// [`CursorTarget::plain`]).
-    pub fn racbvh(rac: RacBvh) -> Self {
-        CursorTarget::new(rac, "racbvh").with_vertex_indices(|r, id| r.triangle_indices(id))
-    }
+/// Any codec as a boxed [`RayTarget`] (a [`CursorTarget`] of the concrete
+/// codec inside).
+pub fn any_target(codec: AnyCodec) -> Box<dyn RayTarget> {
+    crate::with_codec!(codec, |c| Box::new(CursorTarget::new(c)))
 }
 
-impl CursorTarget<PlainBvh> {
-    /// The plain codec, with vertex indices (smooth shading).
-    pub fn plain(bvh: PlainBvh) -> Self {
-        CursorTarget::new(bvh, "plain").with_vertex_indices(|b, id| b.triangles()[id as usize])
-    }
-}
-
-impl<C: NodeCursor> RayTarget for CursorTarget<C> {
+impl<C: Codec> RayTarget for CursorTarget<C> {
     #[inline]
     fn closest(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> Option<RayHit> {
         closest_hit(&self.cursor, ray, t_max, stats)
@@ -164,7 +158,7 @@ impl<C: NodeCursor> RayTarget for CursorTarget<C> {
     }
 
     fn vertex_indices(&self, id: u32) -> Option<[u32; 3]> {
-        self.indices.map(|f| f(&self.cursor, id))
+        self.smooth.then(|| self.cursor.triangle_vertices(id))
     }
 
     fn name(&self) -> &str {

@@ -265,7 +265,7 @@ pub fn render_meshes(meshes: &[(&Mesh, Pose)], opts: &RenderOptions) -> Result<I
                 let bvh = build(mesh, &BuildOptions::default(), &|_, _| {})
                     .map_err(|source| RenderError::Build { mesh: i, source })?;
                 built.push((
-                    CursorTarget::plain(PlainBvh::new(&bvh, mesh)),
+                    CursorTarget::new(PlainBvh::new(&bvh, mesh)),
                     VertexNormals::from_mesh(mesh),
                 ));
                 slot.insert(key, built.len() - 1);

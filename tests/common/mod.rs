@@ -396,3 +396,139 @@ pub fn check_bvtt<A: NodeCursor, B: NodeCursor>(a: &A, ma: &Mesh, b: &B, mb: &Me
     assert_eq!(stopped, count == 1);
     assert!(count <= 1);
 }
+
+/// Best-first search ([`query::find_best`]) with the squared distance to a
+/// point as the cost finds brute force's closest triangle, and finds nothing
+/// when the bound is below the best cost.
+pub fn check_best_first<C: NodeCursor>(c: &C, mesh: &Mesh, seed: u64) {
+    let mut stats = TraversalStats::default();
+    let mut rng = Rng(seed ^ 0xBE57);
+    let (lo, hi) = mesh.bounds().unwrap_or(([0.0; 3], [1.0; 3]));
+    let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
+    for _ in 0..16 {
+        let p =
+            lo + (hi - lo) * Vec3A::new(rng.f32(-0.5, 1.5), rng.f32(-0.5, 1.5), rng.f32(-0.5, 1.5));
+        let cost = |t: &Triangle| (closest_point_on_triangle(p, t).0 - p).length_squared();
+        let want = (0..mesh.triangles.len() as u32)
+            .map(|id| (cost(&tri(mesh, id)), id))
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        let search = |max_cost: f32, stats: &mut TraversalStats| {
+            query::find_best(
+                c,
+                max_cost,
+                stats,
+                |b| b.distance_squared(p),
+                |id, t, best| {
+                    let k = cost(t);
+                    (k < best).then_some((k, id))
+                },
+            )
+        };
+        let got = search(f32::INFINITY, &mut stats);
+        match (got, want) {
+            (None, None) => {}
+            (Some((id, k, payload)), Some((wk, wid))) => {
+                assert_eq!(id, payload, "the payload belongs to the best triangle");
+                assert!(
+                    k == wk || (k - wk).abs() <= 1e-5 * wk.max(1.0),
+                    "best-first cost {k} on {id}, brute force {wk} on {wid} from {p:?}"
+                );
+                assert!(
+                    (cost(&tri(mesh, id)) - k).abs() <= 1e-6 * k.max(1.0),
+                    "best-first names triangle {id} whose cost is not {k}"
+                );
+                if wk > 0.0 {
+                    let bounded = search(wk * 0.5, &mut stats);
+                    assert!(
+                        bounded.is_none(),
+                        "found {bounded:?} below half the best cost {wk}"
+                    );
+                }
+            }
+            (g, w) => panic!("best-first {g:?} vs brute force {w:?}"),
+        }
+    }
+}
+
+/// Distance between two boxes (0 when they overlap).
+fn box_distance(x: &Aabb, y: &Aabb) -> f32 {
+    (x.min - y.max).max(y.min - x.max).max(Vec3A::ZERO).length()
+}
+
+/// The parallel two-tree traversal ([`query::bvtt_par`], from fronts of
+/// several sizes) reports brute force's pairs, and branch-and-bound over two
+/// trees ([`query::bvtt_min`], with the distance between the triangles'
+/// boxes as the cost) finds brute force's smallest cost, for several poses.
+pub fn check_bvtt_par_and_min<A: NodeCursor, B: NodeCursor>(
+    a: &A,
+    ma: &Mesh,
+    b: &B,
+    mb: &Mesh,
+    seed: u64,
+) {
+    let mut stats = TraversalStats::default();
+    for pose in test_poses(ma, seed) {
+        let moved: Vec<Aabb> = (0..mb.triangles.len() as u32)
+            .map(|j| Aabb::of_triangle(&tri(mb, j).map(|p| pose.transform_point(p))))
+            .collect();
+        let boxes_a: Vec<Aabb> = (0..ma.triangles.len() as u32)
+            .map(|i| Aabb::of_triangle(&tri(ma, i)))
+            .collect();
+        let prediction = 0.05;
+        let mut want = Vec::new();
+        let mut best: Option<(f32, u32, u32)> = None;
+        for (i, bi) in boxes_a.iter().enumerate() {
+            for (j, bj) in moved.iter().enumerate() {
+                if bi.loosened(prediction).intersects(bj) {
+                    want.push((i as u32, j as u32));
+                }
+                let d = box_distance(bi, bj);
+                if best.is_none_or(|b| d < b.0) {
+                    best = Some((d, i as u32, j as u32));
+                }
+            }
+        }
+        for target in [1, 8, 64] {
+            let (states, _) = query::bvtt_par(
+                a,
+                b,
+                &pose,
+                prediction,
+                target,
+                Vec::new,
+                |s: &mut Vec<(u32, u32)>, i, _, j, _| s.push((i, j)),
+            );
+            let mut got: Vec<(u32, u32)> = states.into_iter().flatten().collect();
+            let n = got.len();
+            got.sort_unstable();
+            got.dedup();
+            assert_eq!(n, got.len(), "bvtt_par reported a pair twice");
+            assert_eq!(
+                got, want,
+                "bvtt_par pairs differ at {pose:?}, front {target}"
+            );
+        }
+        let got = query::bvtt_min(
+            a,
+            b,
+            &pose,
+            f32::INFINITY,
+            &mut stats,
+            |i, _, j, _, best| {
+                let d = box_distance(&boxes_a[i as usize], &moved[j as usize]);
+                (d < best).then_some((d, ()))
+            },
+        );
+        match (got, best) {
+            (None, None) => {}
+            (Some((i, j, d, ())), Some((wd, wi, wj))) => {
+                let tol = 1e-5 * wd.max(1.0);
+                assert!(
+                    (d - wd).abs() <= tol,
+                    "bvtt_min {d} on ({i}, {j}), brute force {wd} on ({wi}, {wj}) at {pose:?}"
+                );
+            }
+            (g, w) => panic!("bvtt_min {g:?} vs brute force {w:?} at {pose:?}"),
+        }
+    }
+}

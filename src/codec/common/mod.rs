@@ -1,11 +1,39 @@
-//! Machinery more than one codec uses: atomic file saves, the stored mass
-//! properties, and recognising a codec file by its magic.
+//! Machinery more than one codec uses. Nothing here knows a codec: errors
+//! are [`FormatError`]s, which each codec's error wraps.
+//!
+//! - [`bits`]: bit streams written and read least-significant bit first,
+//!   Exp-Golomb codes, zig-zag.
+//! - [`dict`]: the per-context dictionary coder (RACBVH §4.4).
+//! - [`quant`]: conservative quantization of boxes on a grid over a box
+//!   (min rounded down, max up), at any bit count.
+//! - [`Store`] (`store.rs`): a codec's bytes, owned or a range of a
+//!   memory-mapped file.
+//! - [`packed`]: frame-of-reference arrays of `u32` with O(1) access, and
+//!   [`bits_for`](packed::bits_for).
+//! - [`le`]: little-endian readers at a byte offset.
+//! - [`container`]: the frame of every codec file (magic, section table,
+//!   header checksum), written and checked.
+//! - [`FormatError`] (`error.rs`): bad magic, truncation, bad header
+//!   fields, checksum mismatches, values out of range, corrupted codes.
+//! - [`atomic_write`] (`save.rs`): atomic file saves.
+//! - [`mass`]: the stored mass properties.
+//! - [`MAGIC_PREFIX`]: how every codec file starts.
 
+pub mod bits;
+pub mod container;
+pub mod dict;
+mod error;
+pub mod le;
 pub mod mass;
+pub mod packed;
+pub mod quant;
 mod save;
+mod store;
 
+pub use error::FormatError;
 pub use mass::{MASS_BYTES, MassProps};
 pub use save::atomic_write;
+pub use store::Store;
 
 /// The first four bytes of every cbvh codec file (`CBVHRAC\0`, `CBVHPLN\0`).
 pub const MAGIC_PREFIX: [u8; 4] = *b"CBVH";

@@ -27,7 +27,7 @@
 //! table and every checksum (the bytes are copied into memory anyway);
 //! [`verify`](PlainBvh::verify) proves what queries rely on. A tree that
 //! was not verified may make a query panic or loop; the CLI, the sims and
-//! [`crate::parry::open_codec`] verify by default.
+//! [`crate::codec::AnyCodec::open`] verify by default.
 
 use std::path::Path;
 
@@ -35,7 +35,9 @@ use xxhash_rust::xxh3::xxh3_64;
 
 use super::node::PlainNode;
 use super::{PlainBvh, PlainError};
-use crate::codec::common::{MASS_BYTES, MassProps, atomic_write};
+use crate::codec::common::container;
+use crate::codec::common::le::u32_at;
+use crate::codec::common::{FormatError, MASS_BYTES, MassProps, atomic_write};
 
 /// The file version this build writes and reads.
 pub const VERSION: u32 = 1;
@@ -45,24 +47,13 @@ const HEADER_LEN: usize = 192;
 const TABLE: usize = 88;
 const NAMES: [&str; 4] = ["nodes", "vertices", "triangles", "leaf ids"];
 
-fn u32_at(b: &[u8], at: usize) -> u32 {
-    u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
-}
-
-fn u64_at(b: &[u8], at: usize) -> u64 {
-    u64::from_le_bytes(std::array::from_fn(|k| b[at + k]))
-}
-
 fn words(b: &[u8]) -> impl Iterator<Item = u32> + '_ {
     b.chunks_exact(4)
         .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
 }
 
 fn header_err(field: &'static str, why: impl Into<String>) -> PlainError {
-    PlainError::Header {
-        field,
-        why: why.into(),
-    }
+    FormatError::header(field, why).into()
 }
 
 impl PlainBvh {
@@ -109,19 +100,7 @@ impl PlainBvh {
         out.extend_from_slice(&0u32.to_le_bytes());
         debug_assert_eq!(out.len(), TABLE);
         let sections: [&[u8]; 4] = [&nodes, &verts, &tris, &ids];
-        let mut at = HEADER_LEN as u64;
-        for s in sections {
-            out.extend_from_slice(&at.to_le_bytes());
-            out.extend_from_slice(&(s.len() as u64).to_le_bytes());
-            out.extend_from_slice(&xxh3_64(s).to_le_bytes());
-            at += s.len() as u64;
-        }
-        let h = xxh3_64(&out);
-        out.extend_from_slice(&h.to_le_bytes());
-        debug_assert_eq!(out.len(), HEADER_LEN);
-        for s in sections {
-            out.extend_from_slice(s);
-        }
+        container::write_sections(&mut out, HEADER_LEN, &sections);
         out
     }
 
@@ -149,19 +128,7 @@ impl PlainBvh {
     /// allocates more than the bytes given. Call [`verify`](Self::verify)
     /// before querying bytes you did not write yourself.
     pub fn from_bytes(b: &[u8]) -> Result<PlainBvh, PlainError> {
-        if b.len() < HEADER_LEN {
-            return Err(PlainError::Truncated {
-                section: "header",
-                need: HEADER_LEN as u64,
-                have: b.len() as u64,
-            });
-        }
-        if b[..8] != MAGIC {
-            return Err(PlainError::BadMagic);
-        }
-        if xxh3_64(&b[..HEADER_LEN - 8]) != u64_at(b, HEADER_LEN - 8) {
-            return Err(PlainError::Checksum { section: "header" });
-        }
+        container::check_header(b, HEADER_LEN, &MAGIC, "plain BVH")?;
         let version = u32_at(b, 8);
         if version != VERSION {
             return Err(PlainError::Version {
@@ -186,11 +153,7 @@ impl PlainBvh {
         let mut at = HEADER_LEN as u64;
         let mut ranges: [std::ops::Range<usize>; 4] = Default::default();
         for k in 0..4 {
-            let (off, len, hash) = (
-                u64_at(b, TABLE + 24 * k),
-                u64_at(b, TABLE + 8 + 24 * k),
-                u64_at(b, TABLE + 16 + 24 * k),
-            );
+            let (off, len, hash) = container::section_entry(b, TABLE, k);
             if off != at {
                 return Err(header_err(
                     NAMES[k],
@@ -205,15 +168,16 @@ impl PlainBvh {
             }
             let end = off + len; // both below 2^40: no overflow
             if end > b.len() as u64 {
-                return Err(PlainError::Truncated {
+                return Err(FormatError::Truncated {
                     section: NAMES[k],
                     need: end,
                     have: b.len() as u64,
-                });
+                }
+                .into());
             }
             let r = off as usize..end as usize;
             if xxh3_64(&b[r.clone()]) != hash {
-                return Err(PlainError::Checksum { section: NAMES[k] });
+                return Err(FormatError::Checksum { section: NAMES[k] }.into());
             }
             ranges[k] = r;
             at = end;

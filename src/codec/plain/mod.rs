@@ -2,6 +2,7 @@
 //! against (the papers' "Ori."). See [`node::PlainNode`] for the node
 //! layout and [`file`](mod@file) for the self-contained file.
 
+mod contract;
 mod decode;
 mod encode;
 mod error;
@@ -10,4 +11,4 @@ mod node;
 
 pub use encode::PlainBvh;
 pub use error::PlainError;
-pub use node::{LEAF_FLAG, PlainNode};
+pub use node::PlainNode;

@@ -1,10 +1,7 @@
 //! The 32-byte plain node.
 
+use crate::build::LEAF_FLAG;
 use crate::geom::Aabb;
-
-/// Flag in [`PlainNode::right`] marking a leaf; the low bits hold the
-/// triangle count.
-pub const LEAF_FLAG: u32 = 0x8000_0000;
 
 /// RACBVH Listing 1: an AABB and two indices.
 ///
@@ -16,7 +13,8 @@ pub const LEAF_FLAG: u32 = 0x8000_0000;
 /// | 24–27 | `left`  | inner: left child index; leaf with one triangle: the triangle's id; leaf with several: first slot in the leaf-id array |
 /// | 28–31 | `right` | inner: right child index; leaf: [`LEAF_FLAG`] \| triangle count |
 ///
-/// All fields little-endian when stored in a file.
+/// All fields little-endian when stored in a file. [`LEAF_FLAG`] is the
+/// canonical tree's leaf flag, `0x8000_0000`: the file format fixes it.
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct PlainNode {
@@ -31,6 +29,7 @@ pub struct PlainNode {
 }
 
 const _: () = assert!(std::mem::size_of::<PlainNode>() == 32);
+const _: () = assert!(LEAF_FLAG == 0x8000_0000);
 
 impl PlainNode {
     /// Whether this node is a leaf.

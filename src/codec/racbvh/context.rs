@@ -2,7 +2,7 @@
 //! decoder (see the module docs of [`super`] for what each codes).
 
 use super::Header;
-use super::mesh;
+use crate::codec::common::packed::bits_for;
 
 /// Coder context: the structure symbol.
 pub(super) const CTX_STRUCT: usize = 0;
@@ -65,9 +65,9 @@ pub(super) fn raw_bits(ctx: usize, h: &Header) -> u32 {
     match ctx {
         CTX_STRUCT => h.cluster_bits + 3,
         CTX_PCLUSTER => h.cluster_bits + 1,
-        CTX_TRI => mesh::bits_for(2 * u64::from(h.tri_threshold)),
+        CTX_TRI => bits_for(2 * u64::from(h.tri_threshold)),
         CTX_COUNT => 17,
-        CTX_CHILD => mesh::bits_for(u64::from(h.node_count)) + 1,
+        CTX_CHILD => bits_for(u64::from(h.node_count)) + 1,
         CTX_TRI_FAR => 6,
         c if c < CTX_BV + 8 => 6,
         _ => 5,

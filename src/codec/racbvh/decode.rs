@@ -1,40 +1,46 @@
-//! Decompression (§5): clusters into in-core nodes, BV completion, the
-//! random-access API (§5.1) and [`NodeCursor`].
+//! Cluster decompression (§5): a cluster's bytes, checked against its
+//! checksum, into in-core nodes ([`Cluster`]), and clusters fetched through
+//! the cache. What a cluster codes is in the module docs of [`super`].
 
 use std::sync::{Arc, Mutex};
 
 use super::cache::{self, Live};
-use super::coder::{BitReader, DictDecoder, SymbolDecoder, unzigzag};
-use super::node::{CoreNode, INCOMPLETE, LEAF_FLAG, QBox, apply, qbox_of};
+use super::node::{CoreNode, INCOMPLETE, apply, qbox_of};
 use super::{
     CTX_CHILD, CTX_COUNT, CTX_PCLUSTER, CTX_STRUCT, CTX_TRI, CTX_TRI_FAR, Header, NCTX, RacBvh,
     RacError, STREAMS, mask_context, raw_bits, value_context,
 };
-use crate::cursor::NodeCursor;
-use crate::geom::{Aabb, Triangle};
+use crate::build::LEAF_FLAG;
+use crate::codec::common::FormatError;
+use crate::codec::common::bits::{BitReader, unzigzag};
+use crate::codec::common::dict::{DictDecoder, SymbolDecoder};
+use crate::codec::common::quant::QBox;
 
 /// In-core bytes per node of a decoded cluster (node + local-root ordinal).
 pub const CLUSTER_BYTES_PER_NODE: usize = 34;
 
 /// A local root: a node whose parent is in an earlier cluster.
 #[derive(Clone, Copy, Debug)]
-struct LocalRoot {
-    local: u32,
-    parent: u32,
-    right: bool,
+pub(super) struct LocalRoot {
+    /// Its index in the cluster.
+    pub(super) local: u32,
+    /// Its parent's global index.
+    pub(super) parent: u32,
+    /// Whether it is its parent's right child.
+    pub(super) right: bool,
 }
 
 /// A decompressed cluster.
 pub struct Cluster {
-    first: u32,
-    nodes: Box<[CoreNode]>,
+    pub(super) first: u32,
+    pub(super) nodes: Box<[CoreNode]>,
     /// Triangle ids of leaves holding several.
-    tris: Box<[u32]>,
-    roots: Box<[LocalRoot]>,
+    pub(super) tris: Box<[u32]>,
+    pub(super) roots: Box<[LocalRoot]>,
     /// Per node, the ordinal of its local root in `roots` (`u16::MAX` for
     /// the subtree of the global root).
-    root_of: Box<[u16]>,
-    lock: Mutex<()>,
+    pub(super) root_of: Box<[u16]>,
+    pub(super) lock: Mutex<()>,
     live: Arc<Live>,
     bytes: usize,
 }
@@ -332,338 +338,22 @@ impl RacBvh {
             bytes,
             &self.cache.live,
         )
+        .map_err(|e| match e {
+            // The bit and dictionary coders do not know where they are.
+            RacError::Format(FormatError::Corrupt { what }) => {
+                RacError::CorruptCluster { cluster: c, what }
+            }
+            e => e,
+        })
     }
 
     /// Cluster `c`, from the cache or decompressed into it.
-    fn cluster(&self, c: u32) -> Result<Arc<Cluster>, RacError> {
+    pub(super) fn cluster(&self, c: u32) -> Result<Arc<Cluster>, RacError> {
         if let Some(cl) = self.cache.get(c) {
             return Ok(cl);
         }
         cache::unpin();
         let cl = Arc::new(self.decode(c)?);
         Ok(self.cache.insert(c, cl))
-    }
-
-    /// The complete words of node `g`, completing it if needed (§5.2).
-    ///
-    /// Completing a node needs its local root's parent, which may itself be
-    /// incomplete in an earlier cluster, and so on: the chain is walked
-    /// with a loop and an explicit list (never recursion, whose depth a
-    /// crafted file could make overflow the stack). Parent clusters come
-    /// strictly before their children's (checked when a cluster is
-    /// decoded), so the chain has at most one entry per cluster.
-    pub(super) fn try_words(&self, g: u32) -> Result<[u32; 8], RacError> {
-        let cb = self.header.cluster_bits;
-        let split = |x: u32| -> Result<(u32, usize), RacError> {
-            if x >= self.header.node_count {
-                return Err(RacError::NoSuchNode {
-                    node: x,
-                    count: self.header.node_count,
-                });
-            }
-            let c = x >> cb;
-            Ok((c, (x - (c << cb)) as usize))
-        };
-        let (c, l) = split(g)?;
-        let fast = cache::with_pinned(self.id, c, |cl| {
-            let w = cl.nodes[l].words();
-            (w[0] & INCOMPLETE == 0).then_some(w)
-        });
-        if let Some(w) = fast {
-            return Ok(w);
-        }
-        // Walk up: (cluster, local index of the node, its local root) for
-        // every incomplete node of the chain, until a complete one.
-        let mut chain: Vec<(u32, usize, LocalRoot)> = Vec::new();
-        let mut x = g;
-        let mut top = loop {
-            let (c, l) = split(x)?;
-            let cl = self.cluster(c)?;
-            let w = cl.nodes[l].words();
-            if w[0] & INCOMPLETE == 0 {
-                if chain.is_empty() {
-                    cache::pin(self.id, c, cl);
-                }
-                break w;
-            }
-            let root = cl.roots[usize::from(cl.root_of[l])];
-            // Hold nothing while the parent's cluster loads.
-            drop(cl);
-            if chain.len() > self.meta.len() {
-                return Err(RacError::CorruptCluster {
-                    cluster: c,
-                    what: "the chain of local roots' parents does not end",
-                });
-            }
-            chain.push((c, l, root));
-            x = root.parent;
-        };
-        // Walk down, completing each local root's subtree from its parent.
-        while let Some((c, l, root)) = chain.pop() {
-            if top[7] & LEAF_FLAG != 0 || top[6 + usize::from(root.right)] != c << cb | root.local {
-                return Err(RacError::CorruptCluster {
-                    cluster: c,
-                    what: "a local root's parent does not name it as child",
-                });
-            }
-            let cl = self.cluster(c)?;
-            complete(&cl, root, &qbox_of(&top), self.header.grid.max_q)
-                .map_err(|what| RacError::CorruptCluster { cluster: c, what })?;
-            top = cl.nodes[l].words();
-            if top[0] & INCOMPLETE != 0 {
-                return Err(RacError::CorruptCluster {
-                    cluster: c,
-                    what: "a node is not below its local root",
-                });
-            }
-            if chain.is_empty() {
-                cache::pin(self.id, c, cl);
-            }
-        }
-        Ok(top)
-    }
-
-    #[inline]
-    fn words(&self, g: u32) -> [u32; 8] {
-        self.try_words(g)
-            .unwrap_or_else(|e| panic!("racbvh: {e} (run verify() to check the data)"))
-    }
-
-    /// The decoded box of complete words.
-    #[inline]
-    pub(super) fn box_of(&self, w: &[u32; 8]) -> Aabb {
-        if self.header.empty {
-            return Aabb::EMPTY;
-        }
-        self.header.grid.dequantize(&qbox_of(w))
-    }
-
-    /// `GetRootIndex`: the root's index (always 0).
-    pub fn root_index(&self) -> u32 {
-        0
-    }
-
-    /// `GetBV`: the conservative box of node `i`.
-    ///
-    /// # Panics
-    /// If `i` does not exist or its data is corrupted (see [`try_bv`](Self::try_bv)).
-    pub fn bv(&self, i: u32) -> Aabb {
-        self.box_of(&self.words(i))
-    }
-
-    /// [`bv`](Self::bv) returning errors.
-    pub fn try_bv(&self, i: u32) -> Result<Aabb, RacError> {
-        Ok(self.box_of(&self.try_words(i)?))
-    }
-
-    /// `IsLeaf`: whether node `i` is a leaf. Panics like [`bv`](Self::bv).
-    pub fn is_leaf(&self, i: u32) -> bool {
-        self.words(i)[7] & LEAF_FLAG != 0
-    }
-
-    /// `GetLeftChildIdx`: the left child of inner node `i`. Panics like
-    /// [`bv`](Self::bv), or if `i` is a leaf.
-    pub fn left(&self, i: u32) -> u32 {
-        let w = self.words(i);
-        assert!(w[7] & LEAF_FLAG == 0, "racbvh: left({i}) of a leaf");
-        w[6]
-    }
-
-    /// `GetRightChildIdx`: the right child of inner node `i`. Panics like
-    /// [`left`](Self::left).
-    pub fn right(&self, i: u32) -> u32 {
-        let w = self.words(i);
-        assert!(w[7] & LEAF_FLAG == 0, "racbvh: right({i}) of a leaf");
-        w[7]
-    }
-
-    /// `GetTriangleIdx`: the (first) original triangle id of leaf `i`, or
-    /// `None` for the empty tree's root. Panics like [`left`](Self::left)
-    /// if `i` is not a leaf.
-    pub fn triangle_index(&self, i: u32) -> Option<u32> {
-        self.leaf_triangles(i).first().copied()
-    }
-
-    /// The original triangle ids of leaf `i`.
-    pub fn leaf_triangles(&self, i: u32) -> Vec<u32> {
-        let mut out = Vec::new();
-        self.try_leaf_ids(i, &mut |id| out.push(id))
-            .unwrap_or_else(|e| panic!("racbvh: {e}"));
-        out
-    }
-
-    pub(super) fn try_leaf_ids(&self, i: u32, f: &mut dyn FnMut(u32)) -> Result<(), RacError> {
-        let w = self.try_words(i)?;
-        assert!(w[7] & LEAF_FLAG != 0, "racbvh: triangles of inner node {i}");
-        let count = w[7] & !LEAF_FLAG;
-        if count == 1 {
-            f(w[6]);
-        } else if count > 1 {
-            let cl = self.cluster(i >> self.header.cluster_bits)?;
-            let ids =
-                cl.tris
-                    .get(w[6] as usize..(w[6] + count) as usize)
-                    .ok_or(RacError::Corrupt(
-                        "a leaf's triangle slots are out of range",
-                    ))?;
-            ids.iter().for_each(|&id| f(id));
-        }
-        Ok(())
-    }
-}
-
-/// Completes the subtree of local root `root` in `cl`, given the parent's
-/// quantized box.
-fn complete(cl: &Cluster, root: LocalRoot, parent: &QBox, max_q: u32) -> Result<(), &'static str> {
-    let _guard = cl.lock.lock().unwrap_or_else(|e| e.into_inner());
-    if cl.nodes[root.local as usize].is_complete() {
-        return Ok(());
-    }
-    let n = cl.nodes.len() as u32;
-    let mut stack = vec![(root.local, *parent, root.right)];
-    while let Some((l, pq, right)) = stack.pop() {
-        let node = &cl.nodes[l as usize];
-        let mut w = node.words();
-        if w[0] & INCOMPLETE == 0 {
-            return Err("a node below a local root is already complete");
-        }
-        w[0] &= !INCOMPLETE;
-        let res = [w[0], w[1], w[2], w[3], w[4], w[5]];
-        let q = apply(&pq, right, &res, max_q).ok_or("a completed box leaves the grid")?;
-        node.set_box(&q);
-        if w[7] & LEAF_FLAG == 0 {
-            for (side, child) in [(false, w[6]), (true, w[7])] {
-                if let Some(cl_local) = child.checked_sub(cl.first).filter(|&x| x < n) {
-                    stack.push((cl_local, q, side));
-                }
-            }
-        }
-    }
-    Ok(())
-}
-
-/// Decoded triangles per thread, direct-mapped by triangle id: (tree id,
-/// triangle id, corners). A traversal of two trees meets the same leaf
-/// again and again (once per leaf of the other tree it overlaps), and a
-/// stored triangle costs twelve frame-of-reference look-ups to decode.
-const TRI_CACHE: usize = 1024;
-
-type TriSlot = (u64, u32, Triangle);
-
-thread_local! {
-    static TRIS: std::cell::RefCell<Box<[TriSlot]>> =
-        std::cell::RefCell::new(vec![(0, 0, [glam::Vec3A::ZERO; 3]); TRI_CACHE].into_boxed_slice());
-}
-
-impl RacBvh {
-    /// Triangle `id` of the stored mesh, through this thread's cache of
-    /// decoded triangles (tree ids start at 1, so an empty slot never
-    /// matches).
-    #[inline]
-    fn cached_triangle(&self, id: u32) -> Triangle {
-        let slot = id as usize % TRI_CACHE;
-        let hit = TRIS.with(|c| {
-            let c = c.try_borrow().ok()?;
-            let (tree, tid, tri) = &c[slot];
-            (*tree == self.id && *tid == id).then_some(*tri)
-        });
-        if let Some(t) = hit {
-            return t;
-        }
-        self.expect_mesh();
-        let t = self.mesh.triangle(id);
-        TRIS.with(|c| {
-            if let Ok(mut c) = c.try_borrow_mut() {
-                c[slot] = (self.id, id, t);
-            }
-        });
-        t
-    }
-}
-
-/// The cursor's node handle: the global node index with the node's words
-/// 6 and 7 (children, or a leaf's triangle id / slot and count), so that
-/// `is_leaf`, `for_each_child` and a one-triangle leaf's
-/// `for_each_triangle` do not read the node again.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct RacNode {
-    index: u32,
-    a: u32,
-    b: u32,
-}
-
-impl RacNode {
-    /// The global node index (for the random-access API).
-    pub fn index(&self) -> u32 {
-        self.index
-    }
-
-    #[inline]
-    fn new(index: u32, w: &[u32; 8]) -> Self {
-        Self {
-            index,
-            a: w[6],
-            b: w[7],
-        }
-    }
-}
-
-impl NodeCursor for RacBvh {
-    type Node = RacNode;
-
-    fn root(&self) -> (RacNode, Aabb) {
-        let w = self.words(0);
-        (RacNode::new(0, &w), self.box_of(&w))
-    }
-
-    #[inline]
-    fn is_leaf(&self, node: &RacNode) -> bool {
-        node.b & LEAF_FLAG != 0
-    }
-
-    #[inline]
-    fn for_each_child(&self, node: &RacNode, mut f: impl FnMut(RacNode, Aabb)) {
-        // Fast path: both children complete in the thread's pinned cluster
-        // (one thread-local look-up for the two).
-        let cb = self.header.cluster_bits;
-        let c = node.a >> cb;
-        let fast = cache::with_pinned(self.id, c, |cl| {
-            let mut out = [[0u32; 8]; 2];
-            for (slot, child) in out.iter_mut().zip([node.a, node.b]) {
-                if child >> cb != c {
-                    return None;
-                }
-                let cw = cl.nodes[(child - cl.first) as usize].words();
-                if cw[0] & INCOMPLETE != 0 {
-                    return None;
-                }
-                *slot = cw;
-            }
-            Some(out)
-        });
-        let out = fast.unwrap_or_else(|| [self.words(node.a), self.words(node.b)]);
-        for (child, cw) in [node.a, node.b].into_iter().zip(out) {
-            f(RacNode::new(child, &cw), self.box_of(&cw));
-        }
-    }
-
-    #[inline]
-    fn for_each_triangle(&self, node: &RacNode, mut f: impl FnMut(u32, &Triangle)) {
-        let count = node.b & !LEAF_FLAG;
-        if count == 1 {
-            f(node.a, &self.cached_triangle(node.a));
-        } else if count > 1 {
-            self.try_leaf_ids(node.index, &mut |id| f(id, &self.cached_triangle(id)))
-                .unwrap_or_else(|e| panic!("racbvh: {e}"));
-        }
-    }
-
-    #[inline]
-    fn triangle(&self, id: u32) -> Triangle {
-        self.cached_triangle(id)
-    }
-
-    fn triangle_count(&self) -> usize {
-        self.header.triangle_count as usize
     }
 }

@@ -7,15 +7,18 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::coder::{BitWriter, DictEncoder, MAX_K, SymbolEncoder, golomb_len, zigzag};
 use super::mesh::PackedMesh;
-use super::node::{Grid, QBox, residuals};
+use super::node::residuals;
 use super::{
     CTX_CHILD, CTX_COUNT, CTX_PCLUSTER, CTX_STRUCT, CTX_TRI, CTX_TRI_FAR, ClusterMeta, Header,
     NCTX, RacBvh, RacError, STREAM_MASK, STREAM_RES, STREAMS, bucket, mask_context, raw_bits,
     value_context, zero_mask,
 };
 use crate::build::CanonicalBvh;
+use crate::codec::common::Store;
+use crate::codec::common::bits::{BitWriter, golomb_len, zigzag};
+use crate::codec::common::dict::{DictEncoder, MAX_K, SymbolEncoder};
+use crate::codec::common::quant::{Grid, QBox};
 use crate::geom::Aabb;
 use crate::mesh::Mesh;
 
@@ -309,7 +312,7 @@ impl RacBvh {
         let mesh_hash = super::file::mesh_hash(&pmesh);
         let rac = RacBvh::assemble(
             header,
-            super::file::Store::Owned(data),
+            Store::Owned(data),
             meta,
             pmesh,
             mesh_hash,

@@ -1,6 +1,7 @@
 //! [`RacError`].
 
 use super::file;
+use crate::codec::common::FormatError;
 
 /// What can go wrong encoding, reading or decoding a RACBVH.
 #[derive(Clone, Debug, thiserror::Error, PartialEq)]
@@ -21,30 +22,13 @@ pub enum RacError {
     /// The tree does not satisfy what the codec needs.
     #[error("the tree cannot be compressed: {0}")]
     InvalidTree(String),
-    /// The bytes do not start with the RACBVH magic.
-    #[error("not a cbvh RACBVH file (bad magic)")]
-    BadMagic,
+    /// The bytes are not a well-formed file: bad magic, a truncated
+    /// section, a bad header field, or coded data that breaks its code.
+    #[error(transparent)]
+    Format(#[from] FormatError),
     /// A version this build cannot read.
     #[error("RACBVH version {0} is not supported (this build reads version {ver})", ver = file::VERSION)]
     Version(u32),
-    /// A section is shorter than it must be.
-    #[error("the {section} section is truncated: need {need} bytes, have {have}")]
-    Truncated {
-        /// Section name.
-        section: &'static str,
-        /// Bytes needed.
-        need: u64,
-        /// Bytes present.
-        have: u64,
-    },
-    /// A header field is inconsistent.
-    #[error("bad header field {field}: {why}")]
-    Header {
-        /// The field.
-        field: &'static str,
-        /// What is wrong.
-        why: String,
-    },
     /// Corrupted data (outside a cluster).
     #[error("corrupted RACBVH data: {0}")]
     Corrupt(&'static str),

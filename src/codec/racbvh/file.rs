@@ -41,10 +41,13 @@ use std::sync::Arc;
 use glam::Vec3A;
 use xxhash_rust::xxh3::xxh3_64;
 
-use super::mesh::{MeshParams, PackedMesh, bits_for};
-use super::node::Grid;
+use super::mesh::{MeshParams, PackedMesh};
 use super::{ClusterMeta, Header, RacBvh, RacError};
-use crate::codec::common::{MASS_BYTES, MassProps};
+use crate::codec::common::container;
+use crate::codec::common::le::{f32x3_at, u32_at, u64_at};
+use crate::codec::common::packed::bits_for;
+use crate::codec::common::quant::Grid;
+use crate::codec::common::{FormatError, MASS_BYTES, MassProps, Store};
 
 /// The container version this build writes and reads.
 pub const VERSION: u32 = 3;
@@ -55,54 +58,6 @@ const HEADER_LEN: usize = 288;
 const TABLE: usize = 184;
 /// Bytes of one meta-table entry.
 pub(super) const META_ENTRY: usize = 20;
-
-fn u32_at(b: &[u8], at: usize) -> u32 {
-    u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
-}
-
-fn u64_at(b: &[u8], at: usize) -> u64 {
-    u64::from_le_bytes(std::array::from_fn(|k| b[at + k]))
-}
-
-fn f32_at(b: &[u8], at: usize) -> f32 {
-    f32::from_bits(u32_at(b, at))
-}
-
-fn f32x3_at(b: &[u8], at: usize) -> [f32; 3] {
-    [f32_at(b, at), f32_at(b, at + 4), f32_at(b, at + 8)]
-}
-
-/// Bytes of a section: owned (pre-loaded mode) or a range of a memory-mapped
-/// file (out-of-core mode: the operating system reads pages on demand).
-#[derive(Clone)]
-pub enum Store {
-    /// Bytes in memory.
-    Owned(Vec<u8>),
-    /// A range of a mapped file.
-    Mapped(Arc<memmap2::Mmap>, Range<usize>),
-}
-
-impl std::ops::Deref for Store {
-    type Target = [u8];
-    #[inline]
-    fn deref(&self) -> &[u8] {
-        match self {
-            Store::Owned(v) => v,
-            Store::Mapped(m, r) => &m[r.clone()],
-        }
-    }
-}
-
-impl std::fmt::Debug for Store {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let kind = if matches!(self, Store::Owned(_)) {
-            "owned"
-        } else {
-            "mapped"
-        };
-        write!(f, "Store({kind}, {} bytes)", self.len())
-    }
-}
 
 /// The checksum of the two mesh sections.
 pub(super) fn mesh_hash(m: &PackedMesh) -> u64 {
@@ -117,10 +72,7 @@ fn combine(a: u64, b: u64) -> u64 {
 }
 
 fn header_err(field: &'static str, why: impl Into<String>) -> RacError {
-    RacError::Header {
-        field,
-        why: why.into(),
-    }
+    FormatError::header(field, why).into()
 }
 
 impl RacBvh {
@@ -173,19 +125,7 @@ impl RacBvh {
             meta.extend_from_slice(&e.hash.to_le_bytes());
         }
         let sections: [&[u8]; 4] = [&meta, &self.data, &m.vertices, &m.triangles];
-        let mut at = HEADER_LEN as u64;
-        for s in sections {
-            out.extend_from_slice(&at.to_le_bytes());
-            out.extend_from_slice(&(s.len() as u64).to_le_bytes());
-            out.extend_from_slice(&xxh3_64(s).to_le_bytes());
-            at += s.len() as u64;
-        }
-        let h = xxh3_64(&out);
-        out.extend_from_slice(&h.to_le_bytes());
-        debug_assert_eq!(out.len(), HEADER_LEN);
-        for s in sections {
-            out.extend_from_slice(s);
-        }
+        container::write_sections(&mut out, HEADER_LEN, &sections);
         out
     }
 
@@ -226,19 +166,7 @@ impl RacBvh {
         make: &dyn Fn(Range<usize>) -> Store,
         cache_budget_bytes: usize,
     ) -> Result<RacBvh, RacError> {
-        if b.len() < HEADER_LEN {
-            return Err(RacError::Truncated {
-                section: "header",
-                need: HEADER_LEN as u64,
-                have: b.len() as u64,
-            });
-        }
-        if b[..8] != MAGIC {
-            return Err(RacError::BadMagic);
-        }
-        if xxh3_64(&b[..HEADER_LEN - 8]) != u64_at(b, HEADER_LEN - 8) {
-            return Err(RacError::Corrupt("the header's checksum does not match"));
-        }
+        container::check_header(b, HEADER_LEN, &MAGIC, "RACBVH")?;
         let version = u32_at(b, 8);
         if version != VERSION {
             return Err(RacError::Version(version));
@@ -334,9 +262,8 @@ impl RacBvh {
         let mut ranges: [Range<usize>; 4] = Default::default();
         let mut hashes = [0u64; 4];
         for (k, name) in names.into_iter().enumerate() {
-            let off = u64_at(b, TABLE + 24 * k);
-            let len = u64_at(b, TABLE + 8 + 24 * k);
-            hashes[k] = u64_at(b, TABLE + 16 + 24 * k);
+            let (off, len, hash) = container::section_entry(b, TABLE, k);
+            hashes[k] = hash;
             let end = off
                 .checked_add(len)
                 .ok_or_else(|| header_err(name, "offset + length overflows"))?;
@@ -350,11 +277,12 @@ impl RacBvh {
                 ));
             }
             if end > b.len() as u64 {
-                return Err(RacError::Truncated {
+                return Err(FormatError::Truncated {
                     section: name,
                     need: end,
                     have: b.len() as u64,
-                });
+                }
+                .into());
             }
             sections[k] = &b[off as usize..end as usize];
             ranges[k] = off as usize..end as usize;
@@ -363,11 +291,12 @@ impl RacBvh {
         let clusters = u64::from(node_count).div_ceil(csize);
         let need = clusters * META_ENTRY as u64;
         if (sections[0].len() as u64) < need {
-            return Err(RacError::Truncated {
+            return Err(FormatError::Truncated {
                 section: "meta",
                 need,
                 have: sections[0].len() as u64,
-            });
+            }
+            .into());
         }
         if xxh3_64(sections[0]) != hashes[0] {
             return Err(RacError::Corrupt(
@@ -379,11 +308,12 @@ impl RacBvh {
         // node count the clusters cannot hold is a forgery; this also bounds
         // what `verify` allocates per node by the file's size.
         if (data.len() as u64) * 8 < u64::from(node_count) {
-            return Err(RacError::Truncated {
+            return Err(FormatError::Truncated {
                 section: "clusters",
                 need: u64::from(node_count).div_ceil(8),
                 have: data.len() as u64,
-            });
+            }
+            .into());
         }
         let mut meta = Vec::with_capacity(clusters as usize);
         let mut prev = 0u64;

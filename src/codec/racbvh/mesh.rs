@@ -4,183 +4,26 @@
 //! Vertices are quantized to `vertex_bits` per coordinate over the mesh's
 //! bounding box (round to nearest), or kept as raw `f32` bits (lossless).
 //! The x, y and z values and the triangles' vertex indices are stored as
-//! four frame-of-reference arrays ([`ForArray`]): blocks of 128 values, each
-//! block holding its minimum and the offsets from it in as many bits as the
-//! block's largest offset needs. Consecutive triangles (and their vertices)
-//! are usually close in the mesh's own order, so blocks are narrow, and any
-//! value is one block-head read and one bit-field read away.
+//! four frame-of-reference arrays ([`ForArray`], laid out as its module
+//! [`packed`](crate::codec::common::packed) says): blocks of 128 values,
+//! each block holding its minimum and the offsets from it in as many bits
+//! as the block's largest offset needs. Consecutive triangles (and their
+//! vertices) are usually close in the mesh's own order, so blocks are
+//! narrow, and any value is one block-head read and one bit-field read
+//! away.
 //!
 //! This is *not* the paper's RACM (§4.5), which codes connectivity and
 //! predicted positions cluster by cluster and needs a cache of decoded mesh
 //! clusters; with the tree's leaves in layout order and the triangles in
 //! mesh order, that cache would be hit in scattered order.
-//!
-//! # Layout of a [`ForArray`]
-//! `len: u64`, `data_len: u64`, then per block of 128 values a 16-byte head
-//! (`base: u32`, `width: u32`, bit offset in the data: `u64`), then
-//! `data_len` bytes of offsets. All little-endian.
 
 use glam::Vec3A;
 
 use super::RacError;
-use super::file::Store;
+use crate::codec::common::Store;
+use crate::codec::common::packed::{ForArray, bits_for};
 use crate::geom::Triangle;
 use crate::mesh::Mesh;
-
-/// Reads `bits` (≤ 32) bits at bit offset `at` of `data`; out-of-range
-/// bytes read as zero.
-#[inline]
-fn get_bits(data: &[u8], at: u64, bits: u32) -> u32 {
-    let byte = (at >> 3) as usize;
-    let shift = (at & 7) as u32;
-    let word = match data.get(byte..byte + 8) {
-        Some(s) => u64::from_le_bytes([s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7]]),
-        None => {
-            let mut b = [0u8; 8];
-            if let Some(s) = data.get(byte..) {
-                let n = s.len().min(8);
-                b[..n].copy_from_slice(&s[..n]);
-            }
-            u64::from_le_bytes(b)
-        }
-    };
-    ((word >> shift) & ((1u64 << bits) - 1)) as u32
-}
-
-fn put_bits(data: &mut [u8], at: u64, bits: u32, v: u32) {
-    for k in 0..u64::from(bits) {
-        if (v >> k) & 1 == 1 {
-            let p = at + k;
-            data[(p >> 3) as usize] |= 1 << (p & 7);
-        }
-    }
-}
-
-/// Bits needed to store values `0..n` (at least 1).
-pub fn bits_for(n: u64) -> u32 {
-    (64 - n.saturating_sub(1).leading_zeros()).max(1)
-}
-
-/// Values per [`ForArray`] block.
-const BLOCK: usize = 128;
-
-fn u32_at(b: &[u8], at: usize) -> u32 {
-    u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
-}
-
-fn u64_at(b: &[u8], at: usize) -> u64 {
-    u64::from_le_bytes(std::array::from_fn(|k| b[at + k]))
-}
-
-/// A view of one frame-of-reference array inside a byte blob (see the
-/// module docs for the layout).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ForArray {
-    len: u64,
-    heads: usize,
-    data: usize,
-    data_len: usize,
-}
-
-impl ForArray {
-    const EMPTY: ForArray = ForArray {
-        len: 0,
-        heads: 0,
-        data: 0,
-        data_len: 0,
-    };
-
-    /// Appends the array of `values` to `out`.
-    pub fn write(values: &[u32], out: &mut Vec<u8>) {
-        let mut heads = Vec::new();
-        let mut data = vec![0u8; 0];
-        let mut bit = 0u64;
-        for chunk in values.chunks(BLOCK) {
-            let base = chunk.iter().copied().min().unwrap_or(0);
-            let span = chunk.iter().map(|&v| v - base).max().unwrap_or(0);
-            let width = 32 - span.leading_zeros();
-            heads.extend_from_slice(&base.to_le_bytes());
-            heads.extend_from_slice(&width.to_le_bytes());
-            heads.extend_from_slice(&bit.to_le_bytes());
-            data.resize(
-                (bit + chunk.len() as u64 * u64::from(width)).div_ceil(8) as usize,
-                0,
-            );
-            for &v in chunk {
-                put_bits(&mut data, bit, width, v - base);
-                bit += u64::from(width);
-            }
-        }
-        out.extend_from_slice(&(values.len() as u64).to_le_bytes());
-        out.extend_from_slice(&(data.len() as u64).to_le_bytes());
-        out.extend_from_slice(&heads);
-        out.extend_from_slice(&data);
-    }
-
-    /// Parses the array starting at `at` of `b`, checking every block head;
-    /// returns it and the offset just past it.
-    pub fn parse(b: &[u8], at: usize, section: &'static str) -> Result<(Self, usize), RacError> {
-        let short = |need: u64| RacError::Truncated {
-            section,
-            need,
-            have: b.len() as u64,
-        };
-        let fixed = at.checked_add(16).ok_or(short(u64::MAX))?;
-        if fixed > b.len() {
-            return Err(short(fixed as u64));
-        }
-        let len = u64_at(b, at);
-        let data_len = u64_at(b, at + 8);
-        let blocks = len.div_ceil(BLOCK as u64);
-        let end = blocks
-            .checked_mul(16)
-            .and_then(|h| h.checked_add(fixed as u64))
-            .and_then(|d| d.checked_add(data_len).map(|e| (d, e)))
-            .ok_or(short(u64::MAX))?;
-        if end.1 > b.len() as u64 {
-            return Err(short(end.1));
-        }
-        let arr = Self {
-            len,
-            heads: fixed,
-            data: end.0 as usize,
-            data_len: data_len as usize,
-        };
-        for k in 0..blocks as usize {
-            let h = fixed + 16 * k;
-            let (width, off) = (u32_at(b, h + 4), u64_at(b, h + 8));
-            let count = (len - (k * BLOCK) as u64).min(BLOCK as u64);
-            let stop = off.checked_add(count * u64::from(width));
-            if width > 32 || stop.is_none_or(|x| x > data_len * 8) {
-                return Err(RacError::Corrupt("a mesh block head is out of range"));
-            }
-        }
-        Ok((arr, end.1 as usize))
-    }
-
-    /// Value `i` (`i < len`), read from the blob the array was parsed from.
-    #[inline]
-    pub fn get(&self, b: &[u8], i: u64) -> u32 {
-        let h = self.heads + 16 * (i as usize / BLOCK);
-        let (base, width, off) = (u32_at(b, h), u32_at(b, h + 4), u64_at(b, h + 8));
-        let data = &b[self.data..self.data + self.data_len];
-        base.wrapping_add(get_bits(
-            data,
-            off + (i % BLOCK as u64) * u64::from(width),
-            width,
-        ))
-    }
-
-    /// Number of values.
-    pub fn len(&self) -> u64 {
-        self.len
-    }
-
-    /// Whether the array has no values.
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
-    }
-}
 
 /// The stored mesh.
 #[derive(Clone, Debug)]
@@ -397,38 +240,5 @@ impl PackedMesh {
     /// Stored bytes (the two sections and the header fields).
     pub fn bytes(&self) -> usize {
         self.vertices.len() + self.triangles.len() + 48
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn frame_of_reference_arrays_round_trip_and_reject_bad_heads() {
-        let values: Vec<u32> = (0..1000u32)
-            .map(|i| match i % 7 {
-                0 => u32::MAX,
-                1 => 0,
-                _ => 5000 + i * 3,
-            })
-            .chain(std::iter::repeat_n(42, 300))
-            .collect();
-        let mut blob = vec![9u8; 5];
-        ForArray::write(&values, &mut blob);
-        ForArray::write(&[], &mut blob);
-        let (arr, next) = ForArray::parse(&blob, 5, "test").unwrap();
-        assert_eq!(arr.len(), values.len() as u64);
-        for (i, &v) in values.iter().enumerate() {
-            assert_eq!(arr.get(&blob, i as u64), v);
-        }
-        let (empty, end) = ForArray::parse(&blob, next, "test").unwrap();
-        assert!(empty.is_empty());
-        assert_eq!(end, blob.len());
-        // A width above 32 or a truncated blob is an error, not a panic.
-        let mut bad = blob.clone();
-        bad[5 + 16 + 4] = 33;
-        assert!(ForArray::parse(&bad, 5, "test").is_err());
-        assert!(ForArray::parse(&blob[..next - 1], 5, "test").is_err());
     }
 }

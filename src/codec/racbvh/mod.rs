@@ -75,22 +75,24 @@
 //!
 //! # Choices where the paper leaves them open
 //!
-//! - **Quantization**: `2^bits − 1` steps over the root box per axis (the
-//!   step grown by ulps until the last grid point reaches the root's max);
-//!   `min` is the largest grid point ≤ the true min, `max` the smallest ≥ the
-//!   true max, both computed and checked in `f32` exactly as the decoder
-//!   evaluates them, so a decoded box always contains its subtree. The boxes
-//!   are recomputed from the *stored* mesh first, so they also contain the
-//!   quantized triangles the cursor reports.
-//! - **Dictionary coder** ([`coder`]): the paper's variant for residual and
-//!   delta contexts (empty dictionary, symbols added when met, no
-//!   combination entries) is used for every context, including the
-//!   structure context the paper initialises with all symbols and codes with
-//!   full LZW: with one symbol per node and symbols of many contexts
-//!   interleaved in a stream, LZW's strings would need per-context streams
-//!   and look-ahead for little gain. Ranks are Exp-Golomb coded with
-//!   a per-context parameter chosen by the encoder; entries move one place
-//!   to the front when used (transpose), so ranks follow frequencies.
+//! - **Quantization** (one [`Grid`](crate::codec::common::quant::Grid)):
+//!   `2^bits − 1` steps over the root box per axis (the step grown by ulps
+//!   until the last grid point reaches the root's max); `min` is the largest
+//!   grid point ≤ the true min, `max` the smallest ≥ the true max, both
+//!   computed and checked in `f32` exactly as the decoder evaluates them, so
+//!   a decoded box always contains its subtree. The boxes are recomputed
+//!   from the *stored* mesh first, so they also contain the quantized
+//!   triangles the cursor reports.
+//! - **Dictionary coder** ([`dict`](crate::codec::common::dict)): the
+//!   paper's variant for residual and delta contexts (empty dictionary,
+//!   symbols added when met, no combination entries) is used for every
+//!   context, including the structure context the paper initialises with all
+//!   symbols and codes with full LZW: with one symbol per node and symbols
+//!   of many contexts interleaved in a stream, LZW's strings would need
+//!   per-context streams and look-ahead for little gain. Ranks are
+//!   Exp-Golomb coded with a per-context parameter chosen by the encoder;
+//!   entries move one place to the front when used (transpose), so ranks
+//!   follow frequencies.
 //! - **Box symbols and contexts**: per node, first a 6-bit mask of which
 //!   residuals are zero, XORed with the mask predicted from the sibling's
 //!   residuals when the sibling is earlier in the same cluster (a face one
@@ -145,15 +147,18 @@
 //! the mesh sections once ([`RacBvh::check_mesh`]). What only `verify`
 //! proves is the tree's global shape (a checksummed file whose tree is a
 //! DAG can make queries slow); the CLI, the sims and
-//! [`crate::parry::open_codec`] verify by default. The cursor path and the
+//! [`crate::codec::AnyCodec::open`] verify by default. The cursor path and the
 //! `bv`/`left`/… accessors panic with a message naming the cluster if they
 //! meet corrupted data; the `try_` accessors return the error instead.
 //! Nothing in the decoder recurses to a depth the file decides (completion
 //! walks the chain of local roots' parents with a loop). Saves are atomic.
 
+mod access;
 mod cache;
-pub mod coder;
+mod complete;
 mod context;
+mod contract;
+mod cursor;
 mod decode;
 mod encode;
 mod error;
@@ -161,13 +166,13 @@ pub mod file;
 pub mod mesh;
 pub mod node;
 mod tree;
+mod tricache;
 mod verify;
 
 pub use cache::CacheStats;
-pub use decode::RacNode;
+pub use cursor::RacNode;
 pub use encode::{RacOptions, RacStats};
 pub use error::RacError;
-pub use file::Store;
 pub use node::{CoreNode, INCOMPLETE};
 pub use tree::RacBvh;
 

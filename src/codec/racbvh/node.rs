@@ -1,122 +1,18 @@
-//! The quantization grid, the median-split prediction (§4.2) and the
-//! in-core node a cluster decompresses into (§5).
+//! The median-split prediction of a child's quantized box from its
+//! parent's (§4.2) and the in-core node a cluster decompresses into (§5).
+//! Boxes are quantized on one
+//! [`Grid`](crate::codec::common::quant::Grid) over the root box.
 
 use std::sync::atomic::{AtomicU32, Ordering};
 
-use glam::{UVec3, Vec3A};
+use glam::UVec3;
 
-use crate::geom::Aabb;
+use crate::codec::common::bits::{unzigzag, zigzag};
+use crate::codec::common::quant::QBox;
 
-/// Flag in [`CoreNode`] word 7 marking a leaf; the low bits hold the count.
-pub const LEAF_FLAG: u32 = 0x8000_0000;
 /// Flag in [`CoreNode`] word 0 marking an *incomplete* node (§5.2): its
 /// box words still hold the coded residuals.
 pub const INCOMPLETE: u32 = 0x8000_0000;
-
-/// The fixed-rate quantization grid over the root box: `2^bits − 1` steps
-/// per axis. `dequantize(q) = origin + q · step`, evaluated in `f32` the same
-/// way by the encoder and the decoder, so the encoder can check that every
-/// decoded box contains its subtree.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Grid {
-    /// The root box's minimum.
-    pub origin: Vec3A,
-    /// The size of one quantum per axis (0 for a flat axis).
-    pub step: Vec3A,
-    /// The largest quantized value, `2^bits − 1`.
-    pub max_q: u32,
-}
-
-impl Grid {
-    /// The grid over `root` with `bits` bits per coordinate. `root` must be
-    /// finite and non-empty.
-    pub fn new(root: &Aabb, bits: u32) -> Self {
-        let max_q = ((1u64 << bits) - 1) as u32;
-        let n = max_q as f32;
-        let mut step = [0f32; 3];
-        for (a, s) in step.iter_mut().enumerate() {
-            let (lo, hi) = (root.min[a], root.max[a]);
-            if hi > lo {
-                let mut st = (hi - lo) / n;
-                // Grow the step until the last grid point reaches `hi`.
-                while lo + n * st < hi {
-                    st = f32::from_bits(st.to_bits() + 1);
-                }
-                *s = st;
-            }
-        }
-        Self {
-            origin: root.min,
-            step: Vec3A::from(step),
-            max_q,
-        }
-    }
-
-    #[inline]
-    fn deq(&self, a: usize, q: u32) -> f32 {
-        self.origin[a] + q as f32 * self.step[a]
-    }
-
-    /// The largest `q` whose grid point is at or below `v` (0 if none).
-    fn floor(&self, a: usize, v: f32) -> u32 {
-        if self.step[a] == 0.0 {
-            return 0;
-        }
-        let guess = ((v - self.origin[a]) / self.step[a]).floor();
-        let mut q = guess.clamp(0.0, self.max_q as f32) as u32;
-        while q > 0 && self.deq(a, q) > v {
-            q -= 1;
-        }
-        while q < self.max_q && self.deq(a, q + 1) <= v {
-            q += 1;
-        }
-        q
-    }
-
-    /// The smallest `q` whose grid point is at or above `v` (`max_q` if none).
-    fn ceil(&self, a: usize, v: f32) -> u32 {
-        if self.step[a] == 0.0 {
-            return 0;
-        }
-        let guess = ((v - self.origin[a]) / self.step[a]).ceil();
-        let mut q = guess.clamp(0.0, self.max_q as f32) as u32;
-        while q < self.max_q && self.deq(a, q) < v {
-            q += 1;
-        }
-        while q > 0 && self.deq(a, q - 1) >= v {
-            q -= 1;
-        }
-        q
-    }
-
-    /// Conservative quantization: min rounds down, max rounds up.
-    pub fn quantize(&self, b: &Aabb) -> QBox {
-        let mut q = QBox::default();
-        for a in 0..3 {
-            q.min[a] = self.floor(a, b.min[a]);
-            q.max[a] = self.ceil(a, b.max[a]).max(q.min[a]);
-        }
-        q
-    }
-
-    /// The `f32` box of a quantized box.
-    #[inline]
-    pub fn dequantize(&self, q: &QBox) -> Aabb {
-        Aabb::new(
-            self.origin + q.min.as_vec3a() * self.step,
-            self.origin + q.max.as_vec3a() * self.step,
-        )
-    }
-}
-
-/// A quantized box.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct QBox {
-    /// Minimum corner.
-    pub min: UVec3,
-    /// Maximum corner.
-    pub max: UVec3,
-}
 
 /// The median-split prediction: the parent's longest quantized axis (the
 /// lowest on ties) and its middle.
@@ -144,12 +40,12 @@ pub fn residuals(parent: &QBox, right: bool, child: &QBox) -> [u64; 6] {
     let mut out = [0; 6];
     for a in 0..3 {
         out[a] = if right && a == axis {
-            super::coder::zigzag(i64::from(child.min[a]) - i64::from(mid))
+            zigzag(i64::from(child.min[a]) - i64::from(mid))
         } else {
             u64::from(child.min[a] - parent.min[a])
         };
         out[3 + a] = if !right && a == axis {
-            super::coder::zigzag(i64::from(child.max[a]) - i64::from(mid))
+            zigzag(i64::from(child.max[a]) - i64::from(mid))
         } else {
             u64::from(parent.max[a] - child.max[a])
         };
@@ -166,9 +62,9 @@ pub fn apply(parent: &QBox, right: bool, r: &[u32; 6], max_q: u32) -> Option<QBo
     let mut ok = true;
     for a in 0..3 {
         // Both candidates computed, one selected: no data-dependent branch.
-        let split_min = i64::from(mid) + super::coder::unzigzag(u64::from(r[a]));
+        let split_min = i64::from(mid) + unzigzag(u64::from(r[a]));
         let outer_min = i64::from(parent.min[a]) + i64::from(r[a]);
-        let split_max = i64::from(mid) + super::coder::unzigzag(u64::from(r[3 + a]));
+        let split_max = i64::from(mid) + unzigzag(u64::from(r[3 + a]));
         let outer_max = i64::from(parent.max[a]) - i64::from(r[3 + a]);
         let on_axis = a == axis;
         let lo = if right & on_axis {
@@ -199,9 +95,14 @@ pub fn apply(parent: &QBox, right: bool, r: &[u32; 6], max_q: u32) -> Option<QBo
 /// | 6 | inner: left child (global index); leaf with one triangle: its id; leaf with several: first slot in the cluster's triangle list | same |
 /// | 7 | inner: right child; leaf: [`LEAF_FLAG`] \| triangle count | same |
 ///
+/// [`LEAF_FLAG`] is the canonical tree's leaf flag. These words live in
+/// core only: no flag value is part of the file format.
+///
 /// Words are atomics so that a completion (which rewrites words 0–5 under the
 /// cluster's lock, word 0 last with release ordering) can run while other
 /// threads read the same cluster.
+///
+/// [`LEAF_FLAG`]: crate::build::LEAF_FLAG
 #[derive(Default)]
 #[repr(C)]
 pub struct CoreNode(pub [AtomicU32; 8]);
@@ -254,31 +155,6 @@ pub fn qbox_of(w: &[u32; 8]) -> QBox {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn quantization_is_conservative_and_tight() {
-        let root = Aabb::from_arrays([-3.0, 1e9, 0.0], [7.5, 1e9 + 4096.0, 0.0]);
-        for bits in [8, 16, 24] {
-            let g = Grid::new(&root, bits);
-            let full = g.quantize(&root);
-            assert!(g.dequantize(&full).contains(&root));
-            for k in 0..200 {
-                let t = k as f32 / 200.0;
-                let b = Aabb::new(
-                    root.min + (root.max - root.min) * t * 0.5,
-                    root.min + (root.max - root.min) * (0.5 + t * 0.4),
-                );
-                let q = g.quantize(&b);
-                assert!(g.dequantize(&q).contains(&b), "{bits} {b:?}");
-                for a in 0..3 {
-                    if g.step[a] > 0.0 && q.max[a] > q.min[a] + 2 {
-                        assert!(g.deq(a, q.min[a] + 1) > b.min[a]);
-                        assert!(g.deq(a, q.max[a] - 1) < b.max[a]);
-                    }
-                }
-            }
-        }
-    }
 
     #[test]
     fn residuals_invert() {

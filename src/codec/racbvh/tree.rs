@@ -1,8 +1,9 @@
 //! [`RacBvh`]: the compressed tree with its mesh and its cache, and the
 //! figures about it.
 
-use super::node::{Grid, QBox};
 use super::{CacheStats, RacError, RacStats, cache, decode, file, mesh};
+use crate::codec::common::Store;
+use crate::codec::common::quant::{Grid, QBox};
 
 /// Everything global a cluster's decoder needs.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -44,7 +45,7 @@ pub(super) struct ClusterMeta {
 pub struct RacBvh {
     pub(super) header: Header,
     /// The clusters' bytes, concatenated.
-    pub(super) data: file::Store,
+    pub(super) data: Store,
     pub(super) meta: Vec<ClusterMeta>,
     pub(super) mesh: mesh::PackedMesh,
     /// Checksum of the mesh sections, as stored (checked by `verify`).
@@ -74,7 +75,7 @@ impl std::fmt::Debug for RacBvh {
 impl RacBvh {
     pub(super) fn assemble(
         header: Header,
-        data: file::Store,
+        data: Store,
         meta: Vec<ClusterMeta>,
         mesh: mesh::PackedMesh,
         mesh_hash: u64,

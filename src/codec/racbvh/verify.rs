@@ -1,8 +1,9 @@
 //! [`RacBvh::verify`]: the second validation tier, proving everything a
 //! query relies on.
 
-use super::node::{LEAF_FLAG, qbox_of};
+use super::node::qbox_of;
 use super::{RacBvh, RacError};
+use crate::build::LEAF_FLAG;
 
 impl RacBvh {
     /// Proves everything a query relies on: every cluster decodes and

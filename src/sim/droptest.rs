@@ -1,6 +1,8 @@
 //! The drop test behind the sims: a dynamic mesh dropped onto a fixed mesh
 //! in rapier, once per shape kind, from the same initial conditions, with
-//! the narrow phase timed per step (see [`super::timed::Timed`]).
+//! the narrow phase timed per step (see [`super::timed::Timed`]). The shape
+//! kinds are parry's `TriMesh` and every codec of the registry
+//! ([`CodecKind`]).
 
 use std::str::FromStr;
 use std::sync::atomic::Ordering;
@@ -13,44 +15,49 @@ use rapier3d::prelude::{
     ColliderBuilder, ColliderHandle, NarrowPhase, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle,
 };
 
-use super::Dispatcher;
-use super::patches::{ContactCounters, ContactMode};
-use super::shape::{CbvhShape, Codec};
 use super::timed::Timed;
-use super::trimesh::{parry_trimesh, trimesh_bytes_by_part, trimesh_interference};
 use crate::build::BuildOptions;
-use crate::codec::racbvh::{RacBvh, RacOptions};
+use crate::codec::{AnyOptions, CodecKind};
 use crate::mesh::Mesh;
+use crate::parry::cbvh_cbvh::interference;
+use crate::parry::trimesh::{parry_trimesh, trimesh_bytes_by_part, trimesh_interference};
+use crate::parry::{CbvhShape, ContactCounters, ContactMode, Dispatcher};
 
 /// Which collision shape a run uses for both meshes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShapeKind {
-    /// parry's own `TriMesh`, with parry's default dispatcher: the baseline.
+    /// parry's own `TriMesh`, with parry's default dispatcher: the baseline
+    /// (`parry`).
     Parry,
-    /// cbvh's plain codec, with cbvh's dispatcher.
-    Plain,
-    /// RACBVH with a cluster cache that holds the whole decompressed tree.
-    Racbvh,
-    /// RACBVH with a cache of 10 % of the decompressed tree.
-    Racbvh10,
+    /// A cbvh codec with cbvh's dispatcher, its decode cache (if it has
+    /// one) holding the whole tree (named as the codec: `plain`, `racbvh`).
+    Cbvh(CodecKind),
+    /// A cbvh codec with a decode cache, limited to 10 % of the decoded
+    /// tree (the codec's name and `-10pct`: `racbvh-10pct`). Only for
+    /// codecs with a cache ([`CodecKind::has_cache`]).
+    CbvhTenthCache(CodecKind),
 }
 
 impl ShapeKind {
-    /// Every kind, baseline first.
-    pub const ALL: [ShapeKind; 4] = [
-        ShapeKind::Parry,
-        ShapeKind::Plain,
-        ShapeKind::Racbvh,
-        ShapeKind::Racbvh10,
-    ];
+    /// Every kind, baseline first: parry, then each codec of the registry,
+    /// followed by its small-cache variant if it has a cache.
+    pub fn all() -> Vec<ShapeKind> {
+        let mut all = vec![ShapeKind::Parry];
+        for &k in CodecKind::ALL {
+            all.push(ShapeKind::Cbvh(k));
+            if k.has_cache() {
+                all.push(ShapeKind::CbvhTenthCache(k));
+            }
+        }
+        all
+    }
 
     /// The name used in `--shapes` and in reports.
-    pub fn name(self) -> &'static str {
+    pub fn name(self) -> String {
         match self {
-            ShapeKind::Parry => "parry",
-            ShapeKind::Plain => "plain",
-            ShapeKind::Racbvh => "racbvh",
-            ShapeKind::Racbvh10 => "racbvh-10pct",
+            ShapeKind::Parry => "parry".into(),
+            ShapeKind::Cbvh(k) => k.name().into(),
+            ShapeKind::CbvhTenthCache(k) => format!("{}-10pct", k.name()),
         }
     }
 }
@@ -58,14 +65,13 @@ impl ShapeKind {
 impl FromStr for ShapeKind {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        ShapeKind::ALL
-            .into_iter()
+        let all = ShapeKind::all();
+        all.iter()
+            .copied()
             .find(|k| k.name() == s.trim())
             .ok_or_else(|| {
-                format!(
-                    "unknown shape {s:?}; use one of: {}",
-                    ShapeKind::ALL.map(|k| k.name()).join(", ")
-                )
+                let names: Vec<String> = all.iter().map(|k| k.name()).collect();
+                format!("unknown shape {s:?}; use one of: {}", names.join(", "))
             })
     }
 }
@@ -84,9 +90,9 @@ pub struct DropScene {
     /// Let rapier reuse contacts of pairs that barely moved (off for
     /// timing: it skips the narrow phase).
     pub contact_recycling: bool,
-    /// Nodes per RACBVH cluster for the `racbvh` shapes (a power of two,
-    /// 256 to 16 K; 4096 is the codec's default).
-    pub cluster_nodes: u32,
+    /// Each codec's options for the cbvh shapes (the runs set the cache
+    /// budgets themselves).
+    pub codec_options: AnyOptions,
 }
 
 /// How to place a dropped mesh over a base mesh.
@@ -183,7 +189,7 @@ impl RunSpec {
     /// the per-triangle-pair mode (`plain`, `plain-pairs`, `racbvh`, ...).
     pub fn name(&self) -> String {
         match (self.kind, self.mode) {
-            (ShapeKind::Parry, _) | (_, ContactMode::Patches(_)) => self.kind.name().to_string(),
+            (ShapeKind::Parry, _) | (_, ContactMode::Patches(_)) => self.kind.name(),
             (_, ContactMode::PerTrianglePair) => format!("{}-pairs", self.kind.name()),
         }
     }
@@ -279,6 +285,15 @@ pub struct RunReport {
     /// and outside its footprint) or `tunnelled through the base` (below
     /// the bottom, inside the footprint).
     pub final_state: String,
+    /// The contacts' energy audit: the largest rise of the dropped body's
+    /// mechanical energy (kinetic plus gravitational) between its first
+    /// and last contact above the lowest it had been since the first (a
+    /// body that fell off is not audited in free flight), as a fraction of its
+    /// weight times its size (`m·g·size`, the energy of dropping it by its
+    /// own size). Contacts without restitution only take energy out, so a
+    /// rise is energy the contacts put in: pushing out of deep
+    /// penetration, jitter, creeping up. About 0 for a faithful run.
+    pub energy_gain: f32,
     /// Whether parry's fallback `Bvh` was built for a cbvh shape.
     pub fallback_bvh_built: bool,
     /// Narrow-phase milliseconds of every step.
@@ -295,6 +310,30 @@ pub struct RunReport {
     pub contact_points_per_step: Vec<usize>,
     /// Height (y translation) of the dropped body after every step.
     pub height_per_step: Vec<f32>,
+    /// Mechanical energy of the dropped body after every step, in joules
+    /// (kinetic plus gravitational relative to the base's bottom; see
+    /// [`RunReport::energy_gain`]).
+    pub energy_per_step: Vec<f32>,
+}
+
+/// The largest rise of `energy` from the first to the last step with
+/// contact points, over the lowest value since the first (see [`RunReport::energy_gain`];
+/// not yet divided by `m·g·size`).
+pub fn energy_rise(energy: &[f32], points_per_step: &[usize]) -> f32 {
+    let Some(first) = points_per_step.iter().position(|p| *p > 0) else {
+        return 0.0;
+    };
+    let last = points_per_step
+        .iter()
+        .rposition(|p| *p > 0)
+        .unwrap_or(first);
+    let mut low = f32::INFINITY;
+    let mut rise = 0.0f32;
+    for e in &energy[first..=last] {
+        low = low.min(*e);
+        rise = rise.max(e - low);
+    }
+    rise
 }
 
 enum Shapes {
@@ -303,7 +342,7 @@ enum Shapes {
 }
 
 fn make_shapes(kind: ShapeKind, scene: &DropScene) -> Result<Shapes, String> {
-    Ok(match kind {
+    let (codec, small_cache) = match kind {
         ShapeKind::Parry => {
             let a = parry_trimesh(&scene.dropped).map_err(|e| format!("parry TriMesh: {e:?}"))?;
             let b = parry_trimesh(&scene.base).map_err(|e| format!("parry TriMesh: {e:?}"))?;
@@ -311,43 +350,34 @@ fn make_shapes(kind: ShapeKind, scene: &DropScene) -> Result<Shapes, String> {
                 trimesh_bytes_by_part(&a).iter().map(|p| p.1).sum(),
                 trimesh_bytes_by_part(&b).iter().map(|p| p.1).sum(),
             ];
-            Shapes::Parry(SharedShape::new(a), SharedShape::new(b), bytes)
+            return Ok(Shapes::Parry(
+                SharedShape::new(a),
+                SharedShape::new(b),
+                bytes,
+            ));
         }
-        ShapeKind::Plain => {
-            let opts = BuildOptions::default();
-            let a = CbvhShape::plain(&scene.dropped, &opts).map_err(|e| e.to_string())?;
-            let b = CbvhShape::plain(&scene.base, &opts).map_err(|e| e.to_string())?;
-            Shapes::Cbvh(a, b)
+        ShapeKind::Cbvh(k) => (k, false),
+        ShapeKind::CbvhTenthCache(k) => (k, true),
+    };
+    // Caches start out holding the whole tree.
+    let options = scene.codec_options.clone().with_cache_budget(usize::MAX);
+    let make = |m: &Mesh| -> Result<CbvhShape, String> {
+        let shape = CbvhShape::build(m, &BuildOptions::default(), codec, &options)
+            .map_err(|e| e.to_string())?;
+        if !small_cache {
+            return Ok(shape);
         }
-        ShapeKind::Racbvh | ShapeKind::Racbvh10 => {
-            let opts = BuildOptions::default();
-            let make = |m: &Mesh| -> Result<CbvhShape, String> {
-                let fits = RacOptions {
-                    cache_budget_bytes: usize::MAX,
-                    cluster_nodes: scene.cluster_nodes,
-                    ..Default::default()
-                };
-                let shape = CbvhShape::racbvh(m, &opts, &fits)?;
-                if kind == ShapeKind::Racbvh {
-                    return Ok(shape);
-                }
-                // 10 % of the decompressed size: measure it by touching every
-                // node once with the unbounded cache, then re-open the same
-                // bytes with a tenth of it.
-                let Codec::Racbvh(rac) = shape.codec() else {
-                    unreachable!("racbvh builds a racbvh codec")
-                };
-                for i in 0..rac.node_count() as u32 {
-                    rac.try_bv(i).map_err(|e| e.to_string())?;
-                }
-                let decoded = rac.cache_stats().cached_bytes;
-                let small =
-                    RacBvh::from_bytes(&rac.to_bytes(), decoded / 10).map_err(|e| e.to_string())?;
-                Ok(CbvhShape::from_codec(Codec::Racbvh(Box::new(small)), m))
-            };
-            Shapes::Cbvh(make(&scene.dropped)?, make(&scene.base)?)
-        }
-    })
+        // 10 % of the decompressed size: measured by decoding the whole
+        // tree once with the unbounded cache, then the same bytes re-opened
+        // with a tenth of it.
+        let small = shape
+            .codec()
+            .with_cache_budget_of(&|decoded| decoded / 10)
+            .ok_or_else(|| format!("{}: the codec has no cache to limit", kind.name()))?
+            .map_err(|e| e.to_string())?;
+        Ok(CbvhShape::from_codec(small, m))
+    };
+    Ok(Shapes::Cbvh(make(&scene.dropped)?, make(&scene.base)?))
 }
 
 /// See [`RunReport::final_state`].
@@ -446,6 +476,8 @@ pub fn run(
     let mut heights = Vec::with_capacity(scene.steps);
     let mut inter_ms = Vec::with_capacity(scene.steps);
     let mut inter_pairs = Vec::with_capacity(scene.steps);
+    let mut energy = Vec::with_capacity(scene.steps);
+    let floor = scene.base.bounds().map_or(0.0, |(lo, _)| lo[1]);
     let mut max_penetration = 0.0f32;
     for step in 0..scene.steps {
         let before = counter.load(Ordering::Relaxed);
@@ -477,7 +509,7 @@ pub fn run(
             .inv_mul(world.bodies[base_body].position());
         let ti = Instant::now();
         let n_inter = match &shapes {
-            Shapes::Cbvh(a, b) => super::cbvh_cbvh::interference(&pos12, a, b),
+            Shapes::Cbvh(a, b) => interference(&pos12, a, b),
             Shapes::Parry(a, b, _) => {
                 let (Some(ta), Some(tb)) = (
                     a.as_shape::<parry3d::shape::TriMesh>(),
@@ -490,7 +522,15 @@ pub fn run(
         };
         inter_ms.push(ti.elapsed().as_secs_f64() * 1e3);
         inter_pairs.push(n_inter);
-        heights.push(world.bodies[drop_body].translation().y);
+        let body = &world.bodies[drop_body];
+        heights.push(body.translation().y);
+        // rapier's leap-frog form: the potential at the half step, in step
+        // with the kinetic energy of the velocities just integrated.
+        energy.push(
+            body.kinetic_energy()
+                + body.gravitational_potential_energy(scene.dt, world.gravity)
+                + body.mass() * world.gravity.y * floor,
+        );
         pairs_per_step.push(contact_pairs);
         manifolds_per_step.push(manifolds);
         points_per_step.push(points);
@@ -508,6 +548,10 @@ pub fn run(
     let tr = body.translation();
     let rot = body.rotation();
     let tris = scene.dropped.triangles.len() + scene.base.triangles.len();
+    let size = scene.dropped.bounds().map_or(0.0, |(lo, hi)| {
+        (0..3).map(|k| hi[k] - lo[k]).fold(0.0f32, f32::max)
+    });
+    let drop_scale = body.mass() * world.gravity.length() * size;
     Ok(RunReport {
         shape: spec.name(),
         contact_mode: if kind == ShapeKind::Parry {
@@ -532,6 +576,7 @@ pub fn run(
         final_rotation: [rot.x, rot.y, rot.z, rot.w],
         final_speed: body.linvel().length(),
         final_state: final_state(scene, body.center_of_mass(), body.linvel().length()),
+        energy_gain: energy_rise(&energy, &points_per_step) / drop_scale.max(f32::MIN_POSITIVE),
         fallback_bvh_built: cbvh
             .is_some_and(|(a, b)| a.fallback_bvh_built() || b.fallback_bvh_built()),
         narrow_phase_ms_per_step: narrow,
@@ -541,5 +586,25 @@ pub fn run(
         interference_pairs_per_step: inter_pairs,
         contact_points_per_step: points_per_step,
         height_per_step: heights,
+        energy_per_step: energy,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::energy_rise;
+
+    #[test]
+    fn energy_rise_counts_only_rises_between_first_and_last_contact() {
+        // Free fall before contact (10 -> 9.5) and after it (a rise to 30 in
+        // flight) is not audited; inside, 9 -> 9.5 is a rise of 0.5, and
+        // the later 8 -> 8.2 is smaller.
+        let e = [10.0, 9.5, 9.0, 9.5, 8.0, 8.2, 30.0];
+        let pts = [0, 0, 3, 2, 4, 1, 0];
+        assert!((energy_rise(&e, &pts) - 0.5).abs() < 1e-6);
+        // Falling energy only: nothing put in.
+        assert_eq!(energy_rise(&[5.0, 4.0, 3.0], &[1, 1, 1]), 0.0);
+        // No contact at all.
+        assert_eq!(energy_rise(&[1.0, 2.0], &[0, 0]), 0.0);
+    }
 }

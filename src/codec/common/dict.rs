@@ -1,160 +1,29 @@
-//! Bit streams and the dictionary coder (§4.4).
+//! The dictionary coder of RACBVH (§4.4), behind the [`SymbolEncoder`] /
+//! [`SymbolDecoder`] traits.
 //!
 //! # The dictionary coder
 //!
 //! Each compression context owns a dictionary that starts *empty* (it holds
 //! only an escape entry), gains a symbol the first time the symbol is met,
 //! and never gains combination entries: the paper's variant for residual and
-//! delta contexts, used here for every context (see the module docs of
-//! [`super`] for why). A symbol is sent as its current *rank* in the
-//! dictionary; a new symbol is sent as the escape's rank followed by the
-//! symbol in `raw_bits` bits. After every use the entry moves one place
-//! towards the front (the transpose heuristic), so frequent symbols get small
-//! ranks. Ranks are written with an Exp-Golomb code whose parameter `k`
-//! (0..=3) the encoder chooses per context and cluster (it is stored in the
-//! cluster header), so a context with a flat distribution does not pay the
-//! γ-code's price for it.
+//! delta contexts (RACBVH uses it for every context; its module docs say
+//! why). A symbol is sent as its current *rank* in the dictionary; a new
+//! symbol is sent as the escape's rank followed by the symbol in `raw_bits`
+//! bits. After every use the entry moves one place towards the front (the
+//! transpose heuristic), so frequent symbols get small ranks. Ranks are
+//! written with an Exp-Golomb code whose parameter `k` (0..=[`MAX_K`]) the
+//! encoder chooses per context (RACBVH: per context and cluster, stored in
+//! the cluster header), so a context with a flat distribution does not pay
+//! the γ-code's price for it.
 //!
 //! The coder sits behind [`SymbolEncoder`] / [`SymbolDecoder`] so that a
 //! range coder can be put in its place.
 
-use super::RacError;
+use super::FormatError;
+use super::bits::BitReader;
 
 /// Largest Exp-Golomb parameter the encoder may choose.
 pub const MAX_K: u32 = 3;
-
-/// Writes bits least-significant first into bytes.
-#[derive(Default)]
-pub struct BitWriter {
-    bytes: Vec<u8>,
-    acc: u64,
-    n: u32,
-}
-
-impl BitWriter {
-    /// Appends the low `bits` bits of `v` (`bits` ≤ 56).
-    #[inline]
-    pub fn put(&mut self, v: u64, bits: u32) {
-        debug_assert!(bits <= 56);
-        if bits == 0 {
-            return;
-        }
-        let v = v & ((1u64 << bits) - 1);
-        self.acc |= v << self.n;
-        self.n += bits;
-        while self.n >= 8 {
-            self.bytes.push(self.acc as u8);
-            self.acc >>= 8;
-            self.n -= 8;
-        }
-    }
-
-    /// Appends `v` with the Exp-Golomb code of parameter `k`.
-    #[inline]
-    pub fn put_golomb(&mut self, v: u32, k: u32) {
-        let x = u64::from(v) + (1u64 << k);
-        let n = 63 - x.leading_zeros() - k; // prefix length
-        self.put(0, n);
-        self.put(1, 1);
-        self.put(x, n + k);
-    }
-
-    /// Bits written so far.
-    pub fn bit_len(&self) -> u64 {
-        self.bytes.len() as u64 * 8 + u64::from(self.n)
-    }
-
-    /// The bytes, the last one zero-padded.
-    pub fn finish(mut self) -> Vec<u8> {
-        if self.n > 0 {
-            self.bytes.push(self.acc as u8);
-        }
-        self.bytes
-    }
-}
-
-/// Length in bits of the Exp-Golomb code of `v` with parameter `k`.
-#[inline]
-pub fn golomb_len(v: u32, k: u32) -> u64 {
-    let x = u64::from(v) + (1u64 << k);
-    let n = u64::from(63 - x.leading_zeros() - k);
-    2 * n + 1 + u64::from(k)
-}
-
-/// Reads bits least-significant first. Reading past the end yields zero
-/// bits; [`BitReader::overran`] tells whether that happened.
-pub struct BitReader<'a> {
-    bytes: &'a [u8],
-    pos: u64,
-    limit: u64,
-}
-
-impl<'a> BitReader<'a> {
-    /// A reader over `bytes`.
-    pub fn new(bytes: &'a [u8]) -> Self {
-        Self {
-            bytes,
-            pos: 0,
-            limit: bytes.len() as u64 * 8,
-        }
-    }
-
-    /// A reader of the first `len` bytes of `bytes` (the rest may be read
-    /// ahead but counts as running past the end).
-    pub fn with_limit(bytes: &'a [u8], len: usize) -> Self {
-        Self {
-            bytes,
-            pos: 0,
-            limit: len.min(bytes.len()) as u64 * 8,
-        }
-    }
-
-    /// The next 57 or more bits, without consuming them.
-    #[inline(always)]
-    fn peek(&self) -> u64 {
-        let byte = (self.pos >> 3) as usize;
-        let shift = (self.pos & 7) as u32;
-        let word = match self.bytes.get(byte..byte + 8) {
-            Some(s) => u64::from_le_bytes([s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7]]),
-            None => {
-                let mut b = [0u8; 8];
-                if let Some(s) = self.bytes.get(byte..) {
-                    b[..s.len()].copy_from_slice(s);
-                }
-                u64::from_le_bytes(b)
-            }
-        };
-        word >> shift
-    }
-
-    /// Consumes `bits` (≤ 56) bits.
-    #[inline(always)]
-    pub fn get(&mut self, bits: u32) -> u64 {
-        let v = self.peek() & ((1u64 << bits) - 1);
-        self.pos += u64::from(bits);
-        v
-    }
-
-    /// Consumes one Exp-Golomb code of parameter `k`.
-    #[inline(always)]
-    pub fn get_golomb(&mut self, k: u32) -> Result<u32, RacError> {
-        let w = self.peek();
-        let n = w.trailing_zeros();
-        if n + k > 28 {
-            return Err(RacError::Corrupt("an Exp-Golomb code is too long"));
-        }
-        let total = 2 * n + 1 + k;
-        let body = (w >> (n + 1)) & ((1u64 << (n + k)) - 1);
-        self.pos += u64::from(total);
-        let x = (1u64 << (n + k)) | body;
-        Ok((x - (1u64 << k)) as u32)
-    }
-
-    /// Whether more bits were consumed than the stream holds.
-    pub fn overran(&self) -> bool {
-        self.pos > self.limit
-    }
-}
 
 /// One step of an encoder: what a context decided for a symbol.
 #[derive(Clone, Copy, Debug)]
@@ -174,7 +43,7 @@ pub trait SymbolEncoder {
 /// The decoding side of a per-context symbol coder.
 pub trait SymbolDecoder {
     /// Reads one symbol.
-    fn decode(&mut self, r: &mut BitReader<'_>) -> Result<u32, RacError>;
+    fn decode(&mut self, r: &mut BitReader<'_>) -> Result<u32, FormatError>;
 }
 
 /// The dictionary for the encoder: symbols by rank and ranks by symbol.
@@ -284,39 +153,47 @@ impl DictDecoder {
         &mut self,
         r: &mut BitReader<'_>,
         max_len: u32,
-    ) -> Result<u32, RacError> {
+    ) -> Result<u32, FormatError> {
         let w = r.peek();
         let n = w.trailing_zeros();
         let k = self.k;
         if n + k > 28 {
-            return Err(RacError::Corrupt("an Exp-Golomb code is too long"));
+            return Err(FormatError::Corrupt {
+                what: "an Exp-Golomb code is too long",
+            });
         }
         let total = 2 * n + 1 + k;
         let body = (w >> (n + 1)) & ((1u64 << (n + k)) - 1);
         let rank = (((1u64 << (n + k)) | body) - (1u64 << k)) as u32;
         if rank >= self.by_rank.len() as u32 {
-            return Err(RacError::Corrupt("a dictionary rank is out of range"));
+            return Err(FormatError::Corrupt {
+                what: "a dictionary rank is out of range",
+            });
         }
         if rank == self.esc {
-            r.pos += u64::from(total);
+            r.skip(total);
             let b = self.escape(r);
             self.transpose(rank);
             if b > max_len {
-                return Err(RacError::Corrupt("a bit length is too large"));
+                return Err(FormatError::Corrupt {
+                    what: "a bit length is too large",
+                });
             }
             return Ok(((1u32 << b) >> 1) | r.get(b.saturating_sub(1)) as u32);
         }
         let b = self.by_rank[rank as usize];
         self.transpose(rank);
         if b > max_len {
-            return Err(RacError::Corrupt("a bit length is too large"));
+            return Err(FormatError::Corrupt {
+                what: "a bit length is too large",
+            });
         }
         let m = b.saturating_sub(1);
         let mant = if total + m <= 57 {
-            r.pos += u64::from(total + m);
+            r.skip(total + m);
             (w >> total) & ((1u64 << m) - 1)
         } else {
-            r.pos += u64::from(total);
+            r.skip(total);
             r.get(m)
         };
         Ok(((1u32 << b) >> 1) | mant as u32)
@@ -343,10 +220,12 @@ impl DictDecoder {
 
 impl SymbolDecoder for DictDecoder {
     #[inline(always)]
-    fn decode(&mut self, r: &mut BitReader<'_>) -> Result<u32, RacError> {
+    fn decode(&mut self, r: &mut BitReader<'_>) -> Result<u32, FormatError> {
         let rank = r.get_golomb(self.k)?;
         if rank >= self.by_rank.len() as u32 {
-            return Err(RacError::Corrupt("a dictionary rank is out of range"));
+            return Err(FormatError::Corrupt {
+                what: "a dictionary rank is out of range",
+            });
         }
         let sym = if rank == self.esc {
             self.escape(r)
@@ -358,21 +237,10 @@ impl SymbolDecoder for DictDecoder {
     }
 }
 
-/// Zig-zag map of a signed value.
-#[inline]
-pub fn zigzag(v: i64) -> u64 {
-    ((v << 1) ^ (v >> 63)) as u64
-}
-
-/// Inverse of [`zigzag`].
-#[inline]
-pub fn unzigzag(v: u64) -> i64 {
-    ((v >> 1) as i64) ^ -((v & 1) as i64)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::codec::common::bits::BitWriter;
 
     #[test]
     fn dictionary_round_trip() {
@@ -397,22 +265,6 @@ mod tests {
                 assert_eq!(dec.decode(&mut r).unwrap(), s);
             }
             assert!(!r.overran());
-        }
-    }
-
-    #[test]
-    fn golomb_lengths_match_the_writer() {
-        for k in 0..=MAX_K {
-            for v in [0u32, 1, 2, 3, 7, 100, 65535, 1 << 20] {
-                let mut w = BitWriter::default();
-                w.put_golomb(v, k);
-                assert_eq!(w.bit_len(), golomb_len(v, k));
-                let b = w.finish();
-                assert_eq!(BitReader::new(&b).get_golomb(k).unwrap(), v);
-            }
-        }
-        for v in [-5i64, 0, 7, i64::from(i32::MIN)] {
-            assert_eq!(unzigzag(zigzag(v)), v);
         }
     }
 }

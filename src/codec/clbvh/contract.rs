@@ -1,0 +1,201 @@
+//! CLBVH's [`Codec`] contract, twice: [`ClBvh`] (registry name `clbvh`,
+//! fast leaves) and [`ClBvhCompact`] (`clbvh-compact`), both delegating to
+//! [`ClBvh`]'s own methods. The registry names each type once, so the
+//! compact variant is a type of its own.
+
+use std::path::Path;
+
+use super::{ClBvh, ClBvhCompact, ClError, ClOptions, CompactOptions, LeafKind, file};
+use crate::build::CanonicalBvh;
+use crate::codec::common::{FormatError, MassProps};
+use crate::codec::{Codec, CodecKind, OpenOptions};
+use crate::cursor::NodeCursor;
+use crate::mesh::Mesh;
+
+fn wrong_kind(want: LeafKind) -> ClError {
+    FormatError::header("magic", format!("not a CLBVH file with {want:?} leaves")).into()
+}
+
+fn header_fields(c: &ClBvh) -> Vec<(&'static str, String)> {
+    vec![
+        ("leaf size", c.options().leaf_size.to_string()),
+        ("inner nodes", c.inner_nodes().len().to_string()),
+        ("multi-leaf nodes", c.multi_leaf_count().to_string()),
+        ("vertices", c.vertices().len().to_string()),
+    ]
+}
+
+fn build_fields(c: &ClBvh) -> Vec<(&'static str, serde_json::Value)> {
+    vec![
+        ("leaf_size", c.options().leaf_size.into()),
+        ("inner_nodes", c.inner_nodes().len().into()),
+        ("multi_leaf_nodes", c.multi_leaf_count().into()),
+    ]
+}
+
+impl Codec for ClBvh {
+    const KIND: CodecKind = CodecKind::Clbvh;
+    const MAGIC: [u8; 8] = file::MAGIC;
+    /// `leaves` must be [`LeafKind::Fast`] (the compact variant is
+    /// [`ClBvhCompact`]).
+    type Options = ClOptions;
+    type Error = ClError;
+
+    fn encode(bvh: &CanonicalBvh, mesh: &Mesh, options: &ClOptions) -> Result<Self, ClError> {
+        ClBvh::encode(
+            bvh,
+            mesh,
+            &ClOptions {
+                leaves: LeafKind::Fast,
+                ..*options
+            },
+        )
+    }
+
+    fn triangle_vertices(&self, id: u32) -> [u32; 3] {
+        self.vertex_indices(id)
+    }
+
+    fn decoded_mesh(&self) -> Mesh {
+        ClBvh::decoded_mesh(self)
+    }
+
+    fn mass(&self) -> MassProps {
+        ClBvh::mass(self)
+    }
+
+    fn verify(&self) -> Result<(), ClError> {
+        ClBvh::verify(self)
+    }
+
+    fn save(&self, path: &Path) -> Result<(), ClError> {
+        ClBvh::save(self, path)
+    }
+
+    fn to_bytes(&self) -> Vec<u8> {
+        ClBvh::to_bytes(self)
+    }
+
+    fn from_bytes(bytes: &[u8], _: &OpenOptions) -> Result<Self, ClError> {
+        let t = ClBvh::from_bytes(bytes)?;
+        if t.options().leaves != LeafKind::Fast {
+            return Err(wrong_kind(LeafKind::Fast));
+        }
+        Ok(t)
+    }
+
+    /// Reads the whole file into memory (the options do not apply).
+    fn open(path: &Path, o: &OpenOptions) -> Result<Self, ClError> {
+        <Self as Codec>::from_bytes(&read(path)?, o)
+    }
+
+    fn header_fields(&self) -> Vec<(&'static str, String)> {
+        header_fields(self)
+    }
+
+    fn build_fields(&self) -> Vec<(&'static str, serde_json::Value)> {
+        build_fields(self)
+    }
+}
+
+fn read(path: &Path) -> Result<Vec<u8>, ClError> {
+    std::fs::read(path).map_err(|e| ClError::Io {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })
+}
+
+impl Codec for ClBvhCompact {
+    const KIND: CodecKind = CodecKind::ClbvhCompact;
+    const MAGIC: [u8; 8] = file::MAGIC_COMPACT;
+    type Options = CompactOptions;
+    type Error = ClError;
+
+    fn encode(bvh: &CanonicalBvh, mesh: &Mesh, o: &CompactOptions) -> Result<Self, ClError> {
+        ClBvhCompact::encode(bvh, mesh, o)
+    }
+
+    fn triangle_vertices(&self, id: u32) -> [u32; 3] {
+        self.0.vertex_indices(id)
+    }
+
+    fn decoded_mesh(&self) -> Mesh {
+        self.0.decoded_mesh()
+    }
+
+    fn mass(&self) -> MassProps {
+        self.0.mass()
+    }
+
+    fn verify(&self) -> Result<(), ClError> {
+        self.0.verify()
+    }
+
+    fn save(&self, path: &Path) -> Result<(), ClError> {
+        self.0.save(path)
+    }
+
+    fn to_bytes(&self) -> Vec<u8> {
+        self.0.to_bytes()
+    }
+
+    fn from_bytes(bytes: &[u8], _: &OpenOptions) -> Result<Self, ClError> {
+        let t = ClBvh::from_bytes(bytes)?;
+        if t.options().leaves != LeafKind::Compact {
+            return Err(wrong_kind(LeafKind::Compact));
+        }
+        Ok(ClBvhCompact(t))
+    }
+
+    /// Reads the whole file into memory (the options do not apply).
+    fn open(path: &Path, o: &OpenOptions) -> Result<Self, ClError> {
+        <Self as Codec>::from_bytes(&read(path)?, o)
+    }
+
+    fn header_fields(&self) -> Vec<(&'static str, String)> {
+        header_fields(&self.0)
+    }
+
+    fn build_fields(&self) -> Vec<(&'static str, serde_json::Value)> {
+        build_fields(&self.0)
+    }
+}
+
+impl NodeCursor for ClBvhCompact {
+    type Node = super::ClNode;
+
+    #[inline]
+    fn root(&self) -> (Self::Node, crate::geom::Aabb) {
+        self.0.root()
+    }
+
+    #[inline]
+    fn is_leaf(&self, node: &Self::Node) -> bool {
+        self.0.is_leaf(node)
+    }
+
+    #[inline]
+    fn for_each_child(&self, node: &Self::Node, f: impl FnMut(Self::Node, crate::geom::Aabb)) {
+        self.0.for_each_child(node, f)
+    }
+
+    #[inline]
+    fn for_each_triangle(&self, node: &Self::Node, f: impl FnMut(u32, &crate::geom::Triangle)) {
+        self.0.for_each_triangle(node, f)
+    }
+
+    #[inline]
+    fn triangle(&self, id: u32) -> crate::geom::Triangle {
+        self.0.triangle(id)
+    }
+
+    fn triangle_count(&self) -> usize {
+        self.0.triangle_count()
+    }
+}
+
+impl crate::codec::ByteSize for ClBvhCompact {
+    fn bytes_by_part(&self) -> Vec<(&'static str, usize)> {
+        self.0.bytes_by_part()
+    }
+}

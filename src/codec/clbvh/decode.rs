@@ -1,0 +1,174 @@
+//! [`NodeCursor`] over a [`ClBvh`].
+
+use glam::Vec3A;
+
+use super::node::{
+    ChildRef, ENDS_WORDS, MULTI_WORDS, MultiLeafNode, TAG_INNER, TAG_LEAF, TAG_MULTI, ref_index,
+    ref_tag,
+};
+use super::{ClBvh, LeafKind};
+use crate::cursor::NodeCursor;
+use crate::geom::{Aabb, Triangle};
+
+/// Lane value of a [`ClNode`] that stands for a whole node.
+const WHOLE: u32 = u32::MAX;
+
+/// A node handle: an inner node, a multi-leaf node, one lane (leaf) of a
+/// multi-leaf node, or an isolated leaf.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ClNode {
+    r: ChildRef,
+    lane: u32,
+}
+
+/// What a [`ClNode`] stands for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NodeKind {
+    /// A regular inner multi-node.
+    Inner,
+    /// A compressed multi-leaf node (its children are its lanes).
+    MultiLeaf,
+    /// One lane of a multi-leaf node: a leaf.
+    Lane,
+    /// An isolated leaf (the child of a regular inner node, or the root).
+    Leaf,
+}
+
+impl ClBvh {
+    /// What `node` stands for.
+    pub fn kind(&self, node: &ClNode) -> NodeKind {
+        match ref_tag(node.r) {
+            TAG_INNER => NodeKind::Inner,
+            TAG_LEAF => NodeKind::Leaf,
+            _ if node.lane == WHOLE => NodeKind::MultiLeaf,
+            _ => NodeKind::Lane,
+        }
+    }
+
+    /// The leaf ends of the multi-leaf node at word `at`.
+    #[inline]
+    pub(super) fn ends(&self, at: usize) -> [u8; 8] {
+        let w = &self.arena[at + MULTI_WORDS..at + MULTI_WORDS + ENDS_WORDS];
+        let (a, b) = (w[0].to_le_bytes(), w[1].to_le_bytes());
+        [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
+    }
+
+    /// Calls `f` for triangles `range` of the leaf block at word `b`.
+    #[inline]
+    fn block_triangles(
+        &self,
+        b: usize,
+        range: std::ops::Range<usize>,
+        mut f: impl FnMut(u32, &Triangle),
+    ) {
+        let hdr = self.arena[b];
+        let n = (hdr & 0xFFFF) as usize;
+        match self.options.leaves {
+            LeafKind::Fast => {
+                let ids = &self.arena[b + 1..b + 1 + n];
+                let corners = &self.arena[b + 1 + n..b + 1 + 10 * n];
+                for j in range {
+                    let c = &corners[9 * j..9 * j + 9];
+                    let p = |k: usize| {
+                        Vec3A::new(
+                            f32::from_bits(c[3 * k]),
+                            f32::from_bits(c[3 * k + 1]),
+                            f32::from_bits(c[3 * k + 2]),
+                        )
+                    };
+                    f(ids[j], &[p(0), p(1), p(2)]);
+                }
+            }
+            LeafKind::Compact => {
+                let u = (hdr >> 16) as usize;
+                let uniq = &self.arena[b + 1..b + 1 + u];
+                let ids = &self.arena[b + 1 + u..b + 1 + u + n];
+                let local: &[u8] = bytemuck::cast_slice(&self.arena[b + 1 + u + n..]);
+                for j in range {
+                    let v = [0, 1, 2].map(|k| uniq[local[3 * j + k] as usize]);
+                    f(ids[j], &self.corners(v));
+                }
+            }
+        }
+    }
+}
+
+impl NodeCursor for ClBvh {
+    type Node = ClNode;
+
+    #[inline]
+    fn root(&self) -> (ClNode, Aabb) {
+        (
+            ClNode {
+                r: self.root,
+                lane: WHOLE,
+            },
+            self.root_box,
+        )
+    }
+
+    #[inline]
+    fn is_leaf(&self, node: &ClNode) -> bool {
+        match ref_tag(node.r) {
+            TAG_LEAF => true,
+            TAG_MULTI => node.lane != WHOLE,
+            _ => false,
+        }
+    }
+
+    #[inline]
+    fn for_each_child(&self, node: &ClNode, mut f: impl FnMut(ClNode, Aabb)) {
+        let at = ref_index(node.r);
+        if ref_tag(node.r) == TAG_INNER {
+            let n = &self.inner[at];
+            for k in 0..8 {
+                let r = n.child[k];
+                if r == 0 {
+                    break;
+                }
+                f(ClNode { r, lane: WHOLE }, n.child_box(k));
+            }
+        } else {
+            let m = MultiLeafNode::read(&self.arena, at);
+            let mut prev = 0;
+            for (k, end) in self.ends(at).into_iter().enumerate() {
+                if end > prev {
+                    f(
+                        ClNode {
+                            r: node.r,
+                            lane: k as u32,
+                        },
+                        m.child_box(k),
+                    );
+                }
+                prev = end;
+            }
+        }
+    }
+
+    #[inline]
+    fn for_each_triangle(&self, node: &ClNode, f: impl FnMut(u32, &Triangle)) {
+        let at = ref_index(node.r);
+        if ref_tag(node.r) == TAG_LEAF {
+            let n = (self.arena[at] & 0xFFFF) as usize;
+            self.block_triangles(at, 0..n, f);
+        } else {
+            let ends = self.ends(at);
+            let k = node.lane as usize;
+            let first = if k == 0 { 0 } else { ends[k - 1] as usize };
+            self.block_triangles(at + MULTI_WORDS + ENDS_WORDS, first..ends[k] as usize, f);
+        }
+    }
+
+    #[inline]
+    fn triangle(&self, id: u32) -> Triangle {
+        self.corners(self.vertex_indices(id))
+    }
+
+    fn triangle_count(&self) -> usize {
+        match self.options.leaves {
+            LeafKind::Fast => self.triangles.len(),
+            LeafKind::Compact => self.slot_of.len(),
+        }
+    }
+}

@@ -1,0 +1,275 @@
+//! The CLBVH file: [`ClBvh::to_bytes`], [`ClBvh::from_bytes`],
+//! [`ClBvh::save`], [`ClBvh::open`]; [`ClBvh::verify`] is in `verify.rs`.
+//!
+//! # Layout
+//! All integers little-endian. A 264-byte header, then six sections back to
+//! back in this order, ending the file. Checksums are xxh3-64.
+//!
+//! | bytes | field |
+//! |---|---|
+//! | 0–7 | magic: `CBVHCLB\0` fast leaves, `CBVHCLC\0` compact leaves |
+//! | 8–11 | version (1) |
+//! | 12–15 | flags: bit 1 multi-leaf nodes; others 0 |
+//! | 16–19 | leaf size `M` |
+//! | 20–23 | root [`ChildRef`](super::ChildRef) |
+//! | 24–47 | root box (min xyz, max xyz; f32) |
+//! | 48–51 | multi-leaf node count |
+//! | 52–55 | triangle count |
+//! | 56–107 | mass properties at density 1 ([`MassProps`]) |
+//! | 108–111 | zero |
+//! | 112–255 | section table: (offset u64, length u64, checksum u64) for inner nodes (224 B each), arena (u32 words), vertices (12 B), triangles (12 B; fast), slots (u32; compact), blocks (2 × u32; compact) |
+//! | 256–263 | checksum of bytes 0–255 |
+//!
+//! A section length that is not a whole number of its entries is an error;
+//! the triangle and slot sections hold one entry a triangle (the one the
+//! variant does not use is empty).
+
+use std::path::Path;
+
+use xxhash_rust::xxh3::xxh3_64;
+
+use super::node::InnerNode;
+use super::{ClBvh, ClError, ClOptions, LeafKind};
+use crate::codec::common::container::{check_header, section_entry, write_sections};
+use crate::codec::common::le::u32_at;
+use crate::codec::common::{FormatError, MASS_BYTES, MassProps, atomic_write};
+use crate::geom::Aabb;
+
+/// The file version this build writes and reads.
+pub const VERSION: u32 = 1;
+/// The magic of a CLBVH file with fast leaves.
+pub const MAGIC: [u8; 8] = *b"CBVHCLB\0";
+/// The magic of a CLBVH file with compact leaves.
+pub const MAGIC_COMPACT: [u8; 8] = *b"CBVHCLC\0";
+const HEADER_LEN: usize = 264;
+const TABLE: usize = 112;
+const SECTIONS: usize = 6;
+const NAMES: [&str; SECTIONS] = [
+    "inner nodes",
+    "arena",
+    "vertices",
+    "triangles",
+    "slots",
+    "blocks",
+];
+const ELEM: [u64; SECTIONS] = [224, 4, 12, 12, 4, 8];
+
+fn words(b: &[u8]) -> impl Iterator<Item = u32> + '_ {
+    b.chunks_exact(4)
+        .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+}
+
+fn header_err(field: &'static str, why: impl Into<String>) -> ClError {
+    FormatError::header(field, why).into()
+}
+
+fn le_words(it: impl Iterator<Item = u32>) -> Vec<u8> {
+    it.flat_map(u32::to_le_bytes).collect()
+}
+
+impl ClBvh {
+    /// The file bytes (see the module docs for the layout).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let inner: &[u32] = bytemuck::cast_slice(&self.inner);
+        let sections: [Vec<u8>; SECTIONS] = [
+            le_words(inner.iter().copied()),
+            le_words(self.arena.iter().copied()),
+            le_words(self.vertices.iter().flatten().map(|f| f.to_bits())),
+            le_words(self.triangles.iter().flatten().copied()),
+            le_words(self.slot_of.iter().copied()),
+            le_words(self.blocks.iter().flatten().copied()),
+        ];
+        let mut out = Vec::with_capacity(HEADER_LEN + sections.iter().map(Vec::len).sum::<usize>());
+        out.extend_from_slice(match self.options.leaves {
+            LeafKind::Fast => &MAGIC,
+            LeafKind::Compact => &MAGIC_COMPACT,
+        });
+        let flags = u32::from(self.options.multi_leaf) << 1;
+        for v in [VERSION, flags, self.options.leaf_size as u32, self.root] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        for f in self
+            .root_box
+            .min
+            .to_array()
+            .into_iter()
+            .chain(self.root_box.max.to_array())
+        {
+            out.extend_from_slice(&f.to_le_bytes());
+        }
+        for v in [
+            self.multi_nodes as u32,
+            crate::cursor::NodeCursor::triangle_count(self) as u32,
+        ] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        out.extend_from_slice(&self.mass.to_bytes());
+        out.extend_from_slice(&0u32.to_le_bytes());
+        debug_assert_eq!(out.len(), TABLE);
+        let refs: Vec<&[u8]> = sections.iter().map(Vec::as_slice).collect();
+        write_sections(&mut out, HEADER_LEN, &refs);
+        out
+    }
+
+    /// Writes the file to `path` atomically (a temporary file beside it,
+    /// then renamed over it).
+    pub fn save(&self, path: &Path) -> Result<(), ClError> {
+        atomic_write(path, &self.to_bytes()).map_err(|e| ClError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })
+    }
+
+    /// Reads and verifies the file at `path` (see
+    /// [`from_bytes`](Self::from_bytes) and [`verify`](Self::verify)).
+    pub fn open(path: &Path) -> Result<ClBvh, ClError> {
+        let bytes = std::fs::read(path).map_err(|e| ClError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        let t = Self::from_bytes(&bytes)?;
+        t.verify()?;
+        Ok(t)
+    }
+
+    /// Reads a file written by [`to_bytes`](Self::to_bytes): checks the
+    /// header, the section table (sections back to back, whole elements,
+    /// ending the file) and the checksums. Never panics and never allocates
+    /// more than the bytes given. Call [`verify`](Self::verify) before
+    /// querying bytes you did not write yourself.
+    pub fn from_bytes(b: &[u8]) -> Result<ClBvh, ClError> {
+        let (leaves, magic) = if b.starts_with(&MAGIC_COMPACT) {
+            (LeafKind::Compact, &MAGIC_COMPACT)
+        } else {
+            (LeafKind::Fast, &MAGIC)
+        };
+        check_header(b, HEADER_LEN, magic, "CLBVH")?;
+        let version = u32_at(b, 8);
+        if version != VERSION {
+            return Err(ClError::Version {
+                found: version,
+                supported: VERSION,
+            });
+        }
+        let flags = u32_at(b, 12);
+        if flags & !2 != 0 || u32_at(b, 108) != 0 {
+            return Err(header_err("flags", "reserved bits are set"));
+        }
+        let options = ClOptions {
+            leaf_size: u32_at(b, 16) as usize,
+            leaves,
+            multi_leaf: flags & 2 != 0,
+        };
+        if !(1..=super::MAX_LEAF_SIZE).contains(&options.leaf_size) {
+            return Err(header_err("leaf size", format!("{}", options.leaf_size)));
+        }
+        let root = u32_at(b, 20);
+        let f = |k: usize| f32::from_bits(u32_at(b, 24 + 4 * k));
+        let root_box = Aabb::from_arrays([f(0), f(1), f(2)], [f(3), f(4), f(5)]);
+        let multi_nodes = u32_at(b, 48) as usize;
+        let tris = u32_at(b, 52) as usize;
+        let mass = MassProps::from_bytes(&b[56..56 + MASS_BYTES]).ok_or_else(|| {
+            header_err(
+                "mass properties",
+                "a value is not finite or the mass is negative",
+            )
+        })?;
+        let mut at = HEADER_LEN as u64;
+        let mut ranges: [std::ops::Range<usize>; SECTIONS] = Default::default();
+        for k in 0..SECTIONS {
+            let (off, len, hash) = section_entry(b, TABLE, k);
+            if off != at {
+                return Err(header_err(
+                    NAMES[k],
+                    format!("the section starts at {off}, not right after the previous one ({at})"),
+                ));
+            }
+            if len % ELEM[k] != 0 {
+                return Err(header_err(
+                    NAMES[k],
+                    format!(
+                        "{len} bytes is not a whole number of {}-byte entries",
+                        ELEM[k]
+                    ),
+                ));
+            }
+            let end = off
+                .checked_add(len)
+                .filter(|&e| e <= b.len() as u64)
+                .ok_or(FormatError::Truncated {
+                    section: NAMES[k],
+                    need: off.saturating_add(len),
+                    have: b.len() as u64,
+                })?;
+            let r = off as usize..end as usize;
+            if xxh3_64(&b[r.clone()]) != hash {
+                return Err(FormatError::Checksum { section: NAMES[k] }.into());
+            }
+            ranges[k] = r;
+            at = end;
+        }
+        if at != b.len() as u64 {
+            return Err(header_err(
+                "length",
+                format!("{} bytes follow the last section", b.len() as u64 - at),
+            ));
+        }
+        let expect_tris = |k: usize, per: usize| {
+            let n = ranges[k].len() / ELEM[k] as usize;
+            if n == tris * per {
+                Ok(())
+            } else {
+                Err(header_err(
+                    NAMES[k],
+                    format!("{n} entries for {tris} triangles"),
+                ))
+            }
+        };
+        match options.leaves {
+            LeafKind::Fast => {
+                expect_tris(3, 1)?;
+                expect_tris(4, 0)?;
+                if !ranges[5].is_empty() {
+                    return Err(header_err("blocks", "a fast tree has no block table"));
+                }
+            }
+            LeafKind::Compact => {
+                expect_tris(3, 0)?;
+                expect_tris(4, 1)?;
+            }
+        }
+        let inner = b[ranges[0].clone()]
+            .chunks_exact(224)
+            .map(|c| {
+                let w: Vec<u32> = words(c).collect();
+                let mut n = InnerNode::EMPTY;
+                let dst: &mut [u32] = bytemuck::cast_slice_mut(std::slice::from_mut(&mut n));
+                dst.copy_from_slice(&w);
+                n
+            })
+            .collect();
+        let w = |c: &[u8], k: usize| u32_at(c, 4 * k);
+        Ok(ClBvh {
+            options,
+            inner,
+            arena: words(&b[ranges[1].clone()]).collect(),
+            multi_nodes,
+            root,
+            root_box,
+            vertices: b[ranges[2].clone()]
+                .chunks_exact(12)
+                .map(|c| [w(c, 0), w(c, 1), w(c, 2)].map(f32::from_bits))
+                .collect(),
+            triangles: b[ranges[3].clone()]
+                .chunks_exact(12)
+                .map(|c| [w(c, 0), w(c, 1), w(c, 2)])
+                .collect(),
+            slot_of: words(&b[ranges[4].clone()]).collect(),
+            blocks: b[ranges[5].clone()]
+                .chunks_exact(8)
+                .map(|c| [w(c, 0), w(c, 1)])
+                .collect(),
+            mass,
+        })
+    }
+}

@@ -1,0 +1,177 @@
+//! CLBVH: compressed-leaf BVHs (Benthin, Wald, Woop, Áfra, HPG 2018, §3–4).
+//!
+//! The binary canonical tree is collapsed into an 8-wide tree (module
+//! `collapse`) with two multi-node types:
+//!
+//! - **regular inner multi-nodes** ([`InnerNode`]): eight `f32` child boxes
+//!   and eight tagged child references; a child is another inner node, an
+//!   isolated leaf, or a compressed multi-leaf node;
+//! - **compressed multi-leaf nodes** ([`MultiLeafNode`], 72 bytes): the
+//!   dequantization frame and eight 8-bit child boxes rounded outward; every
+//!   child is a leaf, and the leaves' data (the *leaf block*, see
+//!   [`encode`](self::encode) docs) is stored right behind the node, so the
+//!   node needs no child pointers.
+//!
+//! The builder's threshold is the paper's `N × M`: a subtree of at most
+//! `8 · M` triangles ([`ClOptions::leaf_size`] is `M`) that the SAH does not
+//! make a single leaf becomes one multi-leaf node, its children chosen by
+//! the same greedy SAH collapse as the inner nodes'; larger subtrees become
+//! regular inner nodes, some of whose children may be isolated leaves.
+//!
+//! Two leaf variants ([`LeafKind`]): *fast* leaves hold the triangles'
+//! corners pre-gathered (the paper's `triangle4`-style "best speed" leaves)
+//! and their ids; *compact* leaves hold each vertex index used in the leaf
+//! block once (u32) and three 8-bit indices into that list per triangle
+//! (the paper's §4.5 proof of concept), and the mesh keeps only its
+//! vertices.
+//!
+//! # Choices where the paper leaves them open
+//!
+//! - **Collapse**: the canonical builder makes one triangle a leaf; a
+//!   bottom-up SAH pass (leaf cost `1 · A · n` against split cost
+//!   `1 · A + children`) merges subtrees of at most `M` triangles into
+//!   leaves, and a wide node's children are found by opening the largest
+//!   child the SAH wants split until there are eight. Embree's BVH8 builder
+//!   splits top-down with the SAH directly; collapsing the one canonical
+//!   tree keeps every codec on the same tree.
+//! - **Per-lane triangle counts**: the paper drops the 8-bit offsets when
+//!   each leaf is exactly one `triangle4`. Leaves here hold 1 to `8 · M`
+//!   triangles, so the 8 bytes of *leaf ends* (cumulative counts) stay, as
+//!   the first part of the leaf data, not of the 72-byte node. A lane with
+//!   no triangles is unused.
+//! - **Frame**: the node's float box minimum and one quantum per axis
+//!   (`extent / 255` grown by ulps until `start + 255 · step` reaches the
+//!   maximum), so that decoding is one multiply and one add per bound.
+//! - **32-bit child references** (index or arena word offset, 30 bits, and
+//!   a 2-bit tag) instead of Embree's 64-bit pointers: 224-byte inner
+//!   nodes; a tree that does not fit is an error.
+//! - **Triangle ids** stay the mesh's original ids; the compact variant
+//!   finds a triangle by id through a slot table (4 bytes a triangle plus 8
+//!   a leaf block), the fast one through the mesh's index array, which it
+//!   keeps for smooth shading.
+//! - **Uncompressed reference**: [`ClOptions::multi_leaf`] `= false` gives
+//!   the same 8-wide tree with regular nodes only (the paper's BVH8), for
+//!   the figures.
+
+mod collapse;
+mod contract;
+mod decode;
+mod encode;
+mod error;
+pub mod file;
+mod node;
+pub mod simd;
+mod verify;
+
+use crate::build::CanonicalBvh;
+use crate::codec::common::MassProps;
+use crate::geom::Aabb;
+use crate::mesh::Mesh;
+
+pub use collapse::{NODE_COST, TRIANGLE_COST};
+pub use decode::{ClNode, NodeKind};
+pub use encode::MAX_LEAF_SIZE;
+pub use error::ClError;
+pub use node::{
+    ChildRef, ENDS_WORDS, InnerNode, MAX_REF_INDEX, MULTI_WORDS, MultiLeafNode, TAG_EMPTY,
+    TAG_INNER, TAG_LEAF, TAG_MULTI, child_ref, ref_index, ref_tag,
+};
+
+/// What a leaf block stores per triangle.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum LeafKind {
+    /// Pre-gathered corners (36 bytes) and the id (4 bytes).
+    #[default]
+    Fast,
+    /// De-duplicated vertex indices, 8-bit local corner indices, the id.
+    Compact,
+}
+
+/// Encoder settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ClOptions {
+    /// `M`, the most triangles the SAH may merge into one leaf (1 to
+    /// [`MAX_LEAF_SIZE`]); the multi-leaf threshold is `8 · M`.
+    pub leaf_size: usize,
+    /// Leaf data variant.
+    pub leaves: LeafKind,
+    /// Whether to make compressed multi-leaf nodes (`false`: the
+    /// uncompressed 8-wide reference tree).
+    pub multi_leaf: bool,
+}
+
+impl Default for ClOptions {
+    fn default() -> Self {
+        Self {
+            leaf_size: 4,
+            leaves: LeafKind::Fast,
+            multi_leaf: true,
+        }
+    }
+}
+
+impl ClOptions {
+    /// The compact variant with otherwise default settings.
+    pub fn compact() -> Self {
+        Self {
+            leaves: LeafKind::Compact,
+            ..Self::default()
+        }
+    }
+}
+
+/// A compressed-leaf 8-wide BVH with its mesh.
+#[derive(Clone, Debug)]
+pub struct ClBvh {
+    options: ClOptions,
+    inner: Vec<InnerNode>,
+    /// Multi-leaf nodes with their leaf data, and isolated leaf blocks.
+    arena: Vec<u32>,
+    multi_nodes: usize,
+    root: ChildRef,
+    root_box: Aabb,
+    vertices: Vec<[f32; 3]>,
+    /// The mesh's triangles (fast variant; empty for compact).
+    triangles: Vec<[u32; 3]>,
+    /// Compact: each triangle id's slot (its position in leaf order).
+    slot_of: Vec<u32>,
+    /// Compact: `(first slot, word offset)` of each leaf block, by slot.
+    blocks: Vec<[u32; 2]>,
+    mass: MassProps,
+}
+
+/// Settings of the compact variant ([`ClBvhCompact`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct CompactOptions {
+    /// `M`, as [`ClOptions::leaf_size`].
+    pub leaf_size: usize,
+    /// As [`ClOptions::multi_leaf`].
+    pub multi_leaf: bool,
+}
+
+impl Default for CompactOptions {
+    fn default() -> Self {
+        let o = ClOptions::compact();
+        Self {
+            leaf_size: o.leaf_size,
+            multi_leaf: o.multi_leaf,
+        }
+    }
+}
+
+/// The compact variant as a codec of its own (registry name
+/// `clbvh-compact`): a [`ClBvh`] with [`LeafKind::Compact`] leaves.
+#[derive(Clone, Debug)]
+pub struct ClBvhCompact(pub ClBvh);
+
+impl ClBvhCompact {
+    /// Encodes `bvh` (built over `mesh`) with compact leaves.
+    pub fn encode(bvh: &CanonicalBvh, mesh: &Mesh, o: &CompactOptions) -> Result<Self, ClError> {
+        let opts = ClOptions {
+            leaf_size: o.leaf_size,
+            leaves: LeafKind::Compact,
+            multi_leaf: o.multi_leaf,
+        };
+        ClBvh::encode(bvh, mesh, &opts).map(ClBvhCompact)
+    }
+}

@@ -1,0 +1,170 @@
+//! Bit streams: [`BitWriter`] and [`BitReader`] (least-significant bit
+//! first, with Exp-Golomb codes), and the zig-zag map of signed values.
+
+use super::FormatError;
+use super::le::u64_at_padded;
+
+/// Writes bits least-significant first into bytes.
+#[derive(Default)]
+pub struct BitWriter {
+    bytes: Vec<u8>,
+    acc: u64,
+    n: u32,
+}
+
+impl BitWriter {
+    /// Appends the low `bits` bits of `v` (`bits` ≤ 56).
+    #[inline]
+    pub fn put(&mut self, v: u64, bits: u32) {
+        debug_assert!(bits <= 56);
+        if bits == 0 {
+            return;
+        }
+        let v = v & ((1u64 << bits) - 1);
+        self.acc |= v << self.n;
+        self.n += bits;
+        while self.n >= 8 {
+            self.bytes.push(self.acc as u8);
+            self.acc >>= 8;
+            self.n -= 8;
+        }
+    }
+
+    /// Appends `v` with the Exp-Golomb code of parameter `k`.
+    #[inline]
+    pub fn put_golomb(&mut self, v: u32, k: u32) {
+        let x = u64::from(v) + (1u64 << k);
+        let n = 63 - x.leading_zeros() - k; // prefix length
+        self.put(0, n);
+        self.put(1, 1);
+        self.put(x, n + k);
+    }
+
+    /// Bits written so far.
+    pub fn bit_len(&self) -> u64 {
+        self.bytes.len() as u64 * 8 + u64::from(self.n)
+    }
+
+    /// The bytes, the last one zero-padded.
+    pub fn finish(mut self) -> Vec<u8> {
+        if self.n > 0 {
+            self.bytes.push(self.acc as u8);
+        }
+        self.bytes
+    }
+}
+
+/// Length in bits of the Exp-Golomb code of `v` with parameter `k`.
+#[inline]
+pub fn golomb_len(v: u32, k: u32) -> u64 {
+    let x = u64::from(v) + (1u64 << k);
+    let n = u64::from(63 - x.leading_zeros() - k);
+    2 * n + 1 + u64::from(k)
+}
+
+/// Reads bits least-significant first. Reading past the end yields zero
+/// bits; [`BitReader::overran`] tells whether that happened.
+pub struct BitReader<'a> {
+    bytes: &'a [u8],
+    pos: u64,
+    limit: u64,
+}
+
+impl<'a> BitReader<'a> {
+    /// A reader over `bytes`.
+    pub fn new(bytes: &'a [u8]) -> Self {
+        Self {
+            bytes,
+            pos: 0,
+            limit: bytes.len() as u64 * 8,
+        }
+    }
+
+    /// A reader of the first `len` bytes of `bytes` (the rest may be read
+    /// ahead but counts as running past the end).
+    pub fn with_limit(bytes: &'a [u8], len: usize) -> Self {
+        Self {
+            bytes,
+            pos: 0,
+            limit: len.min(bytes.len()) as u64 * 8,
+        }
+    }
+
+    /// The next 57 or more bits, without consuming them.
+    #[inline(always)]
+    pub(super) fn peek(&self) -> u64 {
+        let byte = (self.pos >> 3) as usize;
+        let shift = (self.pos & 7) as u32;
+        u64_at_padded(self.bytes, byte) >> shift
+    }
+
+    /// Consumes `bits` bits already read with [`peek`](Self::peek).
+    #[inline(always)]
+    pub(super) fn skip(&mut self, bits: u32) {
+        self.pos += u64::from(bits);
+    }
+
+    /// Consumes `bits` (≤ 56) bits.
+    #[inline(always)]
+    pub fn get(&mut self, bits: u32) -> u64 {
+        let v = self.peek() & ((1u64 << bits) - 1);
+        self.pos += u64::from(bits);
+        v
+    }
+
+    /// Consumes one Exp-Golomb code of parameter `k`.
+    #[inline(always)]
+    pub fn get_golomb(&mut self, k: u32) -> Result<u32, FormatError> {
+        let w = self.peek();
+        let n = w.trailing_zeros();
+        if n + k > 28 {
+            return Err(FormatError::Corrupt {
+                what: "an Exp-Golomb code is too long",
+            });
+        }
+        let total = 2 * n + 1 + k;
+        let body = (w >> (n + 1)) & ((1u64 << (n + k)) - 1);
+        self.pos += u64::from(total);
+        let x = (1u64 << (n + k)) | body;
+        Ok((x - (1u64 << k)) as u32)
+    }
+
+    /// Whether more bits were consumed than the stream holds.
+    pub fn overran(&self) -> bool {
+        self.pos > self.limit
+    }
+}
+
+/// Zig-zag map of a signed value.
+#[inline]
+pub fn zigzag(v: i64) -> u64 {
+    ((v << 1) ^ (v >> 63)) as u64
+}
+
+/// Inverse of [`zigzag`].
+#[inline]
+pub fn unzigzag(v: u64) -> i64 {
+    ((v >> 1) as i64) ^ -((v & 1) as i64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::codec::common::dict::MAX_K;
+
+    #[test]
+    fn golomb_lengths_match_the_writer() {
+        for k in 0..=MAX_K {
+            for v in [0u32, 1, 2, 3, 7, 100, 65535, 1 << 20] {
+                let mut w = BitWriter::default();
+                w.put_golomb(v, k);
+                assert_eq!(w.bit_len(), golomb_len(v, k));
+                let b = w.finish();
+                assert_eq!(BitReader::new(&b).get_golomb(k).unwrap(), v);
+            }
+        }
+        for v in [-5i64, 0, 7, i64::from(i32::MIN)] {
+            assert_eq!(unzigzag(zigzag(v)), v);
+        }
+    }
+}

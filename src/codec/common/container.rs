@@ -1,0 +1,76 @@
+//! The frame every cbvh codec file shares: a fixed-size header that starts
+//! with the codec's magic and ends with a section table and the header's
+//! checksum, then the sections. What the header holds between the magic and
+//! the table, which sections there are and how they are checked against
+//! each other is the codec's own (see its `file.rs`).
+//!
+//! # Layout
+//! All integers little-endian; checksums are xxh3-64.
+//!
+//! | bytes | field |
+//! |---|---|
+//! | 0–7 | the codec's magic (starting with [`MAGIC_PREFIX`](super::MAGIC_PREFIX)) |
+//! | 8 – table start | the codec's header fields |
+//! | 24 per section | the section table: offset u64, length u64, checksum u64 |
+//! | the header's last 8 | checksum of every header byte before it |
+//!
+//! The sections follow the header back to back, in table order.
+
+use xxhash_rust::xxh3::xxh3_64;
+
+use super::FormatError;
+use super::le::u64_at;
+
+/// Bytes of one section-table entry.
+const ENTRY: usize = 24;
+
+/// Completes a file whose header, up to the section table, is in `out`:
+/// appends the section table (the sections stored back to back from
+/// `header_len` on), the header's checksum, then the sections.
+pub fn write_sections(out: &mut Vec<u8>, header_len: usize, sections: &[&[u8]]) {
+    let mut at = header_len as u64;
+    for s in sections {
+        out.extend_from_slice(&at.to_le_bytes());
+        out.extend_from_slice(&(s.len() as u64).to_le_bytes());
+        out.extend_from_slice(&xxh3_64(s).to_le_bytes());
+        at += s.len() as u64;
+    }
+    let h = xxh3_64(out);
+    out.extend_from_slice(&h.to_le_bytes());
+    debug_assert_eq!(out.len(), header_len);
+    for s in sections {
+        out.extend_from_slice(s);
+    }
+}
+
+/// Checks that `b` holds a whole header of `header_len` bytes that starts
+/// with `magic` (of the format called `format` in errors) and whose
+/// checksum matches.
+pub fn check_header(
+    b: &[u8],
+    header_len: usize,
+    magic: &[u8; 8],
+    format: &'static str,
+) -> Result<(), FormatError> {
+    if b.len() < header_len {
+        return Err(FormatError::Truncated {
+            section: "header",
+            need: header_len as u64,
+            have: b.len() as u64,
+        });
+    }
+    if b[..8] != *magic {
+        return Err(FormatError::BadMagic { format });
+    }
+    if xxh3_64(&b[..header_len - 8]) != u64_at(b, header_len - 8) {
+        return Err(FormatError::Checksum { section: "header" });
+    }
+    Ok(())
+}
+
+/// Entry `k` of the section table that starts at byte `table` of a checked
+/// header: the section's offset, length and checksum.
+pub fn section_entry(b: &[u8], table: usize, k: usize) -> (u64, u64, u64) {
+    let at = table + ENTRY * k;
+    (u64_at(b, at), u64_at(b, at + 8), u64_at(b, at + 16))
+}

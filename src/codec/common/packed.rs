@@ -1,0 +1,196 @@
+//! Packed arrays of `u32`: [`ForArray`], frame-of-reference blocks of 128
+//! values, each block holding its minimum and the offsets from it in as
+//! many bits as the block's largest offset needs, so that any value is one
+//! block-head read and one bit-field read away; and [`bits_for`].
+//!
+//! # Layout of a [`ForArray`]
+//! `len: u64`, `data_len: u64`, then per block of 128 values a 16-byte head
+//! (`base: u32`, `width: u32`, bit offset in the data: `u64`), then
+//! `data_len` bytes of offsets. All little-endian.
+
+use super::FormatError;
+use super::le::{u32_at, u64_at, u64_at_padded};
+
+/// Reads `bits` (≤ 32) bits at bit offset `at` of `data`; out-of-range
+/// bytes read as zero.
+#[inline]
+fn get_bits(data: &[u8], at: u64, bits: u32) -> u32 {
+    let byte = (at >> 3) as usize;
+    let shift = (at & 7) as u32;
+    let word = u64_at_padded(data, byte);
+    ((word >> shift) & ((1u64 << bits) - 1)) as u32
+}
+
+fn put_bits(data: &mut [u8], at: u64, bits: u32, v: u32) {
+    for k in 0..u64::from(bits) {
+        if (v >> k) & 1 == 1 {
+            let p = at + k;
+            data[(p >> 3) as usize] |= 1 << (p & 7);
+        }
+    }
+}
+
+/// Bits needed to store values `0..n` (at least 1).
+pub fn bits_for(n: u64) -> u32 {
+    (64 - n.saturating_sub(1).leading_zeros()).max(1)
+}
+
+/// Values per [`ForArray`] block.
+const BLOCK: usize = 128;
+
+/// A view of one frame-of-reference array inside a byte blob (see the
+/// module docs for the layout).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ForArray {
+    len: u64,
+    heads: usize,
+    data: usize,
+    data_len: usize,
+}
+
+impl ForArray {
+    /// The array of no values.
+    pub const EMPTY: ForArray = ForArray {
+        len: 0,
+        heads: 0,
+        data: 0,
+        data_len: 0,
+    };
+
+    /// Appends the array of `values` to `out`.
+    pub fn write(values: &[u32], out: &mut Vec<u8>) {
+        let mut heads = Vec::new();
+        let mut data = vec![0u8; 0];
+        let mut bit = 0u64;
+        for chunk in values.chunks(BLOCK) {
+            let base = chunk.iter().copied().min().unwrap_or(0);
+            let span = chunk.iter().map(|&v| v - base).max().unwrap_or(0);
+            let width = 32 - span.leading_zeros();
+            heads.extend_from_slice(&base.to_le_bytes());
+            heads.extend_from_slice(&width.to_le_bytes());
+            heads.extend_from_slice(&bit.to_le_bytes());
+            data.resize(
+                (bit + chunk.len() as u64 * u64::from(width)).div_ceil(8) as usize,
+                0,
+            );
+            for &v in chunk {
+                put_bits(&mut data, bit, width, v - base);
+                bit += u64::from(width);
+            }
+        }
+        out.extend_from_slice(&(values.len() as u64).to_le_bytes());
+        out.extend_from_slice(&(data.len() as u64).to_le_bytes());
+        out.extend_from_slice(&heads);
+        out.extend_from_slice(&data);
+    }
+
+    /// Parses the array starting at `at` of `b`, checking every block head;
+    /// returns it and the offset just past it.
+    pub fn parse(b: &[u8], at: usize, section: &'static str) -> Result<(Self, usize), FormatError> {
+        let short = |need: u64| FormatError::Truncated {
+            section,
+            need,
+            have: b.len() as u64,
+        };
+        let fixed = at.checked_add(16).ok_or(short(u64::MAX))?;
+        if fixed > b.len() {
+            return Err(short(fixed as u64));
+        }
+        let len = u64_at(b, at);
+        let data_len = u64_at(b, at + 8);
+        let blocks = len.div_ceil(BLOCK as u64);
+        let end = blocks
+            .checked_mul(16)
+            .and_then(|h| h.checked_add(fixed as u64))
+            .and_then(|d| d.checked_add(data_len).map(|e| (d, e)))
+            .ok_or(short(u64::MAX))?;
+        if end.1 > b.len() as u64 {
+            return Err(short(end.1));
+        }
+        let arr = Self {
+            len,
+            heads: fixed,
+            data: end.0 as usize,
+            data_len: data_len as usize,
+        };
+        for k in 0..blocks as usize {
+            let h = fixed + 16 * k;
+            let (width, off) = (u32_at(b, h + 4), u64_at(b, h + 8));
+            let count = (len - (k * BLOCK) as u64).min(BLOCK as u64);
+            if width > 32 {
+                return Err(FormatError::OutOfRange {
+                    section,
+                    what: "a packed block's bit width",
+                    value: u64::from(width),
+                    limit: 32,
+                });
+            }
+            let stop = off.checked_add(count * u64::from(width));
+            if stop.is_none_or(|x| x > data_len * 8) {
+                return Err(FormatError::OutOfRange {
+                    section,
+                    what: "a packed block's last bit",
+                    value: stop.unwrap_or(u64::MAX),
+                    limit: data_len * 8,
+                });
+            }
+        }
+        Ok((arr, end.1 as usize))
+    }
+
+    /// Value `i` (`i < len`), read from the blob the array was parsed from.
+    #[inline]
+    pub fn get(&self, b: &[u8], i: u64) -> u32 {
+        let h = self.heads + 16 * (i as usize / BLOCK);
+        let (base, width, off) = (u32_at(b, h), u32_at(b, h + 4), u64_at(b, h + 8));
+        let data = &b[self.data..self.data + self.data_len];
+        base.wrapping_add(get_bits(
+            data,
+            off + (i % BLOCK as u64) * u64::from(width),
+            width,
+        ))
+    }
+
+    /// Number of values.
+    pub fn len(&self) -> u64 {
+        self.len
+    }
+
+    /// Whether the array has no values.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_of_reference_arrays_round_trip_and_reject_bad_heads() {
+        let values: Vec<u32> = (0..1000u32)
+            .map(|i| match i % 7 {
+                0 => u32::MAX,
+                1 => 0,
+                _ => 5000 + i * 3,
+            })
+            .chain(std::iter::repeat_n(42, 300))
+            .collect();
+        let mut blob = vec![9u8; 5];
+        ForArray::write(&values, &mut blob);
+        ForArray::write(&[], &mut blob);
+        let (arr, next) = ForArray::parse(&blob, 5, "test").unwrap();
+        assert_eq!(arr.len(), values.len() as u64);
+        for (i, &v) in values.iter().enumerate() {
+            assert_eq!(arr.get(&blob, i as u64), v);
+        }
+        let (empty, end) = ForArray::parse(&blob, next, "test").unwrap();
+        assert!(empty.is_empty());
+        assert_eq!(end, blob.len());
+        // A width above 32 or a truncated blob is an error, not a panic.
+        let mut bad = blob.clone();
+        bad[5 + 16 + 4] = 33;
+        assert!(ForArray::parse(&bad, 5, "test").is_err());
+        assert!(ForArray::parse(&blob[..next - 1], 5, "test").is_err());
+    }
+}

@@ -1,0 +1,140 @@
+//! [`Codec`]: the contract every codec implements, and [`OpenOptions`] for
+//! opening a codec's file.
+
+use std::path::Path;
+
+use super::ByteSize;
+use super::any::CodecKind;
+use super::common::MassProps;
+use crate::build::CanonicalBvh;
+use crate::cursor::NodeCursor;
+use crate::mesh::Mesh;
+
+/// One storage form of a BVH with its mesh: encoded from the canonical tree,
+/// traversed through [`NodeCursor`], sized by part through [`ByteSize`],
+/// stored in a self-contained file.
+///
+/// The registry ([`super::any`]) names every codec once and dispatches to
+/// its implementation of this trait; the parry shape, the renderer, the CLI
+/// and the sims go through the registry, never through a codec directly.
+/// Implementations are thin: each codec's `contract.rs` delegates to the
+/// codec's own methods.
+pub trait Codec: NodeCursor + ByteSize + Send + Sync + Sized + 'static {
+    /// The codec's registry entry (its name in the CLI, the sims and JSON).
+    const KIND: CodecKind;
+
+    /// The first eight bytes of the codec's file, by which
+    /// [`AnyCodec::open`](super::AnyCodec::open) recognises it.
+    const MAGIC: [u8; 8];
+
+    /// Encoding settings.
+    type Options: Clone + Default + std::fmt::Debug + Send + Sync;
+
+    /// What can go wrong encoding, opening, verifying or saving.
+    type Error: std::error::Error + Send + Sync + 'static;
+
+    /// Encodes `bvh`, built over `mesh`. A value that does not fit the
+    /// codec's layout is an error, never a truncation.
+    fn encode(
+        bvh: &CanonicalBvh,
+        mesh: &Mesh,
+        options: &Self::Options,
+    ) -> Result<Self, Self::Error>;
+
+    /// [`Codec::encode`], calling `progress(done, total)` as work finishes
+    /// (for codecs whose encoding takes long enough to show; by default
+    /// nothing is reported).
+    fn encode_with_progress(
+        bvh: &CanonicalBvh,
+        mesh: &Mesh,
+        options: &Self::Options,
+        progress: &(dyn Fn(u64, u64) + Sync),
+    ) -> Result<Self, Self::Error> {
+        let _ = progress;
+        Self::encode(bvh, mesh, options)
+    }
+
+    /// The vertex indices of triangle `id` (an id a leaf reported), into
+    /// [`Codec::decoded_mesh`]'s vertices: what smooth shading needs.
+    fn triangle_vertices(&self, id: u32) -> [u32; 3];
+
+    /// The mesh as stored (quantized vertices decoded), triangle `k` being
+    /// the triangle the cursor reports as id `k`: the input's order for a
+    /// codec that stores ids, storage order for one that stores triangles
+    /// implicitly (hcc: see its module docs on triangle ids).
+    fn decoded_mesh(&self) -> Mesh;
+
+    /// Mass properties at density 1, computed from the original mesh when
+    /// encoded and stored with the codec.
+    fn mass(&self) -> MassProps;
+
+    /// Proves everything a query relies on (the second validation tier:
+    /// one parent per node, nested boxes, leaves containing their
+    /// triangles, indices in range, checksums).
+    fn verify(&self) -> Result<(), Self::Error>;
+
+    /// Writes the codec's self-contained file (atomically).
+    fn save(&self, path: &Path) -> Result<(), Self::Error>;
+
+    /// The codec's file as bytes (what [`Codec::save`] writes).
+    fn to_bytes(&self) -> Vec<u8>;
+
+    /// Reads the bytes of the codec's file, checking them in O(header)
+    /// (the first validation tier); [`Codec::verify`] is not run, whatever
+    /// `options.verify` says.
+    fn from_bytes(bytes: &[u8], options: &OpenOptions) -> Result<Self, Self::Error>;
+
+    /// Opens the codec's file, checking it as [`Codec::from_bytes`] does;
+    /// [`Codec::verify`] is not run, whatever `options.verify` says.
+    fn open(path: &Path, options: &OpenOptions) -> Result<Self, Self::Error>;
+
+    /// The codec's own header fields for `cbvh info` (the registry adds
+    /// the codec's name, the triangle count and the mass).
+    fn header_fields(&self) -> Vec<(&'static str, String)>;
+
+    /// The figures `cbvh build` reports after encoding (node counts,
+    /// compression figures), as JSON values.
+    fn build_fields(&self) -> Vec<(&'static str, serde_json::Value)>;
+
+    /// For a codec that decodes into a cache under a byte budget (RACBVH's
+    /// clusters): the budget field of `options`. `None` (the default) for
+    /// a codec without a cache.
+    fn cache_budget(options: &mut Self::Options) -> Option<&mut usize> {
+        let _ = options;
+        None
+    }
+
+    /// For a codec with a cache: decodes the whole tree once (so that the
+    /// cache holds all of it, if its budget allows), then returns the same
+    /// codec over the same bytes with a cache of `budget(bytes the cache
+    /// held)`. `None` (the default) for a codec without a cache.
+    fn with_cache_budget_of(
+        &self,
+        budget: &dyn Fn(usize) -> usize,
+    ) -> Option<Result<Self, Self::Error>> {
+        let _ = budget;
+        None
+    }
+}
+
+/// How to open a codec file ([`AnyCodec::open`](super::AnyCodec::open)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct OpenOptions {
+    /// Run the codec's `verify` (everything a query relies on) before
+    /// handing the codec out: on by default. Skip it only for files you
+    /// wrote yourself; an unverified file can make queries panic, loop or
+    /// answer wrongly.
+    pub verify: bool,
+    /// Codecs that decode into a cache (RACBVH's clusters): its byte
+    /// budget. Codecs without a cache ignore it.
+    pub cache_budget_bytes: usize,
+}
+
+impl Default for OpenOptions {
+    fn default() -> Self {
+        Self {
+            verify: true,
+            cache_budget_bytes: 64 << 20,
+        }
+    }
+}

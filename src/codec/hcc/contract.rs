@@ -1,0 +1,85 @@
+//! The i-HCCMesh's [`Codec`] contract, delegating to [`HccBvh`]'s own
+//! methods.
+
+use std::path::Path;
+
+use super::{HccBvh, HccError, file};
+use crate::build::CanonicalBvh;
+use crate::codec::common::MassProps;
+use crate::codec::{ByteSize, Codec, CodecKind, OpenOptions};
+use crate::cursor::NodeCursor;
+use crate::mesh::Mesh;
+
+impl Codec for HccBvh {
+    const KIND: CodecKind = CodecKind::Hcc;
+    const MAGIC: [u8; 8] = file::MAGIC;
+    /// Nothing to choose: the canonical tree's leaf size picks one triangle
+    /// a leaf (the paper's form) or multi-triangle leaves.
+    type Options = ();
+    type Error = HccError;
+
+    fn encode(bvh: &CanonicalBvh, mesh: &Mesh, _: &()) -> Result<Self, HccError> {
+        HccBvh::encode(bvh, mesh)
+    }
+
+    fn triangle_vertices(&self, id: u32) -> [u32; 3] {
+        self.triangle_vertex_indices(id)
+    }
+
+    /// The stored mesh, triangles in id order (storage order: see the
+    /// module docs on triangle ids).
+    fn decoded_mesh(&self) -> Mesh {
+        HccBvh::decoded_mesh(self)
+    }
+
+    fn mass(&self) -> MassProps {
+        HccBvh::mass(self)
+    }
+
+    fn verify(&self) -> Result<(), HccError> {
+        HccBvh::verify(self)
+    }
+
+    fn save(&self, path: &Path) -> Result<(), HccError> {
+        HccBvh::save(self, path)
+    }
+
+    fn to_bytes(&self) -> Vec<u8> {
+        HccBvh::to_bytes(self)
+    }
+
+    /// Copies the bytes (the options do not apply).
+    fn from_bytes(bytes: &[u8], _: &OpenOptions) -> Result<Self, HccError> {
+        HccBvh::from_bytes(bytes)
+    }
+
+    /// Reads the whole file into memory (the options do not apply).
+    fn open(path: &Path, _: &OpenOptions) -> Result<Self, HccError> {
+        HccBvh::open(path)
+    }
+
+    fn header_fields(&self) -> Vec<(&'static str, String)> {
+        vec![
+            ("low-level trees", self.tree_count().to_string()),
+            ("multi-triangle leaves", self.is_multi().to_string()),
+            ("stored vertices", self.stats().tree_vertices.to_string()),
+        ]
+    }
+
+    fn build_fields(&self) -> Vec<(&'static str, serde_json::Value)> {
+        let st = self.stats();
+        let n = self.triangle_count().max(1) as f64;
+        let parts: serde_json::Map<String, serde_json::Value> = self
+            .bytes_by_part()
+            .into_iter()
+            .map(|(p, b)| (p.to_string(), (b as f64 / n).into()))
+            .collect();
+        vec![
+            ("low_level_trees", st.trees.into()),
+            ("multi_triangle_leaves", self.is_multi().into()),
+            ("duplicated_vertices", st.duplicated_fraction().into()),
+            ("loose_extents", st.loose_extents.into()),
+            ("bytes_per_triangle_by_part", parts.into()),
+        ]
+    }
+}

@@ -1,0 +1,537 @@
+//! Building an [`HccBvh`] from the canonical tree.
+
+use super::decompose::decompose;
+use super::error::HccError;
+use super::node::{
+    HIGH_LEAF, HighNode, INDEX_BITS, Interconnection, MAX_TREE_INTERCONNECTIONS, MAX_TREE_NODES,
+    MULTI_START_BITS, TYPE_INNER, TYPE_LEAF, TYPE_SHIFT, TYPE_TEMPLATE_LEAF, TreeHeader, pack_node,
+};
+use super::template::{MAX_HEIGHT, MAX_TEMPLATE_NODES, TEMPLATES, id_of_mask};
+use super::{HccStats, MAX_LEAF_TRIANGLES};
+use crate::build::CanonicalBvh;
+use crate::codec::ByteSize;
+use crate::codec::common::MassProps;
+use crate::mesh::Mesh;
+
+/// An i-HCCMesh: the high-level tree and every low-level tree's header,
+/// node words, inter-connections and vertices (see the module docs).
+#[derive(Clone, Debug)]
+pub struct HccBvh {
+    pub(super) high: Vec<HighNode>,
+    pub(super) headers: Vec<TreeHeader>,
+    pub(super) nodes: Vec<u32>,
+    pub(super) ics: Vec<u32>,
+    pub(super) vertices: Vec<[f32; 3]>,
+    /// Multi-triangle leaves: each triangle's three 9-bit corners, in id order.
+    pub(super) triangles: Vec<u32>,
+    /// One triangle a leaf: bit `p` set when node word `p` is a leaf.
+    pub(super) leaf_bits: Vec<u64>,
+    /// Leaves before each word of `leaf_bits`.
+    pub(super) leaf_rank: Vec<u32>,
+    pub(super) multi: bool,
+    pub(super) triangle_count: u32,
+    pub(super) mass: MassProps,
+    pub(super) stats: HccStats,
+}
+
+/// An extent `e` of a box as six numbers: 0–2 the minimum, 3–5 the maximum.
+type Extents = [f32; 6];
+
+/// Whether extent `e`'s value `a` is farther out than `b`.
+#[inline]
+fn outer(e: usize, a: f32, b: f32) -> bool {
+    if e < 3 { a < b } else { a > b }
+}
+
+/// Tight boxes of every canonical node and, per extent, a vertex (mesh id)
+/// that attains it.
+struct Tight {
+    boxes: Vec<Extents>,
+    verts: Vec<[u32; 6]>,
+}
+
+fn tight(bvh: &CanonicalBvh, mesh: &Mesh) -> Tight {
+    let n = bvh.nodes.len();
+    let mut boxes = vec![[0.0f32; 6]; n];
+    let mut verts = vec![[0u32; 6]; n];
+    // Post-order with an explicit stack: (node, children done).
+    let mut stack = vec![(0u32, false)];
+    while let Some((i, done)) = stack.pop() {
+        let node = &bvh.nodes[i as usize];
+        if node.is_leaf() {
+            let mut b = [
+                f32::INFINITY,
+                f32::INFINITY,
+                f32::INFINITY,
+                f32::NEG_INFINITY,
+                f32::NEG_INFINITY,
+                f32::NEG_INFINITY,
+            ];
+            let mut v = [0u32; 6];
+            for &t in &bvh.leaf_triangles[node.leaf_range()] {
+                for c in mesh.triangles[t as usize] {
+                    let p = mesh.vertices[c as usize];
+                    for e in 0..6 {
+                        if outer(e, p[e % 3], b[e]) {
+                            b[e] = p[e % 3];
+                            v[e] = c;
+                        }
+                    }
+                }
+            }
+            boxes[i as usize] = b;
+            verts[i as usize] = v;
+        } else if !done {
+            stack.push((i, true));
+            stack.push((node.a, false));
+            stack.push((node.b, false));
+        } else {
+            let (l, r) = (node.a as usize, node.b as usize);
+            for e in 0..6 {
+                let from = if outer(e, boxes[r][e], boxes[l][e]) {
+                    r
+                } else {
+                    l
+                };
+                boxes[i as usize][e] = boxes[from][e];
+                verts[i as usize][e] = verts[from][e];
+            }
+        }
+    }
+    Tight { boxes, verts }
+}
+
+/// Scratch shared by the low-level trees of one encode.
+struct Scratch {
+    /// Local position of each canonical node in its low-level tree.
+    pos_of: Vec<u32>,
+    /// Local vertex index of each mesh vertex, valid where `stamp` is the
+    /// current tree.
+    local_of: Vec<u32>,
+    stamp: Vec<u32>,
+    /// Triangles in the trees encoded so far.
+    triangles_so_far: u32,
+}
+
+impl Scratch {
+    /// The local index of mesh vertex `v` in tree `tree`, appending the
+    /// vertex to the tree's array (which starts at `base`) on first use.
+    fn local_vertex(
+        &mut self,
+        tree: u32,
+        v: u32,
+        mesh: &Mesh,
+        verts: &mut Vec<[f32; 3]>,
+        base: u32,
+    ) -> u32 {
+        let v = v as usize;
+        if self.stamp[v] != tree {
+            self.stamp[v] = tree;
+            self.local_of[v] = verts.len() as u32 - base;
+            verts.push(mesh.vertices[v]);
+        }
+        self.local_of[v]
+    }
+}
+
+/// One low-level tree under construction.
+#[derive(Default)]
+struct TreeBuild {
+    /// Canonical node at each local position.
+    canon_at: Vec<u32>,
+    /// Node type at each local position.
+    types: Vec<u32>,
+    /// Inter-connection index of each template leaf (by local position).
+    ic_at: Vec<u32>,
+    ics: Vec<Interconnection>,
+    words: Vec<u32>,
+    /// Template leaves whose child templates are not yet allocated.
+    pending: Vec<u32>,
+}
+
+impl TreeBuild {
+    /// Lays out the template rooted at canonical node `root` at the end of
+    /// the node array; returns its id and first local position.
+    fn alloc_template(&mut self, bvh: &CanonicalBvh, s: &mut Scratch, root: u32) -> (u8, u32) {
+        let mut list = [0u32; MAX_TEMPLATE_NODES];
+        let mut depth = [0usize; MAX_TEMPLATE_NODES];
+        list[0] = root;
+        let (mut len, mut i, mut mask) = (1usize, 0usize, 0u16);
+        while i < len {
+            let n = &bvh.nodes[list[i] as usize];
+            if !n.is_leaf() && depth[i] < MAX_HEIGHT - 1 {
+                mask |= 1 << i;
+                list[len] = n.a;
+                list[len + 1] = n.b;
+                depth[len] = depth[i] + 1;
+                depth[len + 1] = depth[i] + 1;
+                len += 2;
+            }
+            i += 1;
+        }
+        let id = id_of_mask(mask).expect("a breadth-first shape of height at most 4");
+        let start = self.canon_at.len() as u32;
+        for (k, &n) in list[..len].iter().enumerate() {
+            s.pos_of[n as usize] = start + k as u32;
+            self.canon_at.push(n);
+            let ty = if bvh.nodes[n as usize].is_leaf() {
+                TYPE_LEAF
+            } else if mask >> k & 1 != 0 {
+                TYPE_INNER
+            } else {
+                self.pending.push(n);
+                TYPE_TEMPLATE_LEAF
+            };
+            self.types.push(ty);
+            self.ic_at.push(u32::MAX);
+        }
+        (id, start)
+    }
+
+    /// Writes the 9-bit field `j` of the node at local position `p`; the
+    /// third field of a template leaf goes to its inter-connection.
+    fn set_field(&mut self, p: u32, j: usize, v: u32) {
+        let p = p as usize;
+        if j == 2 && self.types[p] == TYPE_TEMPLATE_LEAF {
+            self.ics[self.ic_at[p] as usize].vertex = v;
+        } else {
+            self.words[p] |= v << (INDEX_BITS as usize * j);
+        }
+    }
+}
+
+impl HccBvh {
+    /// Encodes `bvh` (built over `mesh`). A tree with one triangle a leaf
+    /// gives the paper's i-HCCMesh; one built with
+    /// [`BuildOptions::max_leaf_triangles`](crate::build::BuildOptions)
+    /// above 1 (at most [`MAX_LEAF_TRIANGLES`]) gives multi-triangle leaves.
+    pub fn encode(bvh: &CanonicalBvh, mesh: &Mesh) -> Result<Self, HccError> {
+        let multi = bvh.max_leaf_triangles > 1;
+        if bvh.max_leaf_triangles > MAX_LEAF_TRIANGLES {
+            return Err(HccError::LeafSize {
+                got: bvh.max_leaf_triangles,
+                limit: MAX_LEAF_TRIANGLES,
+            });
+        }
+        if bvh.triangle_count() != mesh.triangles.len() {
+            return Err(HccError::MeshMismatch {
+                tree: bvh.triangle_count(),
+                mesh: mesh.triangles.len(),
+            });
+        }
+        let mut out = HccBvh {
+            high: Vec::new(),
+            headers: Vec::new(),
+            nodes: Vec::new(),
+            ics: Vec::new(),
+            vertices: Vec::new(),
+            triangles: Vec::new(),
+            leaf_bits: Vec::new(),
+            leaf_rank: Vec::new(),
+            multi,
+            triangle_count: mesh.triangles.len() as u32,
+            mass: MassProps::of_mesh(mesh),
+            stats: HccStats::default(),
+        };
+        if mesh.triangles.is_empty() {
+            return Ok(out);
+        }
+        let tight = tight(bvh, mesh);
+        let dec = decompose(bvh, mesh).map_err(|e| HccError::LeafTooBig {
+            node: e.node,
+            vertices: e.vertices,
+        })?;
+        let mut is_root = vec![false; bvh.nodes.len()];
+        for &r in &dec.roots {
+            is_root[r as usize] = true;
+        }
+        let mut s = Scratch {
+            pos_of: vec![0; bvh.nodes.len()],
+            local_of: vec![0; mesh.vertices.len()],
+            stamp: vec![u32::MAX; mesh.vertices.len()],
+            triangles_so_far: 0,
+        };
+        // The high-level tree, depth-first, left first; its leaves number
+        // the low-level trees in the same order.
+        out.high.push(HighNode::zeroed_node());
+        let mut stack = vec![(0u32, 0u32)];
+        while let Some((c, h)) = stack.pop() {
+            let b = &tight.boxes[c as usize];
+            let mut node = HighNode {
+                min: [b[0], b[1], b[2]],
+                max: [b[3], b[4], b[5]],
+                a: out.high.len() as u32,
+                b: out.high.len() as u32 + 1,
+            };
+            if is_root[c as usize] {
+                node.a = out.headers.len() as u32;
+                node.b = HIGH_LEAF;
+                out.high[h as usize] = node;
+                out.encode_tree(bvh, mesh, &tight, &mut s, c)?;
+            } else {
+                let first = node.a;
+                out.high[h as usize] = node;
+                out.high.push(HighNode::zeroed_node());
+                out.high.push(HighNode::zeroed_node());
+                let cn = &bvh.nodes[c as usize];
+                stack.push((cn.b, first + 1));
+                stack.push((cn.a, first));
+            }
+        }
+        if !multi {
+            out.build_leaf_ranks();
+        }
+        let mut used = vec![false; mesh.vertices.len()];
+        for t in &mesh.triangles {
+            for &v in t {
+                used[v as usize] = true;
+            }
+        }
+        out.stats.trees = out.headers.len();
+        out.stats.tree_vertices = out.vertices.len();
+        out.stats.mesh_vertices = used.iter().filter(|&&u| u).count();
+        out.stats.high_nodes = out.high.len();
+        Ok(out)
+    }
+
+    /// Encodes the low-level tree rooted at canonical node `root`.
+    fn encode_tree(
+        &mut self,
+        bvh: &CanonicalBvh,
+        mesh: &Mesh,
+        tight: &Tight,
+        s: &mut Scratch,
+        root: u32,
+    ) -> Result<(), HccError> {
+        let tree = self.headers.len() as u32;
+        let header = TreeHeader {
+            node_start: self.nodes.len() as u32,
+            ic_start: self.ics.len() as u32,
+            vertex_start: self.vertices.len() as u32,
+            first_triangle: s.triangles_so_far,
+        };
+        self.headers.push(header);
+        let mut t = TreeBuild::default();
+        // Structure: templates top-down, the two child templates of a
+        // template leaf next to each other, template leaves taken
+        // depth-first so a subtree's templates stay close in memory.
+        let (root_template, _) = t.alloc_template(bvh, s, root);
+        while let Some(n) = t.pending.pop() {
+            let node = &bvh.nodes[n as usize];
+            let (lt, ls) = t.alloc_template(bvh, s, node.a);
+            let (rt, rs) = t.alloc_template(bvh, s, node.b);
+            debug_assert_eq!(rs, ls + TEMPLATES[lt as usize].nodes as u32);
+            t.ic_at[s.pos_of[n as usize] as usize] = t.ics.len() as u32;
+            t.ics.push(Interconnection {
+                vertex: 0,
+                left_template: lt,
+                right_template: rt,
+                left_start: ls,
+            });
+        }
+        if t.canon_at.len() > MAX_TREE_NODES || t.ics.len() > MAX_TREE_INTERCONNECTIONS {
+            return Err(HccError::TreeLimits {
+                tree,
+                nodes: t.canon_at.len(),
+                interconnections: t.ics.len(),
+            });
+        }
+        // Leaves in storage order: vertices by first use, triangle ids.
+        t.words = t
+            .types
+            .iter()
+            .zip(&t.ic_at)
+            .map(|(&ty, &ic)| {
+                if ty == TYPE_TEMPLATE_LEAF {
+                    pack_node([0, 0, ic], 0, ty)
+                } else {
+                    ty << TYPE_SHIFT
+                }
+            })
+            .collect();
+        for p in 0..t.canon_at.len() {
+            if t.types[p] != TYPE_LEAF {
+                continue;
+            }
+            let node = &bvh.nodes[t.canon_at[p] as usize];
+            let ids = &bvh.leaf_triangles[node.leaf_range()];
+            s.triangles_so_far += ids.len() as u32;
+            if self.multi {
+                let start = self.triangles.len() as u32 - header.first_triangle;
+                for &id in ids {
+                    let c = mesh.triangles[id as usize].map(|v| {
+                        s.local_vertex(tree, v, mesh, &mut self.vertices, header.vertex_start)
+                    });
+                    self.triangles
+                        .push(c[0] | c[1] << INDEX_BITS | c[2] << (2 * INDEX_BITS));
+                }
+                debug_assert!(start < 1 << MULTI_START_BITS);
+                t.words[p] |= start | (ids.len() as u32 - 1) << MULTI_START_BITS;
+            } else {
+                let c = mesh.triangles[ids[0] as usize].map(|v| {
+                    s.local_vertex(tree, v, mesh, &mut self.vertices, header.vertex_start)
+                });
+                t.words[p] = pack_node(c, 0, TYPE_LEAF);
+            }
+        }
+        let local = |v: u32| s.local_of[v as usize];
+        if t.types[0] != TYPE_LEAF {
+            t.words[0] |= root_template as u32;
+        }
+        // Boxes: top-down, each pair of children coded against the box
+        // their parent decodes to.
+        let mut stack = vec![(root, tight.boxes[root as usize])];
+        while let Some((p, d)) = stack.pop() {
+            let node = &bvh.nodes[p as usize];
+            if node.is_leaf() {
+                continue;
+            }
+            let (l, r) = (node.a, node.b);
+            let (pl, pr) = (s.pos_of[l as usize], s.pos_of[r as usize]);
+            let (tl, tr) = (&tight.boxes[l as usize], &tight.boxes[r as usize]);
+            let (ll, rl) = (
+                t.types[pl as usize] == TYPE_LEAF,
+                t.types[pr as usize] == TYPE_LEAF,
+            );
+            let mut mask = 0u32;
+            let (mut dl, mut dr) = (*tl, *tr);
+            match (ll, rl) {
+                (false, false) => {
+                    for e in 0..6 {
+                        let left_inherits = if tl[e] == d[e] {
+                            true
+                        } else if tr[e] == d[e] {
+                            false
+                        } else {
+                            // A parent decoded looser than tight: the child
+                            // that loses less inherits.
+                            (d[e] - tl[e]).abs() <= (d[e] - tr[e]).abs()
+                        };
+                        let (pos, v) = if left_inherits {
+                            mask |= 1 << e;
+                            dl[e] = d[e];
+                            (if e < 3 { pl } else { pr }, tight.verts[r as usize][e])
+                        } else {
+                            dr[e] = d[e];
+                            (if e < 3 { pl } else { pr }, tight.verts[l as usize][e])
+                        };
+                        t.set_field(pos, e % 3, local(v));
+                    }
+                    self.stats.inner_pairs += 1;
+                }
+                (true, true) => {}
+                (leaf_left, _) => {
+                    let (inner, pi, ti) = if leaf_left { (r, pr, tr) } else { (l, pl, tl) };
+                    let axis = |e: usize| (d[e % 3 + 3] - d[e % 3]).max(f32::MIN_POSITIVE);
+                    let mut need: Vec<usize> = (0..6).filter(|&e| ti[e] != d[e]).collect();
+                    if need.len() > 3 {
+                        // Three vertex fields: keep the three extents that
+                        // shrink the box most; the rest inherit (loose but
+                        // conservative).
+                        need.sort_by(|&a, &b| {
+                            let la = (d[a] - ti[a]).abs() / axis(a);
+                            let lb = (d[b] - ti[b]).abs() / axis(b);
+                            lb.total_cmp(&la).then(a.cmp(&b))
+                        });
+                        self.stats.loose_extents += need.len() - 3;
+                        need.truncate(3);
+                        need.sort_unstable();
+                    }
+                    let di = if leaf_left { &mut dr } else { &mut dl };
+                    mask = 0b11_1111;
+                    for (j, &e) in need.iter().enumerate() {
+                        mask &= !(1 << e);
+                        t.set_field(pi, j, local(tight.verts[inner as usize][e]));
+                    }
+                    for e in 0..6 {
+                        if mask >> e & 1 != 0 {
+                            di[e] = d[e];
+                        }
+                    }
+                    self.stats.mixed_pairs += 1;
+                }
+            }
+            t.words[pl as usize] |= (mask & 7) << super::node::MASK_SHIFT;
+            t.words[pr as usize] |= (mask >> 3) << super::node::MASK_SHIFT;
+            stack.push((l, dl));
+            stack.push((r, dr));
+        }
+        self.nodes.extend_from_slice(&t.words);
+        self.ics.extend(t.ics.iter().map(Interconnection::pack));
+        // Template statistics: every template root (the tree root and the
+        // children of template leaves).
+        self.stats.templates[root_template as usize] += 1;
+        for ic in &t.ics {
+            self.stats.templates[ic.left_template as usize] += 1;
+            self.stats.templates[ic.right_template as usize] += 1;
+        }
+        Ok(())
+    }
+
+    /// Rebuilds the leaf rank/select bits from the node words.
+    pub(super) fn build_leaf_ranks(&mut self) {
+        self.leaf_bits = vec![0; self.nodes.len().div_ceil(64)];
+        for (p, &w) in self.nodes.iter().enumerate() {
+            if w >> TYPE_SHIFT == TYPE_LEAF {
+                self.leaf_bits[p / 64] |= 1 << (p % 64);
+            }
+        }
+        let mut before = 0;
+        self.leaf_rank = self
+            .leaf_bits
+            .iter()
+            .map(|w| {
+                let r = before;
+                before += w.count_ones();
+                r
+            })
+            .collect();
+    }
+
+    /// Statistics of the encode: trees, duplicated vertices, templates.
+    pub fn stats(&self) -> &HccStats {
+        &self.stats
+    }
+
+    /// Mass properties at density 1 (computed from the mesh when built).
+    pub fn mass(&self) -> MassProps {
+        self.mass
+    }
+
+    /// Whether leaves hold several triangles (`hcc-multi`).
+    pub fn is_multi(&self) -> bool {
+        self.multi
+    }
+
+    /// Number of low-level trees.
+    pub fn tree_count(&self) -> usize {
+        self.headers.len()
+    }
+}
+
+impl HighNode {
+    fn zeroed_node() -> Self {
+        bytemuck::Zeroable::zeroed()
+    }
+}
+
+impl ByteSize for HccBvh {
+    fn bytes_by_part(&self) -> Vec<(&'static str, usize)> {
+        let mut parts = vec![
+            ("high-level", self.high.len() * size_of::<HighNode>()),
+            ("headers", self.headers.len() * size_of::<TreeHeader>()),
+            ("nodes", self.nodes.len() * 4),
+            ("interconnections", self.ics.len() * 4),
+            ("vertices", self.vertices.len() * 12),
+        ];
+        if self.multi {
+            parts.push(("triangles", self.triangles.len() * 4));
+        } else {
+            parts.push((
+                "leaf-ranks",
+                self.leaf_bits.len() * 8 + self.leaf_rank.len() * 4,
+            ));
+        }
+        parts
+    }
+}

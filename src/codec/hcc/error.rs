@@ -1,0 +1,81 @@
+//! [`HccError`].
+
+/// What can stop an i-HCCMesh encode.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum HccError {
+    /// The canonical tree was built with leaves too large for a
+    /// multi-triangle leaf.
+    #[error(
+        "leaves of up to {got} triangles are more than hcc-multi stores (at most {limit}); build with a smaller leaf size"
+    )]
+    LeafSize {
+        /// The tree's leaf size.
+        got: usize,
+        /// The largest supported.
+        limit: usize,
+    },
+    /// The tree was not built over this mesh.
+    #[error(
+        "the tree holds {tree} triangles but the mesh has {mesh}: encode the tree with the mesh it was built from"
+    )]
+    MeshMismatch {
+        /// Triangles in the tree.
+        tree: usize,
+        /// Triangles in the mesh.
+        mesh: usize,
+    },
+    /// A single leaf has too many distinct vertices for a low-level tree.
+    #[error(
+        "leaf node {node} alone has {vertices} distinct vertices, more than a low-level tree indexes (511); build with a smaller leaf size"
+    )]
+    LeafTooBig {
+        /// The canonical node.
+        node: u32,
+        /// Its distinct vertices.
+        vertices: usize,
+    },
+    /// A low-level tree came out larger than its index fields address
+    /// (the decomposition should have prevented this).
+    #[error(
+        "low-level tree {tree} has {nodes} nodes and {interconnections} inter-connections, more than 13-bit positions and 9-bit indices address"
+    )]
+    TreeLimits {
+        /// The low-level tree.
+        tree: u32,
+        /// Its nodes.
+        nodes: usize,
+        /// Its inter-connections.
+        interconnections: usize,
+    },
+    /// Bytes that break the file frame (magic, truncation, checksums).
+    #[error(transparent)]
+    Format(#[from] crate::codec::common::FormatError),
+    /// A version this build cannot read.
+    #[error(
+        "i-HCCMesh file version {found} is not supported (this build reads version {supported}); rebuild it with `cbvh build MESH --codec hcc -o FILE`"
+    )]
+    Version {
+        /// The file's version.
+        found: u32,
+        /// The version this build reads.
+        supported: u32,
+    },
+    /// A structure that breaks what queries rely on.
+    #[error("low-level tree {tree}, node word {node}: {what}; the file is damaged, rebuild it")]
+    Corrupt {
+        /// The low-level tree (0 for the high-level tree).
+        tree: u32,
+        /// The node word or high-level node.
+        node: u32,
+        /// What is wrong.
+        what: &'static str,
+    },
+    /// Reading or writing a file failed.
+    #[error("{path}: {message}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The operating system's message.
+        message: String,
+    },
+}

@@ -1,0 +1,225 @@
+//! The i-HCCMesh words: 4-byte nodes, 4-byte inter-connections, 16-byte
+//! low-level headers and 32-byte high-level nodes.
+//!
+//! # Layout
+//!
+//! **Node word** (`u32`, HCCMesh Fig. 5; bit 0 is the least significant):
+//!
+//! | bits  | template intermediate | template leaf | leaf (one triangle) | leaf (several, `hcc-multi`) |
+//! |-------|----------------------|---------------|---------------------|-----------------------------|
+//! | 0–8   | vertex index 0 | vertex index 0 | corner 0 | first triangle, bits 0–8 |
+//! | 9–17  | vertex index 1 | vertex index 1 | corner 1 | first triangle, bits 9–17 |
+//! | 18–26 | vertex index 2 | inter-connection index | corner 2 | triangle count − 1 |
+//! | 27–29 | reuse-mask half | reuse-mask half | reuse-mask half | reuse-mask half |
+//! | 30–31 | `0` | `1` | `2` | `2` |
+//!
+//! Vertex indices and corners index the low-level tree's vertex array. The
+//! root node of a low-level tree has no sibling and takes its box from the
+//! high-level tree, so an inner root's bits 0–4 hold its template id
+//! instead (a leaf root is always template 0).
+//!
+//! **Inter-connection** (`u32`, one per template leaf): bits 0–8 the
+//! vertex index the template leaf's word gave up for the inter-connection
+//! index; 9–13 the left child's template id; 14–18 the right child's
+//! template id; 19–31 the node index, within the low-level tree, of the left
+//! child's template (the right child's template follows it directly, so its
+//! index is not stored).
+//!
+//! **Low-level header** ([`TreeHeader`], 16 bytes) and **high-level node**
+//! ([`HighNode`], 32 bytes): see their docs.
+
+/// Bits of a vertex index (the paper's `C`).
+pub const INDEX_BITS: u32 = 9;
+/// Vertices a low-level tree may hold: fewer than `2^INDEX_BITS`, as §3.1.
+pub const MAX_TREE_VERTICES: usize = 1 << INDEX_BITS;
+/// Mask of one 9-bit field.
+pub const INDEX_MASK: u32 = (1 << INDEX_BITS) - 1;
+/// Bits of a node position inside a low-level tree (inter-connections).
+pub const POSITION_BITS: u32 = 13;
+/// Nodes a low-level tree may hold.
+pub const MAX_TREE_NODES: usize = 1 << POSITION_BITS;
+/// Inter-connections a low-level tree may hold (a 9-bit index).
+pub const MAX_TREE_INTERCONNECTIONS: usize = 1 << INDEX_BITS;
+
+/// Node type: an inner node whose children are in the same template.
+pub const TYPE_INNER: u32 = 0;
+/// Node type: an inner node whose children start new templates.
+pub const TYPE_TEMPLATE_LEAF: u32 = 1;
+/// Node type: a leaf of the original tree.
+pub const TYPE_LEAF: u32 = 2;
+
+/// Shift of the 3-bit reuse-mask half.
+pub const MASK_SHIFT: u32 = 27;
+/// Shift of the 2-bit node type.
+pub const TYPE_SHIFT: u32 = 30;
+
+/// Bits of a multi-triangle leaf's first-triangle field.
+pub const MULTI_START_BITS: u32 = 18;
+/// The most triangles a multi-triangle leaf may hold (a 9-bit count − 1;
+/// the encoder allows fewer, see [`super::MAX_LEAF_TRIANGLES`]).
+pub const MULTI_COUNT_LIMIT: usize = 1 << INDEX_BITS;
+
+/// The node type (bits 30–31).
+#[inline(always)]
+pub fn node_type(w: u32) -> u32 {
+    w >> TYPE_SHIFT
+}
+
+/// The 9-bit field `j` (0, 1 or 2).
+#[inline(always)]
+pub fn field(w: u32, j: u32) -> u32 {
+    w >> (INDEX_BITS * j) & INDEX_MASK
+}
+
+/// The reuse-mask half (bits 27–29).
+#[inline(always)]
+pub fn mask_half(w: u32) -> u32 {
+    w >> MASK_SHIFT & 7
+}
+
+/// A node word from its parts. Fields must fit 9 bits, the mask 3.
+#[inline]
+pub fn pack_node(fields: [u32; 3], mask: u32, ty: u32) -> u32 {
+    debug_assert!(fields.iter().all(|&f| f <= INDEX_MASK) && mask < 8 && ty < 3);
+    fields[0]
+        | fields[1] << INDEX_BITS
+        | fields[2] << (2 * INDEX_BITS)
+        | mask << MASK_SHIFT
+        | ty << TYPE_SHIFT
+}
+
+/// A multi-triangle leaf's `(first triangle, count)` in its tree.
+#[inline(always)]
+pub fn multi_range(w: u32) -> (u32, u32) {
+    (
+        w & ((1 << MULTI_START_BITS) - 1),
+        (w >> MULTI_START_BITS & INDEX_MASK) + 1,
+    )
+}
+
+/// An inter-connection's parts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Interconnection {
+    /// The vertex index displaced from the template leaf's third field.
+    pub vertex: u32,
+    /// Template id of the left child's template.
+    pub left_template: u8,
+    /// Template id of the right child's template.
+    pub right_template: u8,
+    /// Node index, in the low-level tree, of the left child's template.
+    pub left_start: u32,
+}
+
+impl Interconnection {
+    /// The packed word.
+    #[inline]
+    pub fn pack(&self) -> u32 {
+        debug_assert!(self.vertex <= INDEX_MASK);
+        debug_assert!((self.left_start as usize) < MAX_TREE_NODES);
+        self.vertex
+            | (self.left_template as u32) << 9
+            | (self.right_template as u32) << 14
+            | self.left_start << 19
+    }
+
+    /// Unpacks a word.
+    #[inline(always)]
+    pub fn unpack(w: u32) -> Self {
+        Self {
+            vertex: w & INDEX_MASK,
+            left_template: (w >> 9 & 31) as u8,
+            right_template: (w >> 14 & 31) as u8,
+            left_start: w >> 19,
+        }
+    }
+}
+
+/// The header of one low-level tree: where its parts start in the shared
+/// arrays. Counts are the differences to the next header's starts (the
+/// paper stores counts; starts give the same in the same bytes and need no
+/// prefix sum at runtime).
+///
+/// # Layout
+/// | bytes | field | meaning |
+/// |---|---|---|
+/// | 0–3   | `node_start`   | first node word of the tree |
+/// | 4–7   | `ic_start`     | first inter-connection of the tree |
+/// | 8–11  | `vertex_start` | first vertex of the tree |
+/// | 12–15 | `first_triangle` | id of the tree's first triangle |
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct TreeHeader {
+    /// First node word of the tree.
+    pub node_start: u32,
+    /// First inter-connection of the tree.
+    pub ic_start: u32,
+    /// First vertex of the tree's vertex array.
+    pub vertex_start: u32,
+    /// Id of the tree's first triangle (ids are dense, tree by tree).
+    pub first_triangle: u32,
+}
+
+const _: () = assert!(size_of::<TreeHeader>() == 16);
+
+/// Flag in [`HighNode::b`] marking a high-level leaf (a low-level tree).
+pub const HIGH_LEAF: u32 = 0x8000_0000;
+
+/// A node of the uncompressed high-level tree (§3.2: "we do not compress
+/// the high-level BVH"): the plain 32-byte node.
+///
+/// # Layout
+/// | bytes | field | meaning |
+/// |---|---|---|
+/// | 0–11  | `min` | box minimum, 3 × f32 |
+/// | 12–23 | `max` | box maximum, 3 × f32 |
+/// | 24–27 | `a`   | inner: left child; leaf: low-level tree index |
+/// | 28–31 | `b`   | inner: right child; leaf: [`HIGH_LEAF`] |
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct HighNode {
+    /// Box minimum.
+    pub min: [f32; 3],
+    /// Box maximum.
+    pub max: [f32; 3],
+    /// Left child or low-level tree index.
+    pub a: u32,
+    /// Right child or [`HIGH_LEAF`].
+    pub b: u32,
+}
+
+const _: () = assert!(size_of::<HighNode>() == 32);
+
+impl HighNode {
+    /// Whether this node is a low-level tree.
+    #[inline(always)]
+    pub fn is_leaf(&self) -> bool {
+        self.b & HIGH_LEAF != 0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn words_round_trip() {
+        let w = pack_node([511, 3, 257], 5, TYPE_TEMPLATE_LEAF);
+        assert_eq!(
+            [
+                field(w, 0),
+                field(w, 1),
+                field(w, 2),
+                mask_half(w),
+                node_type(w)
+            ],
+            [511, 3, 257, 5, 1]
+        );
+        let ic = Interconnection {
+            vertex: 300,
+            left_template: 25,
+            right_template: 17,
+            left_start: 8191,
+        };
+        assert_eq!(Interconnection::unpack(ic.pack()), ic);
+    }
+}

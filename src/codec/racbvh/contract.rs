@@ -1,0 +1,108 @@
+//! RACBVH's [`Codec`] contract, delegating to [`RacBvh`]'s own methods.
+
+use std::path::Path;
+
+use super::{RacBvh, RacError, RacOptions, file};
+use crate::build::CanonicalBvh;
+use crate::codec::common::MassProps;
+use crate::codec::{Codec, CodecKind, OpenOptions};
+use crate::mesh::Mesh;
+
+impl Codec for RacBvh {
+    const KIND: CodecKind = CodecKind::Racbvh;
+    const MAGIC: [u8; 8] = file::MAGIC;
+    type Options = RacOptions;
+    type Error = RacError;
+
+    fn encode(bvh: &CanonicalBvh, mesh: &Mesh, options: &RacOptions) -> Result<Self, RacError> {
+        RacBvh::encode(bvh, mesh, options)
+    }
+
+    /// Clusters are compressed in parallel; `progress` counts clusters.
+    fn encode_with_progress(
+        bvh: &CanonicalBvh,
+        mesh: &Mesh,
+        options: &RacOptions,
+        progress: &(dyn Fn(u64, u64) + Sync),
+    ) -> Result<Self, RacError> {
+        RacBvh::encode_with_progress(bvh, mesh, options, progress)
+    }
+
+    fn triangle_vertices(&self, id: u32) -> [u32; 3] {
+        self.triangle_indices(id)
+    }
+
+    fn decoded_mesh(&self) -> Mesh {
+        RacBvh::decoded_mesh(self)
+    }
+
+    fn mass(&self) -> MassProps {
+        RacBvh::mass(self)
+    }
+
+    fn verify(&self) -> Result<(), RacError> {
+        RacBvh::verify(self)
+    }
+
+    fn save(&self, path: &Path) -> Result<(), RacError> {
+        RacBvh::save(self, path)
+    }
+
+    fn to_bytes(&self) -> Vec<u8> {
+        RacBvh::to_bytes(self)
+    }
+
+    /// With a cluster cache of `options.cache_budget_bytes`.
+    fn from_bytes(bytes: &[u8], options: &OpenOptions) -> Result<Self, RacError> {
+        RacBvh::from_bytes(bytes, options.cache_budget_bytes)
+    }
+
+    /// Memory-maps the file (clusters decoded on demand) with a cluster
+    /// cache of `options.cache_budget_bytes`.
+    fn open(path: &Path, options: &OpenOptions) -> Result<Self, RacError> {
+        RacBvh::open(path, options.cache_budget_bytes)
+    }
+
+    fn header_fields(&self) -> Vec<(&'static str, String)> {
+        RacBvh::header_fields(self)
+    }
+
+    fn build_fields(&self) -> Vec<(&'static str, serde_json::Value)> {
+        let st = self.stats();
+        vec![
+            ("nodes", st.nodes.into()),
+            ("clusters", st.cluster_count.into()),
+            ("cluster_nodes", self.cluster_nodes().into()),
+            ("bits", self.header.bits.into()),
+            ("bits_per_node_tree", st.bits_per_node_tree.into()),
+            ("bits_per_node_bv", st.bits_per_node_bv.into()),
+            (
+                "compression_ratio_vs_plain",
+                st.compression_ratio_vs_plain.into(),
+            ),
+            ("mesh_bytes_per_triangle", st.mesh_bytes_per_triangle.into()),
+            ("compression_seconds", st.compression_seconds.into()),
+        ]
+    }
+
+    fn cache_budget(options: &mut RacOptions) -> Option<&mut usize> {
+        Some(&mut options.cache_budget_bytes)
+    }
+
+    /// Touches every node once (so that a cache holding the whole tree
+    /// holds every cluster), then re-opens the same bytes with a cache of
+    /// `budget(bytes cached)`.
+    fn with_cache_budget_of(
+        &self,
+        budget: &dyn Fn(usize) -> usize,
+    ) -> Option<Result<Self, RacError>> {
+        let reopen = || {
+            for i in 0..self.node_count() as u32 {
+                self.try_bv(i)?;
+            }
+            let decoded = self.cache_stats().cached_bytes;
+            RacBvh::from_bytes(&self.to_bytes(), budget(decoded))
+        };
+        Some(reopen())
+    }
+}

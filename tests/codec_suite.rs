@@ -1,0 +1,481 @@
+//! The shared codec test suite: every test written once, generic over
+//! [`Codec`], and run on every codec by one line at the end of this file:
+//!
+//! ```text
+//! codec_suite!(name, CodecType, lossless: [options, ...], lossy: [options, ...]);
+//! ```
+//!
+//! `lossless` options must decode the very mesh that was encoded (the
+//! suite asserts it); `lossy` ones (quantized vertices) are checked against
+//! their own decoded mesh. Every query is compared with brute force over the
+//! decoded mesh, every box a cursor reports must contain every triangle
+//! below it, and damaged files must give errors, never panics. Tests of one
+//! codec's own API (RACBVH's cache, random access, options) stay in that
+//! codec's test file.
+
+mod common;
+
+use std::path::PathBuf;
+
+use cbvh::build::{BuildOptions, CanonicalBvh, Layout, build};
+use cbvh::codec::common::MassProps;
+use cbvh::codec::{AnyCodec, ByteSize, Codec, CodecFileError, OpenOptions};
+use cbvh::geom::{Aabb, Pose, Ray};
+use cbvh::query::{self, RayHit};
+use cbvh::scene::{Kind, generate};
+use cbvh::{Mesh, NodeCursor, TraversalStats};
+use common::*;
+use glam::Vec3A;
+
+/// A codec's option sets under test.
+pub struct Variants<C: Codec> {
+    /// Options that must decode the encoded mesh exactly.
+    pub lossless: Vec<C::Options>,
+    /// Options that may move vertices (checked against the decoded mesh).
+    pub lossy: Vec<C::Options>,
+}
+
+impl<C: Codec> Variants<C> {
+    /// Every option set, with whether it is lossless.
+    fn all(&self) -> impl Iterator<Item = (&C::Options, bool)> {
+        let lossless = self.lossless.iter().map(|o| (o, true));
+        lossless.chain(self.lossy.iter().map(|o| (o, false)))
+    }
+}
+
+fn tree(mesh: &Mesh, layout: Layout, leaf: usize) -> CanonicalBvh {
+    let opts = BuildOptions {
+        layout,
+        max_leaf_triangles: leaf,
+        ..Default::default()
+    };
+    build(mesh, &opts, &|_, _| {}).expect("build")
+}
+
+fn encode<C: Codec>(bvh: &CanonicalBvh, mesh: &Mesh, o: &C::Options) -> C {
+    C::encode(bvh, mesh, o).unwrap_or_else(|e| panic!("{}: encode {o:?}: {e}", C::KIND))
+}
+
+fn temp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("cbvh-suite-{}-{name}", std::process::id()))
+}
+
+fn hits<C: NodeCursor>(c: &C, mesh: &Mesh) -> Vec<Option<RayHit>> {
+    let mut stats = TraversalStats::default();
+    test_rays(mesh, 5, 100)
+        .iter()
+        .map(|r| query::closest_hit(c, r, f32::INFINITY, &mut stats))
+        .collect()
+}
+
+/// The decoded mesh: lossless options give the encoded mesh itself, lossy
+/// ones the same triangles with every corner within 2 % of the mesh's
+/// largest extent of the original.
+fn check_decoded<C: Codec>(c: &C, mesh: &Mesh, lossless: bool) -> Mesh {
+    let dm = c.decoded_mesh();
+    if lossless {
+        assert_eq!(dm, *mesh, "{}: lossless options changed the mesh", C::KIND);
+        return dm;
+    }
+    assert_eq!(dm.triangles.len(), mesh.triangles.len());
+    let (lo, hi) = mesh.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
+    let extent = (Vec3A::from(hi) - Vec3A::from(lo)).max_element();
+    let scale = Vec3A::from(lo)
+        .abs()
+        .max(Vec3A::from(hi).abs())
+        .max_element();
+    let tol = 0.02 * extent + 4.0 * f32::EPSILON * scale;
+    for t in 0..mesh.triangles.len() {
+        let (a, b) = (mesh.triangle_vertices(t), dm.triangle_vertices(t));
+        for k in 0..3 {
+            let d = (Vec3A::from(a[k]) - Vec3A::from(b[k])).abs().max_element();
+            assert!(
+                d <= tol,
+                "triangle {t} corner {k}: {:?} decoded as {:?}",
+                a[k],
+                b[k]
+            );
+        }
+    }
+    dm
+}
+
+/// What the contract promises besides traversal: vertex indices into the
+/// decoded mesh, the cursor's triangles from the decoded mesh, sizes by
+/// part adding up, and the mass of the original mesh.
+fn check_contract<C: Codec>(c: &C, mesh: &Mesh, dm: &Mesh) {
+    assert_eq!(c.triangle_count(), mesh.triangles.len());
+    for id in 0..dm.triangles.len() as u32 {
+        let v = c.triangle_vertices(id);
+        assert_eq!(v, dm.triangles[id as usize], "triangle_vertices({id})");
+        assert!(v.iter().all(|&i| (i as usize) < dm.vertices.len()));
+        let corners = NodeCursor::triangle(c, id).map(|p| p.to_array());
+        assert_eq!(corners, dm.triangle_vertices(id as usize), "triangle({id})");
+    }
+    let parts = c.bytes_by_part();
+    assert!(!parts.is_empty(), "{}: no parts", C::KIND);
+    let mut names: Vec<&str> = parts.iter().map(|p| p.0).collect();
+    assert!(names.iter().all(|n| !n.is_empty()));
+    names.sort_unstable();
+    names.dedup();
+    assert_eq!(names.len(), parts.len(), "part names repeat: {parts:?}");
+    assert_eq!(parts.iter().map(|p| p.1).sum::<usize>(), c.bytes_total());
+    assert!(c.bytes_total() > 0);
+    // Stored at encoding time from the original mesh; for lossless options
+    // that is the decoded mesh's too.
+    assert_eq!(c.mass(), MassProps::of_mesh(mesh), "{}: mass", C::KIND);
+    if dm == mesh {
+        assert_eq!(c.mass(), MassProps::of_mesh(dm));
+    }
+}
+
+/// Structure (conservative boxes, every triangle once, triangles as
+/// decoded), every single-tree query against brute force, and the contract.
+fn check_all<C: Codec>(c: &C, mesh: &Mesh, lossless: bool, seed: u64) -> Mesh {
+    let dm = check_decoded(c, mesh, lossless);
+    check_structure(c, &dm);
+    check_queries(c, &dm, seed);
+    check_best_first(c, &dm, seed);
+    check_contract(c, mesh, &dm);
+    dm
+}
+
+/// A random soup in the given layout and leaf size, with every option set.
+pub fn soup_case<C: Codec>(v: &Variants<C>, seed: u64, n: usize, layout: usize, leaf: usize) {
+    let mesh = soup(seed, n, 10.0);
+    let bvh = tree(&mesh, Layout::ALL[layout % Layout::ALL.len()], leaf);
+    for (o, lossless) in v.all() {
+        check_all(&encode::<C>(&bvh, &mesh, o), &mesh, lossless, seed);
+    }
+}
+
+/// A small generated mesh (closed statue, multi-part turbine, robot).
+pub fn generated_case<C: Codec>(v: &Variants<C>, seed: u64, kind: usize) {
+    let kind = [Kind::Statue, Kind::Turbine, Kind::Robot][kind % 3];
+    let mesh = generate(kind, 1000, seed, &mut |_, _| {}).unwrap();
+    let bvh = tree(&mesh, Layout::ALL[seed as usize % Layout::ALL.len()], 1);
+    for (o, lossless) in v.all() {
+        check_all(&encode::<C>(&bvh, &mesh, o), &mesh, lossless, seed);
+    }
+}
+
+/// Two trees, each with every option set, against brute force: BVTT pairs,
+/// its early exit, the parallel traversal and two-tree branch and bound.
+pub fn two_tree_case<C: Codec>(v: &Variants<C>, seed: u64, na: usize, nb: usize) {
+    let ma = soup(seed, na, 2.0);
+    let mb = soup(seed.wrapping_add(1), nb, 2.0);
+    let ta = tree(&ma, Layout::DepthFirst, 1);
+    let tb = tree(&mb, Layout::CacheEfficient, 2);
+    let all: Vec<_> = v.all().collect();
+    for (k, (o, _)) in all.iter().enumerate() {
+        let a = encode::<C>(&ta, &ma, o);
+        // B with the next option set, so that mixed settings meet too.
+        let b = encode::<C>(&tb, &mb, all[(k + 1) % all.len()].0);
+        let (da, db) = (a.decoded_mesh(), b.decoded_mesh());
+        check_bvtt(&a, &da, &b, &db, seed);
+        check_bvtt_par_and_min(&a, &da, &b, &db, seed);
+    }
+}
+
+/// Encode, save, open through the registry and through the codec's own
+/// reader (with a small cache, for codecs that have one), and read the
+/// bytes back: the same decoded mesh, answers, sizes and mass every way.
+pub fn round_trip<C: Codec>(v: &Variants<C>) {
+    let mesh = generate(Kind::Statue, 1500, 2, &mut |_, _| {}).unwrap();
+    let bvh = tree(&mesh, Layout::CacheEfficient, 1);
+    for (k, (o, lossless)) in v.all().enumerate() {
+        let c = encode::<C>(&bvh, &mesh, o);
+        let dm = check_decoded(&c, &mesh, lossless);
+        c.verify().unwrap();
+        let want = hits(&c, &dm);
+        let bytes = c.to_bytes();
+        assert!(bytes.starts_with(&C::MAGIC));
+        let path = temp(&format!("{}-{k}.bin", C::KIND));
+        c.save(&path).unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), bytes, "save writes to_bytes");
+
+        let any = AnyCodec::open(&path, &OpenOptions::default()).unwrap();
+        assert_eq!(any.kind(), C::KIND);
+        assert_eq!(any.decoded_mesh(), dm);
+        assert_eq!(cbvh::with_codec!(&any, |a| hits(a, &dm)), want);
+        assert_eq!(any.bytes_by_part(), c.bytes_by_part());
+        assert_eq!(any.mass(), c.mass());
+        assert_eq!(any.to_bytes(), bytes);
+
+        let small = OpenOptions {
+            verify: false,
+            cache_budget_bytes: 16 << 10,
+        };
+        let own = C::open(&path, &small).unwrap();
+        own.verify().unwrap();
+        assert_eq!(own.decoded_mesh(), dm);
+        assert_eq!(hits(&own, &dm), want);
+        check_structure(&own, &dm);
+        assert_eq!(own.bytes_by_part(), c.bytes_by_part());
+        assert_eq!(own.mass(), c.mass());
+        drop((any, own));
+        std::fs::remove_file(&path).unwrap();
+
+        let back = C::from_bytes(&bytes, &small).unwrap();
+        back.verify().unwrap();
+        assert_eq!(back.to_bytes(), bytes, "reading and writing is stable");
+        assert_eq!(hits(&back, &dm), want);
+
+        assert!(C::open(&path, &small).is_err(), "opening a missing file");
+        let e = AnyCodec::open(&path, &OpenOptions::default()).unwrap_err();
+        assert!(matches!(e, CodecFileError::Io { .. }), "{e}");
+    }
+}
+
+/// Meshes at the edges of what a builder and a codec take.
+fn edge_meshes() -> Vec<(&'static str, Mesh)> {
+    let mut out: Vec<(&'static str, Mesh)> = Vec::new();
+    let [one, same, point, huge]: [Mesh; 4] = edge_case_meshes().try_into().unwrap();
+    out.push(("one triangle", one));
+    out.push(("40 identical triangles", same));
+    out.push(("all corners one point", point));
+    out.push(("coordinates of 1e9", huge));
+    // A flat grid, every z = 0.
+    let mut vertices = Vec::new();
+    let mut triangles = Vec::new();
+    for y in 0..8u32 {
+        for x in 0..8u32 {
+            vertices.push([x as f32, y as f32, 0.0]);
+        }
+    }
+    for y in 0..7u32 {
+        for x in 0..7u32 {
+            let i = y * 8 + x;
+            triangles.push([i, i + 1, i + 8]);
+            triangles.push([i + 1, i + 9, i + 8]);
+        }
+    }
+    out.push(("flat, z = 0", Mesh::new(vertices, triangles)));
+    // Every corner on one line (zero-area triangles).
+    let line: Vec<[f32; 3]> = (0..30).map(|i| [i as f32 * 0.5, i as f32, 2.0]).collect();
+    let tris = (0..28u32).map(|i| [i, i + 1, i + 2]).collect();
+    out.push(("collinear", Mesh::new(line, tris)));
+    // Far from the origin: a soup offset by 1e6.
+    let mut far = soup(3, 200, 5.0);
+    for v in &mut far.vertices {
+        for c in v.iter_mut() {
+            *c += 1e6;
+        }
+    }
+    out.push(("offset 1e6", far));
+    // Duplicates: the same triangles twice, under other ids.
+    let mut dup = soup(4, 60, 3.0);
+    let twice: Vec<[u32; 3]> = dup
+        .triangles
+        .iter()
+        .chain(&dup.triangles)
+        .copied()
+        .collect();
+    dup.triangles = twice;
+    out.push(("duplicate triangles", dup));
+    // Large enough for many clusters or blocks.
+    out.push(("3000-triangle soup", soup(5, 3000, 20.0)));
+    out
+}
+
+/// Every edge mesh, in two leaf sizes, with every option set.
+pub fn edge_cases<C: Codec>(v: &Variants<C>) {
+    for (name, mesh) in edge_meshes() {
+        for (layout, leaf) in [(Layout::VanEmdeBoas, 1), (Layout::DepthFirst, 4)] {
+            let bvh = tree(&mesh, layout, leaf);
+            for (o, lossless) in v.all() {
+                let c = C::encode(&bvh, &mesh, o)
+                    .unwrap_or_else(|e| panic!("{}: {name}: encode {o:?}: {e}", C::KIND));
+                c.verify()
+                    .unwrap_or_else(|e| panic!("{}: {name}: verify: {e}", C::KIND));
+                let dm = check_all(&c, &mesh, lossless, 5);
+                if mesh.triangles.len() <= 200 {
+                    check_bvtt(&c, &dm, &c, &dm, 9);
+                }
+                let back = C::from_bytes(&c.to_bytes(), &OpenOptions::default()).unwrap();
+                back.verify().unwrap();
+                assert_eq!(back.decoded_mesh(), dm, "{name}");
+                assert_eq!(hits(&back, &dm), hits(&c, &dm), "{name}");
+            }
+        }
+    }
+}
+
+/// The empty mesh: either a tree that answers nothing and survives a
+/// round trip, or an error that says something.
+pub fn empty_mesh<C: Codec>(v: &Variants<C>) {
+    let mesh = Mesh::default();
+    let bvh = tree(&mesh, Layout::VanEmdeBoas, 1);
+    for (o, _) in v.all() {
+        let c = match C::encode(&bvh, &mesh, o) {
+            Ok(c) => c,
+            Err(e) => {
+                assert!(!e.to_string().is_empty(), "{}: a silent error", C::KIND);
+                continue;
+            }
+        };
+        c.verify().unwrap();
+        assert_eq!(c.triangle_count(), 0);
+        assert!(c.root().1.is_empty(), "an empty tree's root box is empty");
+        assert_eq!(c.decoded_mesh().triangles.len(), 0);
+        assert_eq!(c.mass(), MassProps::ZERO);
+        let mut stats = TraversalStats::default();
+        let ray = Ray::new(Vec3A::ZERO, Vec3A::X);
+        assert!(query::closest_hit(&c, &ray, f32::INFINITY, &mut stats).is_none());
+        assert!(!query::any_hit(&c, &ray, f32::INFINITY, &mut stats));
+        assert!(query::closest_point(&c, Vec3A::ONE, f32::INFINITY, &mut stats).is_none());
+        let everything = Aabb::new(Vec3A::splat(-1e30), Vec3A::splat(1e30));
+        query::overlap(&c, &everything, &mut stats, |id, _| {
+            panic!("the empty tree reported triangle {id}")
+        });
+        assert!(query::bvtt_pairs(&c, &c, &Pose::IDENTITY, 1.0, &mut stats).is_empty());
+        let back = C::from_bytes(&c.to_bytes(), &OpenOptions::default()).unwrap();
+        back.verify().unwrap();
+        assert_eq!(back.triangle_count(), 0);
+        assert_eq!(back.to_bytes(), c.to_bytes());
+    }
+}
+
+/// Truncations and bit flips of a saved file: an error from reading or
+/// verifying, never a panic and never a file that passes as sound.
+pub fn corruption<C: Codec>(v: &Variants<C>) {
+    let mesh = generate(Kind::Statue, 1000, 4, &mut |_, _| {}).unwrap();
+    let bvh = tree(&mesh, Layout::CacheEfficient, 2);
+    let opts = OpenOptions {
+        verify: false,
+        cache_budget_bytes: 1 << 16,
+    };
+    let mut rng = Rng(0xC0DEC ^ C::MAGIC[0] as u64);
+    for (k, (o, _)) in v.all().enumerate() {
+        let c = encode::<C>(&bvh, &mesh, o);
+        let bytes = c.to_bytes();
+        let n = bytes.len();
+        // Every length in the first 512 bytes (headers), then strided.
+        let lens = (0..n.min(512))
+            .chain((512..n).step_by(n / 150 + 1))
+            .chain([n - 1]);
+        for len in lens {
+            assert!(
+                C::from_bytes(&bytes[..len], &opts).is_err(),
+                "{}: truncated to {len} of {n} bytes",
+                C::KIND
+            );
+        }
+        // Single-bit flips: half in the first 512 bytes, half anywhere.
+        for f in 0..300 {
+            let mut bad = bytes.clone();
+            let at = if f % 2 == 0 {
+                rng.below(n.min(512))
+            } else {
+                rng.below(n)
+            };
+            bad[at] ^= 1 << rng.below(8);
+            if let Ok(t) = C::from_bytes(&bad, &opts) {
+                assert!(
+                    t.verify().is_err(),
+                    "{}: a flip at byte {at} of {n} went unnoticed",
+                    C::KIND
+                );
+            }
+        }
+        // Through files and the registry (verify on by default).
+        let path = temp(&format!("{}-bad-{k}.bin", C::KIND));
+        for _ in 0..8 {
+            let mut bad = bytes.clone();
+            let at = 8 + rng.below(n - 8);
+            bad[at] ^= 1 << rng.below(8);
+            std::fs::write(&path, &bad).unwrap();
+            let e = AnyCodec::open(&path, &OpenOptions::default());
+            assert!(
+                matches!(
+                    e,
+                    Err(CodecFileError::Open { .. } | CodecFileError::Verify { .. })
+                ),
+                "{}: a flip at byte {at} opened as {e:?}",
+                C::KIND
+            );
+        }
+        std::fs::write(&path, &bytes[..n / 2]).unwrap();
+        assert!(AnyCodec::open(&path, &OpenOptions::default()).is_err());
+        std::fs::remove_file(&path).unwrap();
+    }
+}
+
+/// Generates the module `$name` running the whole suite on `$codec` with
+/// the given option sets.
+macro_rules! codec_suite {
+    ($name:ident, $codec:ty, lossless: [$($ll:expr),* $(,)?], lossy: [$($ly:expr),* $(,)?]) => {
+        mod $name {
+            use super::*;
+            use proptest::prelude::*;
+
+            fn variants() -> Variants<$codec> {
+                Variants {
+                    lossless: vec![$($ll),*],
+                    lossy: vec![$($ly),*],
+                }
+            }
+
+            #[test]
+            fn round_trip_through_files_and_bytes() {
+                round_trip(&variants());
+            }
+
+            #[test]
+            fn edge_case_meshes_match_brute_force() {
+                edge_cases(&variants());
+            }
+
+            #[test]
+            fn empty_mesh_answers_nothing_or_is_an_error() {
+                empty_mesh(&variants());
+            }
+
+            #[test]
+            fn damaged_files_are_errors_never_panics() {
+                corruption(&variants());
+            }
+
+            proptest! {
+                #![proptest_config(ProptestConfig::with_cases(24))]
+
+                #[test]
+                fn random_soups_match_brute_force(
+                    seed in any::<u64>(), n in 1usize..120, layout in 0usize..3, leaf in 1usize..4
+                ) {
+                    soup_case(&variants(), seed, n, layout, leaf);
+                }
+
+                #[test]
+                fn two_trees_match_brute_force(seed in any::<u64>(), na in 1usize..50, nb in 1usize..50) {
+                    two_tree_case(&variants(), seed, na, nb);
+                }
+            }
+
+            proptest! {
+                #![proptest_config(ProptestConfig::with_cases(6))]
+
+                #[test]
+                fn generated_meshes_match_brute_force(seed in 0u64..1000, kind in 0usize..3) {
+                    generated_case(&variants(), seed, kind);
+                }
+            }
+        }
+    };
+}
+
+/// RACBVH options with small clusters (so that small meshes span several).
+fn rac(bits: u32, vertex_bits: Option<u32>) -> cbvh::codec::racbvh::RacOptions {
+    cbvh::codec::racbvh::RacOptions {
+        cluster_nodes: 256,
+        bits,
+        vertex_bits,
+        ..Default::default()
+    }
+}
+
+// One line per codec.
+codec_suite!(plain, cbvh::codec::plain::PlainBvh, lossless: [()], lossy: []);
+codec_suite!(racbvh, cbvh::codec::racbvh::RacBvh, lossless: [rac(16, None)], lossy: [rac(8, Some(8)), rac(16, Some(16))]);
+codec_suite!(clbvh, cbvh::codec::clbvh::ClBvh, lossless: [Default::default()], lossy: []);
+codec_suite!(clbvh_compact, cbvh::codec::clbvh::ClBvhCompact, lossless: [Default::default()], lossy: []);
