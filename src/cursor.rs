@@ -58,8 +58,8 @@ pub trait NodeCursor: Sync {
     ///
     /// The default pushes what [`for_each_child`](Self::for_each_child)
     /// gives; a codec overrides it when it can write the batch directly
-    /// (plain does; an 8-wide codec writes its child boxes straight into
-    /// the lanes, [`ChildBoxes::from_rows`]).
+    /// (plain does; CLBVH, 8-wide, writes its float or dequantized child
+    /// boxes straight into the lanes with [`ChildBoxes::from_rows`]).
     #[inline(always)]
     fn children(&self, node: &Self::Node, out: &mut Children<Self::Node>) {
         // Two children (a binary node) are staged in registers' worth of

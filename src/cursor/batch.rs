@@ -372,20 +372,42 @@ impl ChildBoxes {
     }
 
     /// A batch of `n` lanes given as rows, `min[axis][lane]` and
-    /// `max[axis][lane]` (for codecs that decode child boxes axis by axis;
-    /// lanes at and past `n` are ignored).
+    /// `max[axis][lane]` (for codecs that store or decode a node's child
+    /// boxes axis by axis, as an 8-wide node does): past two lanes the rows
+    /// are loaded as they are, four lanes to a load, without a transpose.
+    /// Lanes at and past `n` are not read as boxes: they become padding.
     ///
     /// # Panics
     /// If `n > MAX_CHILDREN`.
     #[inline(always)]
     pub fn from_rows(
         n: usize,
-        min: &[[f32; MAX_CHILDREN]; 3],
-        max: &[[f32; MAX_CHILDREN]; 3],
+        min: [&[f32; MAX_CHILDREN]; 3],
+        max: [&[f32; MAX_CHILDREN]; 3],
     ) -> Self {
-        Self::from_lanes(n, |i| {
-            Aabb::from_arrays(axes(|a| min[a][i]), axes(|a| max[a][i]))
-        })
+        if n <= NARROW {
+            return Self::from_lanes(n, |i| {
+                Aabb::from_arrays(axes(|a| min[a][i]), axes(|a| max[a][i]))
+            });
+        }
+        assert!(
+            n <= MAX_CHILDREN,
+            "a batch holds at most {MAX_CHILDREN} boxes"
+        );
+        let mut r = Rows::EMPTY;
+        for k in 0..chunks(n) {
+            let live = live(n, k);
+            let lanes = k * W..k * W + W;
+            for a in 0..3 {
+                let (mn, mx) = (&min[a][lanes.clone()], &max[a][lanes.clone()]);
+                r.min[a][k] = Vec4::select(live, Vec4::from_slice(mn), Vec4::INFINITY);
+                r.max[a][k] = Vec4::select(live, Vec4::from_slice(mx), Vec4::NEG_INFINITY);
+            }
+        }
+        Self {
+            len: n,
+            repr: Repr::Wide(r),
+        }
     }
 
     /// Makes the batch empty (keeping the two-box form's storage, so that
@@ -648,9 +670,17 @@ mod tests {
 
         fn dir(&mut self) -> Vec3A {
             let mut d = self.vec();
-            // Components exactly zero (of either sign) in some rays.
-            if self.bits().is_multiple_of(3) {
-                d.y = if self.bits() & 1 != 0 { 0.0 } else { -0.0 };
+            // Components exactly zero (of either sign) in some rays, and in
+            // others infinite or NaN (an inverse of zero or NaN: slabs
+            // whose distances are NaN, which both tests must skip alike).
+            let axis = (self.bits() % 3) as usize;
+            match self.bits() % 8 {
+                0 | 1 => d[axis] = if self.bits() & 1 != 0 { 0.0 } else { -0.0 },
+                2 => d[axis] = f32::INFINITY,
+                3 => d[axis] = f32::NEG_INFINITY,
+                4 => d[axis] = f32::NAN,
+                5 => d = Vec3A::ZERO,
+                _ => {}
             }
             d
         }
@@ -791,7 +821,10 @@ mod tests {
         for _ in 0..2_000 {
             let (batch, _, boxes) = g.batch();
             let mut pushed = ChildBoxes::EMPTY;
-            let (mut min, mut max) = ([[0.0; MAX_CHILDREN]; 3], [[0.0; MAX_CHILDREN]; 3]);
+            // Rows with garbage past the batch's lanes, which must not
+            // show.
+            let junk = g.coord();
+            let (mut min, mut max) = ([[junk; MAX_CHILDREN]; 3], [[-junk; MAX_CHILDREN]; 3]);
             for (i, b) in boxes.iter().enumerate() {
                 pushed.push(*b);
                 for a in 0..3 {
@@ -799,13 +832,18 @@ mod tests {
                     max[a][i] = b.max[a];
                 }
             }
-            let from_rows = ChildBoxes::from_rows(boxes.len(), &min, &max);
+            let [a, b, c] = &min;
+            let [d, e, f] = &max;
+            let from_rows = ChildBoxes::from_rows(boxes.len(), [a, b, c], [d, e, f]);
             for i in 0..MAX_CHILDREN {
                 let want = boxes.get(i).copied().unwrap_or(Aabb::EMPTY);
                 for c in [&batch, &pushed, &from_rows] {
                     assert!(same_box(&c.get(i), &want), "lane {i}");
                 }
             }
+            let all = Aabb::from_arrays([f32::NEG_INFINITY; 3], [f32::INFINITY; 3]);
+            assert_eq!(from_rows.overlaps(&all), batch.lanes(), "padding of rows");
+            assert_eq!(from_rows.len(), batch.len());
             let mask = g.bits() as u32;
             let mut seen = Vec::new();
             pushed.for_each_in(mask, |i| seen.push(i));
