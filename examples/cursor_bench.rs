@@ -1,5 +1,5 @@
-//! Every query over [`NodeCursor`] on one thread, for the plain and RACBVH
-//! codecs, same tree and same queries: camera rays one at a time (closest
+//! Every query over [`NodeCursor`] on one thread, for every codec of the
+//! registry, same tree and same queries: camera rays one at a time (closest
 //! hit), shadow rays (any hit), 8×8 packets, closest points, box overlaps
 //! and two-tree pair enumeration (statue against a turned copy of itself).
 //! Prints one JSON object per (codec, query) with nanoseconds per query
@@ -20,12 +20,12 @@ use std::time::Instant;
 
 use cbvh::TraversalStats;
 use cbvh::build::{BuildOptions, build};
-use cbvh::codec::plain::PlainBvh;
-use cbvh::codec::racbvh::{RacBvh, RacOptions};
+use cbvh::codec::{AnyCodec, AnyOptions, CodecKind, OpenOptions};
 use cbvh::cursor::NodeCursor;
 use cbvh::geom::{Aabb, Pose, Ray};
 use cbvh::query;
 use cbvh::scene::{Kind, generate};
+use cbvh::with_codec;
 use glam::{Quat, Vec3, Vec3A};
 
 #[path = "support/rays.rs"]
@@ -201,37 +201,36 @@ fn main() {
     // With a folder, the trees are kept there as files and reopened by
     // later runs (generating and encoding take longer than the queries).
     let dir = args.next().map(std::path::PathBuf::from);
-    let files = dir.as_ref().map(|d| {
-        (
-            d.join(format!("statue-{tris}.plain")),
-            d.join(format!("statue-{tris}.racbvh")),
-        )
-    });
-    let (plain, rac) = match &files {
-        Some((p, r)) if p.exists() && r.exists() => (
-            PlainBvh::open(p).expect("open plain"),
-            RacBvh::open(r, usize::MAX).expect("open racbvh"),
-        ),
-        _ => {
-            let mesh = generate(Kind::Statue, tris, 0, &mut |_, _| {}).expect("generate");
-            let bvh = build(&mesh, &BuildOptions::default(), &|_, _| {}).expect("build");
-            let opts = RacOptions {
-                cache_budget_bytes: usize::MAX,
-                ..Default::default()
-            };
-            let out = (
-                PlainBvh::new(&bvh, &mesh),
-                RacBvh::encode(&bvh, &mesh, &opts).expect("encode"),
-            );
-            if let Some((p, r)) = &files {
-                out.0.save(p).expect("save plain");
-                out.1.save(r).expect("save racbvh");
-            }
-            out
-        }
+    // Codecs with a cache get one that holds the whole tree.
+    let options = AnyOptions::default().with_cache_budget(usize::MAX);
+    let open = OpenOptions {
+        cache_budget_bytes: usize::MAX,
+        ..Default::default()
     };
-    let root = plain.root().1;
-    let q = queries(&plain, root.min, root.max);
-    bench("plain", &plain, &q, passes);
-    bench("racbvh", &rac, &q, passes);
+    let mut built = None;
+    let codecs: Vec<AnyCodec> = CodecKind::ALL
+        .iter()
+        .map(|&k| {
+            let file = dir.as_ref().map(|d| d.join(format!("statue-{tris}.{k}")));
+            if let Some(f) = file.as_ref().filter(|f| f.exists()) {
+                return AnyCodec::open(f, &open).expect("open");
+            }
+            let (mesh, bvh) = built.get_or_insert_with(|| {
+                let mesh = generate(Kind::Statue, tris, 0, &mut |_, _| {}).expect("generate");
+                let bvh = build(&mesh, &BuildOptions::default(), &|_, _| {}).expect("build");
+                (mesh, bvh)
+            });
+            let codec = AnyCodec::encode(k, bvh, mesh, &options).expect("encode");
+            if let Some(f) = &file {
+                codec.save(f).expect("save");
+            }
+            codec
+        })
+        .collect();
+    drop(built);
+    let root = with_codec!(&codecs[0], |c| c.root().1);
+    let q = with_codec!(&codecs[0], |c| queries(c, root.min, root.max));
+    for codec in &codecs {
+        with_codec!(codec, |c| bench(codec.name(), c, &q, passes));
+    }
 }
