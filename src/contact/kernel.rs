@@ -230,7 +230,9 @@ impl PairKernel {
             };
             let (a, b) = (lane(&self.batch.a), lane(&self.batch.b));
             let (i, j) = self.batch.ids[l];
-            if let Some(c) = self.finish(i, &a, j, &b, out.sep[l], out.axis[l], out.up[l]) {
+            if let Some(c) =
+                self.finish(i, &a, j, &b, out.sep[l], out.axis[l] as u8, out.up[l] != 0)
+            {
                 self.stats.contacts += 1;
                 sink(&c);
             }

@@ -395,15 +395,28 @@ impl PatchSet {
     /// angle of the joined patch's normal (the angle between the two
     /// normals plus the joining patch's own cone).
     pub fn merge(&mut self, other: PatchSet) {
-        let acos = |c: f32| c.clamp(-1.0, 1.0).acos();
         for p in other.patches {
-            let cone = acos(p.min_cos);
-            let fits = |q: &Patch| {
-                q.normal.dot(p.normal) >= self.cos_angle
-                    && acos(q.normal.dot(p.normal)) + cone <= self.max_angle
-                    && q.bounds.loosened(self.gap).intersects(&p.bounds)
+            // The joined normal `q` must satisfy angle(q, p) + cone <=
+            // max_angle, i.e. q·p >= cos(max_angle - cone): one cosine per
+            // merged patch instead of an arc cosine per candidate.
+            let cone = p.min_cos.clamp(-1.0, 1.0).acos();
+            let slack = self.max_angle - cone;
+            let k = if slack < 0.0 {
+                None
+            } else {
+                let min_dot = slack.cos().max(self.cos_angle);
+                let fits = |q: &Patch| {
+                    q.normal.dot(p.normal) >= min_dot
+                        && q.bounds.loosened(self.gap).intersects(&p.bounds)
+                };
+                // As in `find`: a few patches are scanned faster than 27
+                // cells are hashed; both give the first fitting patch.
+                if self.patches.len() <= LINEAR_SCAN_PATCHES {
+                    self.patches.iter().position(fits)
+                } else {
+                    self.first_near(p.normal, fits)
+                }
             };
-            let k = self.first_near(p.normal, fits);
             match k {
                 Some(k) => {
                     let q = &mut self.patches[k];
@@ -414,7 +427,12 @@ impl PatchSet {
                     q.points = before + p.points;
                     q.bounds = q.bounds.union(&p.bounds);
                     q.pairs += p.pairs;
-                    q.min_cos = q.min_cos.min((acos(q.normal.dot(p.normal)) + cone).cos());
+                    // cos(angle(q, p) + cone), by the sum formula.
+                    let d = q.normal.dot(p.normal).clamp(-1.0, 1.0);
+                    let joined = d * p.min_cos
+                        - (1.0 - d * d).max(0.0).sqrt()
+                            * (1.0 - p.min_cos * p.min_cos).max(0.0).sqrt();
+                    q.min_cos = q.min_cos.min(joined);
                     q.members.extend(p.members);
                 }
                 None => {

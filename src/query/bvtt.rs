@@ -242,18 +242,22 @@ pub fn bvtt_par<A: NodeCursor, B: NodeCursor, S: Send>(
     use rayon::prelude::*;
     let mut stats = TraversalStats::default();
     let front = bvtt_front(a, b, b_to_a, prediction, target, &mut stats);
-    let results: Vec<(S, TraversalStats)> = front
-        .into_par_iter()
-        .map(|start| {
-            let mut s = init();
-            let mut st = TraversalStats::default();
-            bvtt_from(a, b, b_to_a, prediction, start, &mut st, |i, ti, j, tj| {
-                leaf(&mut s, i, ti, j, tj);
-                ControlFlow::Continue(())
-            });
-            (s, st)
-        })
-        .collect();
+    let task = |start| {
+        let mut s = init();
+        let mut st = TraversalStats::default();
+        bvtt_from(a, b, b_to_a, prediction, start, &mut st, |i, ti, j, tj| {
+            leaf(&mut s, i, ti, j, tj);
+            ControlFlow::Continue(())
+        });
+        (s, st)
+    };
+    // On one thread the same tasks run in order on the caller's thread,
+    // without handing them to the pool and waiting for it.
+    let results: Vec<(S, TraversalStats)> = if rayon::current_num_threads() <= 1 {
+        front.into_iter().map(task).collect()
+    } else {
+        front.into_par_iter().map(task).collect()
+    };
     let mut states = Vec::with_capacity(results.len());
     for (s, st) in results {
         stats.add(&st);
