@@ -168,7 +168,7 @@ impl NodeCursor for ClBvh {
                 r: n.child[k],
                 lane: WHOLE,
             });
-            out.set_boxes(boxes, &kids[..used]);
+            out.set_boxes(boxes, kids);
         } else {
             let m = MultiLeafNode::read(&self.arena, at);
             let ends = self.ends(at);
@@ -192,7 +192,7 @@ impl NodeCursor for ClBvh {
                 r: node.r,
                 lane: k as u32,
             });
-            out.set_boxes(boxes, &kids[..used]);
+            out.set_boxes(boxes, kids);
         }
     }
 
