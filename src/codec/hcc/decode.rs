@@ -4,11 +4,13 @@
 use glam::Vec3A;
 
 use super::HccBvh;
+use super::block::{Block, slot_bits};
 use super::node::{
-    HighNode, INDEX_BITS, INDEX_MASK, Interconnection, TYPE_LEAF, TYPE_TEMPLATE_LEAF, TreeHeader,
-    field, mask_half, multi_range, node_type,
+    HighNode, INDEX_MASK, Interconnection, TYPE_LEAF, TYPE_TEMPLATE_LEAF, TreeHeader, field,
+    mask_half, multi_leaf, node_type,
 };
 use super::template::TEMPLATES;
+use super::vertices::Vertices;
 use crate::cursor::NodeCursor;
 use crate::geom::{Aabb, Triangle};
 
@@ -110,41 +112,73 @@ impl HccBvh {
         }
     }
 
+    /// Coordinate `a` of vertex `local` of tree `tree` (header `h`).
     #[inline(always)]
-    fn vertex(&self, h: &TreeHeader, local: u32) -> [f32; 3] {
-        self.vertices[(h.vertex_start + local) as usize]
+    fn coord(&self, tree: u32, h: &TreeHeader, local: u32, a: usize) -> f32 {
+        match &self.vertices {
+            Vertices::F32(v) => v[(h.vertex_start + local) as usize][a],
+            Vertices::Packed(q) => q.coord(tree as usize, local, a),
+        }
     }
 
-    /// The corners (local vertex indices) of triangle slot `t`.
+    /// Vertex `local` of tree `tree` (header `h`).
     #[inline(always)]
-    pub(super) fn multi_corners(&self, t: u32) -> [u32; 3] {
-        let w = self.triangles[t as usize];
-        [
-            w & INDEX_MASK,
-            w >> INDEX_BITS & INDEX_MASK,
-            w >> (2 * INDEX_BITS) & INDEX_MASK,
-        ]
+    pub(super) fn point(&self, tree: u32, h: &TreeHeader, local: u32) -> [f32; 3] {
+        match &self.vertices {
+            Vertices::F32(v) => v[(h.vertex_start + local) as usize],
+            Vertices::Packed(q) => q.point(tree as usize, local),
+        }
     }
 
     #[inline(always)]
-    fn corners(&self, h: &TreeHeader, c: [u32; 3]) -> Triangle {
-        c.map(|i| Vec3A::from(self.vertex(h, i)))
+    fn corners(&self, tree: u32, h: &TreeHeader, c: [u32; 3]) -> Triangle {
+        c.map(|i| Vec3A::from(self.point(tree, h, i)))
     }
 
-    /// The tight box of a leaf word's triangles.
-    #[inline]
-    fn leaf_box(&self, h: &TreeHeader, w: u32) -> Aabb {
+    /// The block of the multi-triangle leaf word `w` of tree `tree`, and
+    /// its triangle count.
+    #[inline(always)]
+    pub(super) fn leaf_block(&self, tree: u32, w: u32) -> (Block, u32) {
+        let (off, count) = multi_leaf(w);
+        let at = u64::from(self.block_start[tree as usize]) * 8 + u64::from(off);
+        let sb = slot_bits(self.tree_triangles(tree as usize));
+        (Block::read(&self.blocks, at, sb), count)
+    }
+
+    /// Calls `f` with the storage rank and local corners of each triangle
+    /// of the leaf at node word `pos` of tree `tree`.
+    #[inline(always)]
+    pub(super) fn leaf_triangles(&self, tree: u32, pos: u32, mut f: impl FnMut(u32, [u32; 3])) {
+        let w = self.nodes[pos as usize];
         if self.multi {
-            let (start, count) = multi_range(w);
-            let mut b = Aabb::EMPTY;
-            for t in h.first_triangle + start..h.first_triangle + start + count {
-                for p in self.corners(h, self.multi_corners(t)) {
-                    b.grow(p);
+            let first = self.headers[tree as usize].first_triangle;
+            let (b, count) = self.leaf_block(tree, w);
+            for j in 0..count {
+                f(first + b.slot + j, b.corners(&self.blocks, j));
+            }
+        } else {
+            f(
+                self.leaf_rank_of(pos),
+                [field(w, 0), field(w, 1), field(w, 2)],
+            );
+        }
+    }
+
+    /// The tight box of the leaf at node word `pos`'s triangles.
+    #[inline]
+    fn leaf_box(&self, tree: u32, h: &TreeHeader, pos: u32) -> Aabb {
+        let w = self.nodes[pos as usize];
+        if self.multi {
+            let (b, count) = self.leaf_block(tree, w);
+            let mut bx = Aabb::EMPTY;
+            for j in 0..count {
+                for p in self.corners(tree, h, b.corners(&self.blocks, j)) {
+                    bx.grow(p);
                 }
             }
-            b
+            bx
         } else {
-            Aabb::of_triangle(&self.corners(h, [field(w, 0), field(w, 1), field(w, 2)]))
+            Aabb::of_triangle(&self.corners(tree, h, [field(w, 0), field(w, 1), field(w, 2)]))
         }
     }
 
@@ -152,7 +186,8 @@ impl HccBvh {
     /// … or `l`, `r` for the roots of two templates, children of `parent`.
     #[inline(always)]
     fn child_pair(&self, parent: &HccNode, l: u32, r: u32) -> (Aabb, Aabb, u32, u32) {
-        let h = &self.headers[parent.tree as usize];
+        let tree = parent.tree;
+        let h = &self.headers[tree as usize];
         let (wl, wr) = (self.nodes[l as usize], self.nodes[r as usize]);
         let (tl, tr) = (node_type(wl), node_type(wr));
         let d = parent.bounds;
@@ -162,7 +197,7 @@ impl HccBvh {
                 let (mut bl, mut br) = (d, d);
                 for e in 0..6 {
                     let w = if e < 3 { wl } else { wr };
-                    let v = self.vertex(h, self.vertex_field(h, w, e % 3))[e % 3];
+                    let v = self.coord(tree, h, self.vertex_field(h, w, e % 3), e % 3);
                     if mask >> e & 1 != 0 {
                         set_extent(&mut br, e, v);
                     } else {
@@ -171,22 +206,22 @@ impl HccBvh {
                 }
                 (bl, br)
             }
-            (true, true) => (self.leaf_box(h, wl), self.leaf_box(h, wr)),
+            (true, true) => (self.leaf_box(tree, h, l), self.leaf_box(tree, h, r)),
             (leaf_left, _) => {
                 let wi = if leaf_left { wr } else { wl };
                 let mut bi = d;
                 let mut j = 0;
                 for e in 0..6 {
                     if mask >> e & 1 == 0 {
-                        let v = self.vertex(h, self.vertex_field(h, wi, j))[e % 3];
+                        let v = self.coord(tree, h, self.vertex_field(h, wi, j), e % 3);
                         set_extent(&mut bi, e, v);
                         j += 1;
                     }
                 }
                 if leaf_left {
-                    (self.leaf_box(h, wl), bi)
+                    (self.leaf_box(tree, h, l), bi)
                 } else {
-                    (bi, self.leaf_box(h, wr))
+                    (bi, self.leaf_box(tree, h, r))
                 }
             }
         };
@@ -201,27 +236,79 @@ impl HccBvh {
         self.leaf_rank[w] + (self.leaf_bits[w] & ((1u64 << b) - 1)).count_ones()
     }
 
-    /// Triangle `id`'s corners as indices into the stored vertex array
-    /// (the low-level trees' arrays one after the other, as
-    /// [`HccBvh::decoded_mesh`] gives them). With one triangle a leaf, the
-    /// leaf word of rank `id` is found by select over the leaf bits; with
-    /// several, the tree by a binary search over the first ids.
-    pub fn triangle_vertex_indices(&self, id: u32) -> [u32; 3] {
-        if self.multi {
-            let tree = self.headers.partition_point(|h| h.first_triangle <= id) - 1;
-            let base = self.headers[tree].vertex_start;
-            self.multi_corners(id).map(|c| base + c)
-        } else {
-            let w = self.leaf_rank.partition_point(|&r| r <= id) - 1;
-            let mut bits = self.leaf_bits[w];
-            for _ in 0..id - self.leaf_rank[w] {
-                bits &= bits - 1;
-            }
-            let pos = (w * 64) as u32 + bits.trailing_zeros();
-            let base = self.headers[self.tree_of_word(pos)].vertex_start;
-            let word = self.nodes[pos as usize];
-            [0, 1, 2].map(|j| base + field(word, j))
+    /// The node word of the leaf of rank `k` among all leaf words (select
+    /// over the leaf bits); `k` must be below the number of leaves.
+    fn select_leaf(&self, k: u32) -> u32 {
+        let w = self.leaf_rank.partition_point(|&r| r <= k) - 1;
+        let mut bits = self.leaf_bits[w];
+        for _ in 0..k - self.leaf_rank[w] {
+            bits &= bits - 1;
         }
+        (w * 64) as u32 + bits.trailing_zeros()
+    }
+
+    /// The tree, leaf word and local corners of the triangle of storage
+    /// rank `rank`. One triangle a leaf: the leaf word of rank `rank` by
+    /// select. Several: the tree by a binary search over the trees' first
+    /// ranks, then the leaf by a binary search over the tree's leaves'
+    /// first slots (ascending in node-word order).
+    fn locate(&self, rank: u32) -> (u32, [u32; 3]) {
+        if self.multi {
+            let tree = self.headers.partition_point(|h| h.first_triangle <= rank) - 1;
+            let h = &self.headers[tree];
+            let slot = rank - h.first_triangle;
+            let (node_end, _, _) = self.tree_ends(tree);
+            let (lo, hi) = (
+                self.leaves_before(h.node_start),
+                self.leaves_before(node_end),
+            );
+            let first_slot = |k: u32| {
+                let w = self.nodes[self.select_leaf(k) as usize];
+                self.leaf_block(tree as u32, w).0.slot
+            };
+            // The last leaf whose first slot is at most `slot`.
+            let (mut a, mut b) = (lo, hi);
+            while b - a > 1 {
+                let m = a + (b - a) / 2;
+                if first_slot(m) <= slot {
+                    a = m;
+                } else {
+                    b = m;
+                }
+            }
+            let w = self.nodes[self.select_leaf(a) as usize];
+            let (blk, _) = self.leaf_block(tree as u32, w);
+            (tree as u32, blk.corners(&self.blocks, slot - blk.slot))
+        } else {
+            let pos = self.select_leaf(rank);
+            let w = self.nodes[pos as usize];
+            (
+                self.tree_of_word(pos) as u32,
+                [field(w, 0), field(w, 1), field(w, 2)],
+            )
+        }
+    }
+
+    /// Leaf words before word `pos` (`pos` up to the number of words).
+    fn leaves_before(&self, pos: u32) -> u32 {
+        let (w, b) = ((pos / 64) as usize, pos % 64);
+        match self.leaf_bits.get(w) {
+            Some(bits) => self.leaf_rank[w] + (bits & ((1u64 << b) - 1)).count_ones(),
+            None => self.leaf_rank.last().map_or(0, |&r| {
+                r + self.leaf_bits.last().map_or(0, |b| b.count_ones())
+            }),
+        }
+    }
+
+    /// Triangle `id`'s corners as indices into [`HccBvh::decoded_mesh`]'s
+    /// vertices (the input's vertex indices when vertex ids are kept).
+    /// Finds the triangle's rank through the id map's shortcuts, then its
+    /// leaf (see `locate`).
+    pub fn triangle_vertex_indices(&self, id: u32) -> [u32; 3] {
+        let rank = self.ids.rank(id).unwrap_or(0);
+        let (tree, c) = self.locate(rank);
+        let base = self.headers[tree as usize].vertex_start;
+        c.map(|l| self.vertex_index(base + l))
     }
 
     /// The low-level tree holding node word `pos`.
@@ -302,24 +389,15 @@ impl NodeCursor for HccBvh {
             return;
         }
         let h = &self.headers[node.tree as usize];
-        let w = self.nodes[node.pos as usize];
-        if self.multi {
-            let (start, count) = multi_range(w);
-            for t in h.first_triangle + start..h.first_triangle + start + count {
-                f(t, &self.corners(h, self.multi_corners(t)));
-            }
-        } else {
-            let id = self.leaf_rank_of(node.pos);
-            f(
-                id,
-                &self.corners(h, [field(w, 0), field(w, 1), field(w, 2)]),
-            );
-        }
+        self.leaf_triangles(node.tree, node.pos, |rank, c| {
+            f(self.ids.id(rank), &self.corners(node.tree, h, c));
+        });
     }
 
     fn triangle(&self, id: u32) -> Triangle {
-        let [a, b, c] = self.triangle_vertex_indices(id);
-        [a, b, c].map(|v| Vec3A::from(self.vertices[v as usize]))
+        let rank = self.ids.rank(id).unwrap_or(0);
+        let (tree, c) = self.locate(rank);
+        self.corners(tree, &self.headers[tree as usize], c)
     }
 
     fn triangle_count(&self) -> usize {
