@@ -10,7 +10,7 @@ use super::node::{
     mask_half, multi_leaf, node_type,
 };
 use super::template::TEMPLATES;
-use super::vertices::Vertices;
+use super::vertices::{F32Verts, TreeVerts, Vertices};
 use crate::cursor::NodeCursor;
 use crate::geom::{Aabb, Triangle};
 
@@ -112,17 +112,7 @@ impl HccBvh {
         }
     }
 
-    /// Coordinate `a` of vertex `local` of tree `tree` (header `h`).
-    #[inline(always)]
-    fn coord(&self, tree: u32, h: &TreeHeader, local: u32, a: usize) -> f32 {
-        match &self.vertices {
-            Vertices::F32(v) => v[(h.vertex_start + local) as usize][a],
-            Vertices::Packed(q) => q.coord(tree as usize, local, a),
-        }
-    }
-
     /// Vertex `local` of tree `tree` (header `h`).
-    #[inline(always)]
     pub(super) fn point(&self, tree: u32, h: &TreeHeader, local: u32) -> [f32; 3] {
         match &self.vertices {
             Vertices::F32(v) => v[(h.vertex_start + local) as usize],
@@ -130,9 +120,13 @@ impl HccBvh {
         }
     }
 
+    /// Tree `tree`'s vertices when they are `f32`s.
     #[inline(always)]
-    fn corners(&self, tree: u32, h: &TreeHeader, c: [u32; 3]) -> Triangle {
-        c.map(|i| Vec3A::from(self.point(tree, h, i)))
+    fn f32_verts<'a>(&self, all: &'a [[f32; 3]], tree: u32) -> F32Verts<'a> {
+        F32Verts {
+            all,
+            start: self.headers[tree as usize].vertex_start,
+        }
     }
 
     /// The block of the multi-triangle leaf word `w` of tree `tree`, and
@@ -165,27 +159,39 @@ impl HccBvh {
     }
 
     /// The tight box of the leaf at node word `pos`'s triangles.
-    #[inline]
-    fn leaf_box(&self, tree: u32, h: &TreeHeader, pos: u32) -> Aabb {
+    #[inline(always)]
+    fn leaf_box<V: TreeVerts>(&self, v: &V, tree: u32, pos: u32) -> Aabb {
         let w = self.nodes[pos as usize];
         if self.multi {
             let (b, count) = self.leaf_block(tree, w);
-            let mut bx = Aabb::EMPTY;
+            let (mut lo, mut hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
             for j in 0..count {
-                for p in self.corners(tree, h, b.corners(&self.blocks, j)) {
-                    bx.grow(p);
-                }
+                let [c0, c1, c2] = b.corners(&self.blocks, j);
+                let (p0, p1, p2) = (v.point(c0), v.point(c1), v.point(c2));
+                lo = lo.min(p0.min(p1).min(p2));
+                hi = hi.max(p0.max(p1).max(p2));
             }
-            bx
+            Aabb::new(lo, hi)
         } else {
-            Aabb::of_triangle(&self.corners(tree, h, [field(w, 0), field(w, 1), field(w, 2)]))
+            let (p0, p1, p2) = (
+                v.point(field(w, 0)),
+                v.point(field(w, 1)),
+                v.point(field(w, 2)),
+            );
+            Aabb::new(p0.min(p1).min(p2), p0.max(p1).max(p2))
         }
     }
 
     /// Decodes the boxes of the sibling pair at word indices `l`, `l + 1`
     /// … or `l`, `r` for the roots of two templates, children of `parent`.
     #[inline(always)]
-    fn child_pair(&self, parent: &HccNode, l: u32, r: u32) -> (Aabb, Aabb, u32, u32) {
+    fn child_pair<V: TreeVerts>(
+        &self,
+        v: &V,
+        parent: &HccNode,
+        l: u32,
+        r: u32,
+    ) -> (Aabb, Aabb, u32, u32) {
         let tree = parent.tree;
         let h = &self.headers[tree as usize];
         let (wl, wr) = (self.nodes[l as usize], self.nodes[r as usize]);
@@ -197,31 +203,31 @@ impl HccBvh {
                 let (mut bl, mut br) = (d, d);
                 for e in 0..6 {
                     let w = if e < 3 { wl } else { wr };
-                    let v = self.coord(tree, h, self.vertex_field(h, w, e % 3), e % 3);
+                    let c = v.coord(self.vertex_field(h, w, e % 3), e % 3);
                     if mask >> e & 1 != 0 {
-                        set_extent(&mut br, e, v);
+                        set_extent(&mut br, e, c);
                     } else {
-                        set_extent(&mut bl, e, v);
+                        set_extent(&mut bl, e, c);
                     }
                 }
                 (bl, br)
             }
-            (true, true) => (self.leaf_box(tree, h, l), self.leaf_box(tree, h, r)),
+            (true, true) => (self.leaf_box(v, tree, l), self.leaf_box(v, tree, r)),
             (leaf_left, _) => {
                 let wi = if leaf_left { wr } else { wl };
                 let mut bi = d;
                 let mut j = 0;
                 for e in 0..6 {
                     if mask >> e & 1 == 0 {
-                        let v = self.coord(tree, h, self.vertex_field(h, wi, j), e % 3);
-                        set_extent(&mut bi, e, v);
+                        let c = v.coord(self.vertex_field(h, wi, j), e % 3);
+                        set_extent(&mut bi, e, c);
                         j += 1;
                     }
                 }
                 if leaf_left {
-                    (self.leaf_box(tree, h, l), bi)
+                    (self.leaf_box(v, tree, l), bi)
                 } else {
-                    (bi, self.leaf_box(tree, h, r))
+                    (bi, self.leaf_box(v, tree, r))
                 }
             }
         };
@@ -240,45 +246,52 @@ impl HccBvh {
     /// over the leaf bits); `k` must be below the number of leaves.
     fn select_leaf(&self, k: u32) -> u32 {
         let w = self.leaf_rank.partition_point(|&r| r <= k) - 1;
-        let mut bits = self.leaf_bits[w];
-        for _ in 0..k - self.leaf_rank[w] {
-            bits &= bits - 1;
-        }
-        (w * 64) as u32 + bits.trailing_zeros()
+        (w * 64) as u32 + select_in_word(self.leaf_bits[w], k - self.leaf_rank[w])
     }
 
-    /// The tree, leaf word and local corners of the triangle of storage
-    /// rank `rank`. One triangle a leaf: the leaf word of rank `rank` by
-    /// select. Several: the tree by a binary search over the trees' first
-    /// ranks, then the leaf by a binary search over the tree's leaves'
-    /// first slots (ascending in node-word order).
+    /// The first leaf word at or after `pos` and before `end`.
+    fn next_leaf(&self, pos: u32, end: u32) -> Option<u32> {
+        let mut w = (pos / 64) as usize;
+        let mut bits = *self.leaf_bits.get(w)? & (u64::MAX << (pos % 64));
+        while bits == 0 {
+            w += 1;
+            if w * 64 >= end as usize {
+                return None;
+            }
+            bits = *self.leaf_bits.get(w)?;
+        }
+        let p = (w * 64) as u32 + bits.trailing_zeros();
+        (p < end).then_some(p)
+    }
+
+    /// The tree and local corners of the triangle of storage rank `rank`.
+    /// One triangle a leaf: the leaf word of rank `rank`, by select. Several:
+    /// the tree by a binary search over the trees' first ranks, then the
+    /// leaf by a binary search over the tree's node words (leaves' first
+    /// slots ascend in node-word order; the leaf bits find the next leaf).
     fn locate(&self, rank: u32) -> (u32, [u32; 3]) {
         if self.multi {
             let tree = self.headers.partition_point(|h| h.first_triangle <= rank) - 1;
             let h = &self.headers[tree];
             let slot = rank - h.first_triangle;
-            let (node_end, _, _) = self.tree_ends(tree);
-            let (lo, hi) = (
-                self.leaves_before(h.node_start),
-                self.leaves_before(node_end),
-            );
-            let first_slot = |k: u32| {
-                let w = self.nodes[self.select_leaf(k) as usize];
-                self.leaf_block(tree as u32, w).0.slot
+            let (end, _, _) = self.tree_ends(tree);
+            let block = |p: u32| self.leaf_block(tree as u32, self.nodes[p as usize]).0;
+            let Some(mut lo) = self.next_leaf(h.node_start, end) else {
+                return (tree as u32, [0; 3]);
             };
-            // The last leaf whose first slot is at most `slot`.
-            let (mut a, mut b) = (lo, hi);
-            while b - a > 1 {
-                let m = a + (b - a) / 2;
-                if first_slot(m) <= slot {
-                    a = m;
-                } else {
-                    b = m;
+            let mut hi = end;
+            while hi - lo > 1 {
+                let mid = lo + (hi - lo) / 2;
+                match self.next_leaf(mid, hi) {
+                    Some(q) if block(q).slot <= slot => lo = q,
+                    _ => hi = mid,
                 }
             }
-            let w = self.nodes[self.select_leaf(a) as usize];
-            let (blk, _) = self.leaf_block(tree as u32, w);
-            (tree as u32, blk.corners(&self.blocks, slot - blk.slot))
+            let b = block(lo);
+            (
+                tree as u32,
+                b.corners(&self.blocks, slot.wrapping_sub(b.slot)),
+            )
         } else {
             let pos = self.select_leaf(rank);
             let w = self.nodes[pos as usize];
@@ -286,17 +299,6 @@ impl HccBvh {
                 self.tree_of_word(pos) as u32,
                 [field(w, 0), field(w, 1), field(w, 2)],
             )
-        }
-    }
-
-    /// Leaf words before word `pos` (`pos` up to the number of words).
-    fn leaves_before(&self, pos: u32) -> u32 {
-        let (w, b) = ((pos / 64) as usize, pos % 64);
-        match self.leaf_bits.get(w) {
-            Some(bits) => self.leaf_rank[w] + (bits & ((1u64 << b) - 1)).count_ones(),
-            None => self.leaf_rank.last().map_or(0, |&r| {
-                r + self.leaf_bits.last().map_or(0, |b| b.count_ones())
-            }),
         }
     }
 
@@ -315,6 +317,41 @@ impl HccBvh {
     fn tree_of_word(&self, pos: u32) -> usize {
         self.headers.partition_point(|h| h.node_start <= pos) - 1
     }
+}
+
+impl HccBvh {
+    /// [`NodeCursor::for_each_triangle`] with the tree's vertices `v`.
+    #[inline(always)]
+    fn triangles_with<V: TreeVerts>(
+        &self,
+        v: &V,
+        node: &HccNode,
+        f: &mut impl FnMut(u32, &Triangle),
+    ) {
+        self.leaf_triangles(node.tree, node.pos, |rank, [c0, c1, c2]| {
+            f(self.ids.id(rank), &[v.point(c0), v.point(c1), v.point(c2)]);
+        });
+    }
+}
+
+/// The position of the set bit of rank `k` in `w` (`k < popcount(w)`): a
+/// byte at a time, then a bit at a time.
+#[inline]
+fn select_in_word(mut w: u64, mut k: u32) -> u32 {
+    let mut base = 0;
+    loop {
+        let c = (w & 0xFF).count_ones();
+        if k < c || base >= 56 {
+            break;
+        }
+        k -= c;
+        w >>= 8;
+        base += 8;
+    }
+    for _ in 0..k {
+        w &= w.wrapping_sub(1);
+    }
+    base + w.trailing_zeros().min(63)
 }
 
 impl NodeCursor for HccBvh {
@@ -370,7 +407,11 @@ impl NodeCursor for HccBvh {
                 node.template,
             )
         };
-        let (bxl, bxr, kl, kr) = self.child_pair(node, l, r);
+        // One branch on the vertex format per expansion.
+        let (bxl, bxr, kl, kr) = match &self.vertices {
+            Vertices::F32(all) => self.child_pair(&self.f32_verts(all, node.tree), node, l, r),
+            Vertices::Packed(q) => self.child_pair(&q.tree(node.tree as usize), node, l, r),
+        };
         let child = |pos, block, template, kind: u32, bounds| HccNode {
             bounds,
             tree: node.tree,
@@ -388,19 +429,38 @@ impl NodeCursor for HccBvh {
         if node.kind == KIND_EMPTY {
             return;
         }
-        let h = &self.headers[node.tree as usize];
-        self.leaf_triangles(node.tree, node.pos, |rank, c| {
-            f(self.ids.id(rank), &self.corners(node.tree, h, c));
-        });
+        match &self.vertices {
+            Vertices::F32(all) => {
+                self.triangles_with(&self.f32_verts(all, node.tree), node, &mut f)
+            }
+            Vertices::Packed(q) => self.triangles_with(&q.tree(node.tree as usize), node, &mut f),
+        }
     }
 
     fn triangle(&self, id: u32) -> Triangle {
         let rank = self.ids.rank(id).unwrap_or(0);
         let (tree, c) = self.locate(rank);
-        self.corners(tree, &self.headers[tree as usize], c)
+        let h = &self.headers[tree as usize];
+        c.map(|l| Vec3A::from(self.point(tree, h, l)))
     }
 
     fn triangle_count(&self) -> usize {
         self.triangle_count as usize
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn select_in_word_finds_every_set_bit() {
+        for w in [1u64, u64::MAX, 0x8000_0000_0000_0001, 0xF0F0_0000_1234_5678] {
+            let mut k = 0;
+            for p in 0..64 {
+                if w >> p & 1 == 1 {
+                    assert_eq!(super::select_in_word(w, k), p, "{w:x} {k}");
+                    k += 1;
+                }
+            }
+        }
     }
 }

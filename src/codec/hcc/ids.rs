@@ -43,7 +43,7 @@
 
 use crate::codec::common::FormatError;
 use crate::codec::common::le::{f32x3_at, u32_at, u64_at};
-use crate::codec::common::packed::ForArray;
+use crate::codec::common::packed::ForVec;
 
 /// Steps between marks on a cycle of `π` (see the module docs): `π⁻¹`
 /// costs at most `SHORTCUT + 2` reads of `π`.
@@ -52,10 +52,8 @@ pub const SHORTCUT: u32 = 8;
 /// Storage rank ↔ input triangle id (see the module docs).
 #[derive(Clone, Debug, PartialEq)]
 pub struct IdMap {
-    /// `π` and the back pointers, each a `ForArray`.
-    blob: Vec<u8>,
-    fwd: ForArray,
-    back: ForArray,
+    fwd: ForVec,
+    back: ForVec,
     marks: Vec<u64>,
     /// Marks before each word of `marks`.
     mark_rank: Vec<u32>,
@@ -111,17 +109,10 @@ impl IdMap {
         }
         back_of.sort_unstable();
         let back: Vec<u32> = back_of.iter().map(|p| p.1).collect();
-        let mut blob = Vec::new();
-        ForArray::write(ids, &mut blob);
-        let split = blob.len();
-        ForArray::write(&back, &mut blob);
-        let (fwd, _) = ForArray::parse(&blob, 0, "ids").expect("a fresh array parses");
-        let (back, _) = ForArray::parse(&blob, split, "ids").expect("a fresh array parses");
         let mark_rank = running_counts(&marks);
         Self {
-            blob,
-            fwd,
-            back,
+            fwd: ForVec::new(ids),
+            back: ForVec::new(&back),
             marks,
             mark_rank,
         }
@@ -135,7 +126,7 @@ impl IdMap {
     /// The input id of the triangle at storage rank `rank` (`< len`).
     #[inline(always)]
     pub fn id(&self, rank: u32) -> u32 {
-        self.fwd.get(&self.blob, u64::from(rank))
+        self.fwd.get(u64::from(rank))
     }
 
     #[inline]
@@ -147,7 +138,7 @@ impl IdMap {
     fn back_of(&self, x: u32) -> u32 {
         let (w, b) = ((x / 64) as usize, x % 64);
         let k = self.mark_rank[w] + (self.marks[w] & ((1u64 << b) - 1)).count_ones();
-        self.back.get(&self.blob, u64::from(k))
+        self.back.get(u64::from(k))
     }
 
     /// The storage rank of input triangle `id` (`< len`), or `None` when
@@ -179,12 +170,14 @@ impl IdMap {
 
     /// Bytes in memory.
     pub fn bytes(&self) -> usize {
-        self.blob.len() + self.marks.len() * 8 + self.mark_rank.len() * 4
+        self.fwd.bytes() + self.back.bytes() + self.marks.len() * 8 + self.mark_rank.len() * 4
     }
 
     /// The `ids` section (see the module docs).
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut out = self.blob.clone();
+        let mut out = Vec::with_capacity(self.bytes());
+        self.fwd.write(&mut out);
+        self.back.write(&mut out);
         for w in &self.marks {
             out.extend_from_slice(&w.to_le_bytes());
         }
@@ -194,8 +187,8 @@ impl IdMap {
     /// Reads an `ids` section of `n` triangles; checks its frame (lengths,
     /// block heads), not the permutation ([`IdMap::verify`] does).
     pub fn parse(b: &[u8], n: u32) -> Result<Self, FormatError> {
-        let (fwd, split) = ForArray::parse(b, 0, "ids")?;
-        let (back, end) = ForArray::parse(b, split, "ids")?;
+        let (fwd, split) = ForVec::parse(b, 0, "ids")?;
+        let (back, end) = ForVec::parse(b, split, "ids")?;
         let words = (n as usize).div_ceil(64);
         if fwd.len() != u64::from(n) || b.len() - end != words * 8 {
             return Err(FormatError::header(
@@ -219,7 +212,6 @@ impl IdMap {
         }
         let mark_rank = running_counts(&marks);
         Ok(Self {
-            blob: b[..end].to_vec(),
             fwd,
             back,
             marks,
@@ -239,7 +231,7 @@ impl IdMap {
             }
         }
         for k in 0..self.back.len() {
-            if self.back.get(&self.blob, k) >= n {
+            if self.back.get(k) >= n {
                 return Err("a triangle id shortcut is out of range");
             }
         }
@@ -256,8 +248,7 @@ impl IdMap {
 /// uses (see the module docs).
 #[derive(Clone, Debug, PartialEq)]
 pub struct VertexIds {
-    blob: Vec<u8>,
-    map: ForArray,
+    map: ForVec,
     /// Input vertices no triangle uses: index and position.
     pub unused: Vec<(u32, [f32; 3])>,
 }
@@ -266,10 +257,10 @@ impl VertexIds {
     /// The map of stored vertex `s` to input vertex `ids[s]`, and the
     /// unused input vertices.
     pub fn new(ids: &[u32], unused: Vec<(u32, [f32; 3])>) -> Self {
-        let mut blob = Vec::new();
-        ForArray::write(ids, &mut blob);
-        let (map, _) = ForArray::parse(&blob, 0, "vertex ids").expect("a fresh array parses");
-        Self { blob, map, unused }
+        Self {
+            map: ForVec::new(ids),
+            unused,
+        }
     }
 
     /// Number of stored vertices mapped.
@@ -280,17 +271,18 @@ impl VertexIds {
     /// The input index of stored vertex `s` (`< len`).
     #[inline]
     pub fn get(&self, s: u32) -> u32 {
-        self.map.get(&self.blob, u64::from(s))
+        self.map.get(u64::from(s))
     }
 
     /// Bytes in memory.
     pub fn bytes(&self) -> usize {
-        self.blob.len() + self.unused.len() * 16
+        self.map.bytes() + 8 + self.unused.len() * 16
     }
 
     /// The `vertex ids` section.
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut out = self.blob.clone();
+        let mut out = Vec::with_capacity(self.bytes());
+        self.map.write(&mut out);
         out.extend_from_slice(&(self.unused.len() as u64).to_le_bytes());
         for (i, p) in &self.unused {
             out.extend_from_slice(&i.to_le_bytes());
@@ -303,7 +295,7 @@ impl VertexIds {
 
     /// Reads a `vertex ids` section for `stored` stored vertices.
     pub fn parse(b: &[u8], stored: u32) -> Result<Self, FormatError> {
-        let (map, end) = ForArray::parse(b, 0, "vertex ids")?;
+        let (map, end) = ForVec::parse(b, 0, "vertex ids")?;
         let bad = |why: String| FormatError::header("vertex ids", why);
         if map.len() != u64::from(stored) {
             return Err(bad(format!(
@@ -335,11 +327,7 @@ impl VertexIds {
                 (u32_at(b, at), f32x3_at(b, at + 4))
             })
             .collect();
-        Ok(Self {
-            blob: b[..end].to_vec(),
-            map,
-            unused,
-        })
+        Ok(Self { map, unused })
     }
 }
 

@@ -28,6 +28,8 @@
 //! tree is `wx + wy + wz` bits at bit `i · (wx + wy + wz)` of the tree's
 //! run, x first.
 
+use glam::Vec3A;
+
 use crate::codec::common::FormatError;
 use crate::codec::common::le::u64_at_padded;
 
@@ -195,19 +197,6 @@ impl Quantized {
         self.trees.push(t);
     }
 
-    /// Coordinate `a` of vertex `local` of tree `tree`.
-    #[inline(always)]
-    pub fn coord(&self, tree: usize, local: u32, a: usize) -> f32 {
-        let t = &self.trees[tree];
-        let skip = match a {
-            0 => 0,
-            1 => t.width(0),
-            _ => t.width(0) + t.width(1),
-        };
-        let at = u64::from(t.byte) * 8 + u64::from(local) * u64::from(t.stride()) + u64::from(skip);
-        self.value(a, t.base(a) + bits_at(&self.data, at, t.width(a)))
-    }
-
     /// Vertex `local` of tree `tree`.
     #[inline(always)]
     pub fn point(&self, tree: usize, local: u32) -> [f32; 3] {
@@ -258,6 +247,96 @@ impl Quantized {
             ));
         }
         Ok(())
+    }
+}
+
+/// One low-level tree's vertices as the cursor reads them: the cursor is
+/// monomorphized over the two forms, so the format is chosen once per
+/// node expansion, not once per coordinate.
+pub trait TreeVerts {
+    /// Coordinate `a` of vertex `local`.
+    fn coord(&self, local: u32, a: usize) -> f32;
+    /// Vertex `local`.
+    fn point(&self, local: u32) -> Vec3A;
+}
+
+/// A tree's `f32` vertices: the shared array and the tree's first index.
+pub struct F32Verts<'a> {
+    /// Every tree's vertices.
+    pub all: &'a [[f32; 3]],
+    /// The tree's first vertex.
+    pub start: u32,
+}
+
+impl TreeVerts for F32Verts<'_> {
+    #[inline(always)]
+    fn coord(&self, local: u32, a: usize) -> f32 {
+        self.all[(self.start + local) as usize][a]
+    }
+
+    #[inline(always)]
+    fn point(&self, local: u32) -> Vec3A {
+        Vec3A::from(self.all[(self.start + local) as usize])
+    }
+}
+
+/// A tree's packed run, its fields unpacked once.
+pub struct PackedVerts<'a> {
+    data: &'a [u8],
+    bit: u64,
+    stride: u64,
+    skip: [u64; 3],
+    width: [u32; 3],
+    base: [u32; 3],
+    origin: [f32; 3],
+    step: [f32; 3],
+}
+
+impl TreeVerts for PackedVerts<'_> {
+    #[inline(always)]
+    fn coord(&self, local: u32, a: usize) -> f32 {
+        let at = self.bit + u64::from(local) * self.stride + self.skip[a];
+        let q = self.base[a] + bits_at(self.data, at, self.width[a]);
+        // The formula of `Quantized::value`, which the encoder used.
+        self.origin[a] + q as f32 * self.step[a]
+    }
+
+    #[inline(always)]
+    fn point(&self, local: u32) -> Vec3A {
+        if self.stride > 57 {
+            return Vec3A::new(
+                self.coord(local, 0),
+                self.coord(local, 1),
+                self.coord(local, 2),
+            );
+        }
+        // One 64-bit read holds the whole vertex.
+        let at = self.bit + u64::from(local) * self.stride;
+        let w = u64_at_padded(self.data, (at >> 3) as usize) >> (at & 7);
+        let q = |a: usize| {
+            let f = (w >> self.skip[a]) & ((1u64 << self.width[a]) - 1);
+            self.origin[a] + (self.base[a] + f as u32) as f32 * self.step[a]
+        };
+        Vec3A::new(q(0), q(1), q(2))
+    }
+}
+
+impl Quantized {
+    /// Tree `tree`'s run, ready to read.
+    #[inline(always)]
+    pub fn tree(&self, tree: usize) -> PackedVerts<'_> {
+        let t = &self.trees[tree];
+        let width = [t.width(0), t.width(1), t.width(2)];
+        PackedVerts {
+            data: &self.data,
+            bit: u64::from(t.byte) * 8,
+            stride: u64::from(width[0] + width[1] + width[2]),
+            skip: [0, u64::from(width[0]), u64::from(width[0] + width[1])],
+            width,
+            base: [t.base(0), t.base(1), t.base(2)],
+            origin: self.origin,
+            step: self.step,
+        }
     }
 }
 
@@ -318,7 +397,8 @@ mod tests {
             let (tree, local) = if k < 100 { (0, k) } else { (1, k - 100) };
             let d = q.point(tree, local as u32);
             for a in 0..3 {
-                assert_eq!(d[a], q.coord(tree, local as u32, a));
+                assert_eq!(d[a], q.tree(tree).coord(local as u32, a));
+                assert_eq!(d[a], q.tree(tree).point(local as u32)[a]);
                 assert_eq!(d[a], q.value(a, grid[k][a]));
                 assert!((d[a] - p[a]).abs() <= q.step[a] * 0.5 + p[a].abs() * 1e-6);
             }
