@@ -1,23 +1,26 @@
 //! i-HCCMesh figures against plain and RACBVH, side by side in one run:
 //! bytes per triangle by part, vertices duplicated across low-level trees,
-//! and closest-hit camera rays per second on one thread; then the
-//! multi-triangle-leaf curve (bytes per triangle and rays per second
-//! against triangles per leaf).
+//! closest-hit camera rays per second on one thread and the cost of
+//! `triangle(id)`; for `f32` and quantized vertices (`--vertex-bits`), one
+//! triangle a leaf and the multi-triangle-leaf curve (bytes per triangle
+//! and rays per second against triangles per leaf).
 //!
 //! ```text
 //! cargo run --release --example hcc_stats -- [--gen statue|turbine|... --tris N | --mesh FILE]
-//!     [--leaves 2,4,8,16] [--width 512] [--rounds 5] [--json]
+//!     [--leaves 2,4,8,16] [--vertex-bits 16] [--width 512] [--rounds 5] [--json]
 //! ```
 //!
 //! Rays: a pinhole camera's primary rays (`--width`², in 8×8 tiles). Every
 //! structure is timed once per round, structures alternating within a
-//! round, and the best round is reported (the machine is shared).
+//! round, and the best round is reported (the machine is shared). The
+//! `maps` column is what the input's numbering costs (parts `ids` and
+//! `vertex-ids`): `w/o maps` is the structure without it.
 
 use std::time::Instant;
 
 use cbvh::build::{BuildOptions, Layout, build};
 use cbvh::codec::ByteSize;
-use cbvh::codec::hcc::HccBvh;
+use cbvh::codec::hcc::{HccBvh, HccOptions};
 use cbvh::codec::plain::PlainBvh;
 use cbvh::codec::racbvh::{RacBvh, RacOptions};
 use cbvh::cursor::NodeCursor;
@@ -45,9 +48,19 @@ struct Args {
     /// Leaf sizes of the multi-triangle variant, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "2,4,8,16")]
     leaves: Vec<usize>,
+    /// Bits per coordinate of the quantized rows.
+    #[arg(long, default_value_t = 16)]
+    vertex_bits: u32,
     /// Camera image width (a multiple of 8).
     #[arg(long, default_value_t = 512)]
     width: usize,
+    /// Time only the rows whose name is one of these (plain always runs,
+    /// as the reference), comma-separated; all rows when unset.
+    #[arg(long, value_delimiter = ',')]
+    only: Vec<String>,
+    /// Random ids for the `triangle(id)` timing (0: skip it).
+    #[arg(long, default_value_t = 20_000)]
+    tri_ids: usize,
     /// Timing rounds.
     #[arg(long, default_value_t = 5)]
     rounds: usize,
@@ -69,6 +82,50 @@ fn per_tri(parts: &[(&'static str, usize)], tris: usize) -> Vec<(&'static str, f
         .iter()
         .map(|&(n, b)| (n, b as f64 / tris as f64))
         .collect()
+}
+
+/// One structure under test.
+#[allow(clippy::large_enum_variant)] // a handful of rows, built once
+enum Row {
+    Plain(PlainBvh),
+    Rac(RacBvh),
+    Hcc(HccBvh),
+}
+
+impl Row {
+    fn trace(&self, rays: &[Ray]) -> usize {
+        match self {
+            Row::Plain(c) => trace(c, rays),
+            Row::Rac(c) => trace(c, rays),
+            Row::Hcc(c) => trace(c, rays),
+        }
+    }
+
+    fn parts(&self) -> Vec<(&'static str, usize)> {
+        match self {
+            Row::Plain(c) => c.bytes_by_part(),
+            Row::Rac(c) => c.bytes_by_part(),
+            Row::Hcc(c) => c.bytes_by_part(),
+        }
+    }
+
+    /// Nanoseconds per `triangle(id)` over `ids`.
+    fn triangle_ns(&self, ids: &[u32]) -> f64 {
+        fn run<C: NodeCursor>(c: &C, ids: &[u32]) -> f64 {
+            let t = Instant::now();
+            let mut acc = Vec3A::ZERO;
+            for &id in ids {
+                acc += c.triangle(id)[0];
+            }
+            std::hint::black_box(acc);
+            t.elapsed().as_secs_f64() * 1e9 / ids.len() as f64
+        }
+        match self {
+            Row::Plain(c) => run(c, ids),
+            Row::Rac(c) => run(c, ids),
+            Row::Hcc(c) => run(c, ids),
+        }
+    }
 }
 
 fn main() {
@@ -94,55 +151,84 @@ fn main() {
     let rac = RacBvh::encode(&bvh, &mesh, &RacOptions::default()).expect("racbvh");
     let budget = rac.cluster_count() * rac.cluster_nodes() as usize * 48;
     let rac = RacBvh::from_bytes(&rac.to_bytes(), budget).expect("reopen racbvh");
+    let f32_opts = HccOptions::default();
+    let q_opts = HccOptions {
+        vertex_bits: Some(a.vertex_bits),
+        ..Default::default()
+    };
     let t = Instant::now();
     let hcc = HccBvh::encode(&bvh, &mesh).expect("hcc");
     let encode_s = t.elapsed().as_secs_f64();
-    let multi: Vec<(usize, HccBvh)> = a
-        .leaves
-        .iter()
-        .map(|&k| (k, HccBvh::encode(&tree(k), &mesh).expect("hcc-multi")))
-        .collect();
+    let st = *hcc.stats();
+    let q = a.vertex_bits;
+    let mut names = vec!["plain".to_string(), "racbvh".into(), "hcc".into()];
+    let mut rows = vec![Row::Plain(plain), Row::Rac(rac), Row::Hcc(hcc)];
+    names.push(format!("hcc-q{q}"));
+    rows.push(Row::Hcc(
+        HccBvh::encode_with(&bvh, &mesh, &q_opts).expect("hcc quantized"),
+    ));
+    drop(bvh);
+    for &k in &a.leaves {
+        let t = tree(k);
+        for (name, o) in [
+            (format!("hcc-L{k}"), f32_opts),
+            (format!("hcc-q{q}-L{k}"), q_opts),
+        ] {
+            names.push(name);
+            rows.push(Row::Hcc(
+                HccBvh::encode_with(&t, &mesh, &o).expect("hcc multi"),
+            ));
+        }
+    }
 
     let (lo, hi) = mesh.bounds().expect("non-empty mesh");
     let (eye, dirs) = ray_sets::camera_tiles(Vec3A::from(lo), Vec3A::from(hi), a.width);
     let rays: Vec<Ray> = dirs.iter().map(|&d| Ray::new(eye, d)).collect();
+    let mut s = 0x2545_F491_4F6C_DD1Du64;
+    let ids: Vec<u32> = (0..a.tri_ids)
+        .map(|_| {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s % n as u64) as u32
+        })
+        .collect();
 
     // Timing: alternate structures within each round, keep the best.
-    let names: Vec<String> = ["plain", "racbvh", "hcc"]
-        .iter()
-        .map(|s| s.to_string())
-        .chain(multi.iter().map(|(k, _)| format!("hcc-multi{k}")))
-        .collect();
-    let mut best = vec![0f64; names.len()];
-    let mut hits = vec![0usize; names.len()];
+    let mut best = vec![0f64; rows.len()];
+    let mut tri_ns = vec![f64::INFINITY; rows.len()];
+    let mut hits = vec![0usize; rows.len()];
+    let timed = |i: usize| i == 0 || a.only.is_empty() || a.only.contains(&names[i]);
     // Warm the RACBVH cache once.
-    trace(&rac, &rays);
+    if timed(1) {
+        rows[1].trace(&rays);
+    }
     for _ in 0..a.rounds {
-        for (i, best) in best.iter_mut().enumerate() {
+        for (i, r) in rows.iter().enumerate().filter(|p| timed(p.0)) {
             let t = Instant::now();
-            hits[i] = match i {
-                0 => trace(&plain, &rays),
-                1 => trace(&rac, &rays),
-                2 => trace(&hcc, &rays),
-                k => trace(&multi[k - 3].1, &rays),
-            };
-            *best = best.max(rays.len() as f64 / t.elapsed().as_secs_f64());
+            hits[i] = r.trace(&rays);
+            best[i] = best[i].max(rays.len() as f64 / t.elapsed().as_secs_f64());
+            if !ids.is_empty() {
+                tri_ns[i] = tri_ns[i].min(r.triangle_ns(&ids));
+            }
         }
     }
 
-    let bytes: Vec<Vec<(&'static str, usize)>> = [
-        plain.bytes_by_part(),
-        rac.bytes_by_part(),
-        hcc.bytes_by_part(),
-    ]
-    .into_iter()
-    .chain(multi.iter().map(|(_, h)| h.bytes_by_part()))
-    .collect();
+    let bytes: Vec<Vec<(&'static str, usize)>> = rows.iter().map(Row::parts).collect();
     let totals: Vec<f64> = bytes
         .iter()
         .map(|p| p.iter().map(|x| x.1).sum::<usize>() as f64 / n as f64)
         .collect();
-    let st = hcc.stats();
+    let maps: Vec<f64> = bytes
+        .iter()
+        .map(|p| {
+            p.iter()
+                .filter(|x| x.0 == "ids" || x.0 == "vertex-ids")
+                .map(|x| x.1)
+                .sum::<usize>() as f64
+                / n as f64
+        })
+        .collect();
     if a.json {
         let rows: Vec<_> = names
             .iter()
@@ -150,8 +236,10 @@ fn main() {
             .map(|(i, name)| {
                 serde_json::json!({
                     "codec": name, "bytes_per_triangle": totals[i],
+                    "maps_per_triangle": maps[i],
                     "parts_per_triangle": per_tri(&bytes[i], n),
                     "rays_per_s": best[i], "vs_plain": best[i] / best[0], "hits": hits[i],
+                    "triangle_ns": tri_ns[i],
                 })
             })
             .collect();
@@ -173,9 +261,14 @@ fn main() {
         st.loose_extents
     );
     println!(
-        "{} camera rays, 1 thread, best of {} rounds",
+        "{} camera rays, 1 thread, best of {} rounds; triangle(id): {} random ids",
         rays.len(),
-        a.rounds
+        a.rounds,
+        ids.len()
+    );
+    println!(
+        "{:<13} {:>6} {:>6} {:>8}  {:>13} {:>5} {:>9} {:>8}",
+        "", "B/tri", "maps", "w/o maps", "M rays/s", "plain", "hits", "tri(id)"
     );
     for (i, name) in names.iter().enumerate() {
         let parts: Vec<String> = per_tri(&bytes[i], n)
@@ -183,11 +276,14 @@ fn main() {
             .map(|(p, b)| format!("{p} {b:.2}"))
             .collect();
         println!(
-            "{name:<13} {:6.2} B/tri  {:7.3} M rays/s ({:.2}x plain, {} hits)  [{}]",
+            "{name:<13} {:6.2} {:6.2} {:8.2}  {:13.3} {:4.2}x {:9} {:6.0}ns  [{}]",
             totals[i],
+            maps[i],
+            totals[i] - maps[i],
             best[i] / 1e6,
             best[i] / best[0],
             hits[i],
+            tri_ns[i],
             parts.join(", ")
         );
     }

@@ -474,8 +474,19 @@ fn rac(bits: u32, vertex_bits: Option<u32>) -> cbvh::codec::racbvh::RacOptions {
     }
 }
 
+/// hcc options: `f32` or quantized vertices, with or without the input's
+/// vertex ids (without them the decoded mesh repeats shared vertices, so
+/// it is checked as a lossy one).
+fn hcc(vertex_bits: Option<u32>, vertex_ids: bool) -> cbvh::codec::hcc::HccOptions {
+    cbvh::codec::hcc::HccOptions {
+        vertex_bits,
+        vertex_ids,
+    }
+}
+
 // One line per codec.
 codec_suite!(plain, cbvh::codec::plain::PlainBvh, lossless: [()], lossy: []);
 codec_suite!(racbvh, cbvh::codec::racbvh::RacBvh, lossless: [rac(16, None)], lossy: [rac(8, Some(8)), rac(16, Some(16))]);
 codec_suite!(clbvh, cbvh::codec::clbvh::ClBvh, lossless: [Default::default()], lossy: []);
 codec_suite!(clbvh_compact, cbvh::codec::clbvh::ClBvhCompact, lossless: [Default::default()], lossy: []);
+codec_suite!(hcc, cbvh::codec::hcc::HccBvh, lossless: [hcc(None, true)], lossy: [hcc(None, false), hcc(Some(16), true), hcc(Some(8), false)]);

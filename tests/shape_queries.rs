@@ -110,8 +110,8 @@ fn point_projection_subshape_feature_and_is_inside_match_trimesh() {
     for (kind, seed) in [(Kind::Statue, 4), (Kind::Robot, 7)] {
         let mesh = mesh_of(kind, 1500, seed);
         for c in cbvh_shapes(&mesh) {
-            // Against the mesh in the codec's triangle ids (hcc numbers
-            // its implicit triangles by storage order).
+            // Against the mesh as the codec decodes it (quantized codecs
+            // move vertices; every codec keeps the input's triangle ids).
             let t = parry_trimesh(&c.codec().decoded_mesh()).unwrap();
             let mut same_triangle = 0;
             let mut inside = 0;

@@ -3,6 +3,7 @@
 use std::time::Instant;
 
 use cbvh::build::{BuildOptions, Layout, build};
+use cbvh::codec::hcc::HccOptions;
 use cbvh::codec::racbvh::RacOptions;
 use cbvh::codec::{AnyCodec, AnyOptions, ByteSize, CodecKind, OpenOptions};
 
@@ -28,9 +29,14 @@ pub struct BuildArgs {
     /// RACBVH: bits per quantized box coordinate.
     #[arg(long, default_value_t = 16)]
     pub bits: u32,
-    /// RACBVH: bits per quantized vertex coordinate; 0 keeps vertices as f32.
-    #[arg(long, default_value_t = 16)]
-    pub vertex_bits: u32,
+    /// RACBVH and hcc: bits per quantized vertex coordinate; 0 keeps
+    /// vertices as f32. Unset: each codec's default (RACBVH 16, hcc f32).
+    #[arg(long)]
+    pub vertex_bits: Option<u32>,
+    /// hcc: drop the input's vertex ids (part vertex-ids): smaller, but the
+    /// decoded mesh repeats the vertices low-level trees share.
+    #[arg(long)]
+    pub no_vertex_ids: bool,
     /// Write the codec's self-contained file here (any codec but parry);
     /// `cbvh info`, `cbvh render`, `cbvh build` and the sims open it like a
     /// mesh, and `cbvh::codec::AnyCodec::open` / `CbvhShape::open` in a
@@ -87,12 +93,21 @@ pub fn run(a: BuildArgs) -> CliResult {
         match a.codec {
             Structure::Codec(kind) => {
                 let bvh = build_with_progress(&mesh, &a)?;
+                let bits = |default: Option<u32>| match a.vertex_bits {
+                    None => default,
+                    Some(0) => None,
+                    Some(b) => Some(b),
+                };
                 let options = AnyOptions {
                     racbvh: RacOptions {
                         cluster_nodes: a.cluster_nodes,
                         bits: a.bits,
-                        vertex_bits: (a.vertex_bits != 0).then_some(a.vertex_bits),
+                        vertex_bits: bits(RacOptions::default().vertex_bits),
                         ..Default::default()
+                    },
+                    hcc: HccOptions {
+                        vertex_bits: bits(HccOptions::default().vertex_bits),
+                        vertex_ids: !a.no_vertex_ids,
                     },
                     ..Default::default()
                 };

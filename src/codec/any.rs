@@ -128,7 +128,7 @@ registry! {
     ClbvhCompact(ClBvhCompact, clbvh_compact) = "clbvh-compact",
         "CLBVH with compact leaves: de-duplicated vertex indices, 8-bit corner indices";
     Hcc(HccBvh, hcc) = "hcc",
-        "i-HCCMesh: low-level trees of < 512 vertices, 4-byte nodes with boxes from vertex indices and reuse masks, tree templates (multi-triangle leaves with --leaf-size > 1)";
+        "i-HCCMesh: low-level trees of < 512 vertices, 4-byte nodes with boxes from vertex indices and reuse masks, tree templates (multi-triangle leaves with --leaf-size > 1, quantized vertices with --vertex-bits)";
 }
 
 /// Runs `$body` with `$c` bound to the concrete codec inside an
@@ -467,8 +467,7 @@ impl AnyCodec {
     }
 
     /// The mesh as stored (quantized vertices decoded), triangle `k` being
-    /// the one the cursor reports as id `k` (the input's order, except for
-    /// codecs that store triangles implicitly, such as hcc).
+    /// the one the cursor reports as id `k`: the input's triangle `k`.
     pub fn decoded_mesh(&self) -> Mesh {
         crate::with_codec!(self, |c| Codec::decoded_mesh(c))
     }

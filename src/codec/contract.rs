@@ -59,9 +59,8 @@ pub trait Codec: NodeCursor + ByteSize + Send + Sync + Sized + 'static {
     fn triangle_vertices(&self, id: u32) -> [u32; 3];
 
     /// The mesh as stored (quantized vertices decoded), triangle `k` being
-    /// the triangle the cursor reports as id `k`: the input's order for a
-    /// codec that stores ids, storage order for one that stores triangles
-    /// implicitly (hcc: see its module docs on triangle ids).
+    /// the triangle the cursor reports as id `k`, which is the input's
+    /// triangle `k`: every codec reports the input's ids.
     fn decoded_mesh(&self) -> Mesh;
 
     /// Mass properties at density 1, computed from the original mesh when

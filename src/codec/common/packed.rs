@@ -1,7 +1,9 @@
 //! Packed arrays of `u32`: [`ForArray`], frame-of-reference blocks of 128
 //! values, each block holding its minimum and the offsets from it in as
 //! many bits as the block's largest offset needs, so that any value is one
-//! block-head read and one bit-field read away; and [`bits_for`].
+//! block-head read and one bit-field read away; [`ForVec`], the same array
+//! parsed into memory (typed block heads, padded data) for in-core hot
+//! paths; and [`bits_for`].
 //!
 //! # Layout of a [`ForArray`]
 //! `len: u64`, `data_len: u64`, then per block of 128 values a 16-byte head
@@ -162,6 +164,107 @@ impl ForArray {
     }
 }
 
+/// One [`ForVec`] block head.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Head {
+    base: u32,
+    width: u32,
+    bit: u64,
+}
+
+/// A [`ForArray`] in memory, in the same layout on disk: the block heads
+/// as a typed array (small enough to stay in cache: 16 bytes per 128
+/// values) and the offsets followed by eight zero bytes, so that a read is
+/// one head and one unaligned 64-bit load, without branches.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ForVec {
+    len: u64,
+    heads: Vec<Head>,
+    /// The offsets, then 8 bytes of padding.
+    data: Vec<u8>,
+}
+
+impl ForVec {
+    /// The array of `values`.
+    pub fn new(values: &[u32]) -> Self {
+        let mut blob = Vec::new();
+        ForArray::write(values, &mut blob);
+        Self::parse(&blob, 0, "packed array")
+            .expect("a fresh array parses")
+            .0
+    }
+
+    /// Parses the [`ForArray`] at `at` of `b` (checked as
+    /// [`ForArray::parse`] does); returns it and the offset just past it.
+    pub fn parse(b: &[u8], at: usize, section: &'static str) -> Result<(Self, usize), FormatError> {
+        let (arr, end) = ForArray::parse(b, at, section)?;
+        let blocks = arr.len.div_ceil(BLOCK as u64) as usize;
+        let heads = (0..blocks)
+            .map(|k| {
+                let h = arr.heads + 16 * k;
+                Head {
+                    base: u32_at(b, h),
+                    width: u32_at(b, h + 4),
+                    bit: u64_at(b, h + 8),
+                }
+            })
+            .collect();
+        let mut data = b[arr.data..arr.data + arr.data_len].to_vec();
+        data.extend_from_slice(&[0; 8]);
+        Ok((
+            Self {
+                len: arr.len,
+                heads,
+                data,
+            },
+            end,
+        ))
+    }
+
+    /// Appends the array in [`ForArray`]'s layout to `out`.
+    pub fn write(&self, out: &mut Vec<u8>) {
+        let data = &self.data[..self.data.len() - 8];
+        out.extend_from_slice(&self.len.to_le_bytes());
+        out.extend_from_slice(&(data.len() as u64).to_le_bytes());
+        for h in &self.heads {
+            out.extend_from_slice(&h.base.to_le_bytes());
+            out.extend_from_slice(&h.width.to_le_bytes());
+            out.extend_from_slice(&h.bit.to_le_bytes());
+        }
+        out.extend_from_slice(data);
+    }
+
+    /// Bytes of the array in [`ForArray`]'s layout.
+    pub fn bytes(&self) -> usize {
+        16 + 16 * self.heads.len() + self.data.len().saturating_sub(8)
+    }
+
+    /// Value `i` (`i < len`).
+    #[inline(always)]
+    pub fn get(&self, i: u64) -> u32 {
+        let h = self.heads[(i / BLOCK as u64) as usize];
+        let at = h.bit + (i % BLOCK as u64) * u64::from(h.width);
+        let byte = (at >> 3) as usize;
+        let w = u64::from_le_bytes(
+            self.data[byte..byte + 8]
+                .try_into()
+                .expect("an 8-byte slice"),
+        );
+        h.base
+            .wrapping_add(((w >> (at & 7)) & ((1u64 << h.width) - 1)) as u32)
+    }
+
+    /// Number of values.
+    pub fn len(&self) -> u64 {
+        self.len
+    }
+
+    /// Whether the array has no values.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -187,6 +290,18 @@ mod tests {
         let (empty, end) = ForArray::parse(&blob, next, "test").unwrap();
         assert!(empty.is_empty());
         assert_eq!(end, blob.len());
+        // The in-memory form reads the same and writes the same bytes.
+        let (v, vnext) = ForVec::parse(&blob, 5, "test").unwrap();
+        assert_eq!(vnext, next);
+        for (i, &x) in values.iter().enumerate() {
+            assert_eq!(v.get(i as u64), x);
+        }
+        let mut again = Vec::new();
+        v.write(&mut again);
+        assert_eq!(again, blob[5..next]);
+        assert_eq!(v.bytes(), next - 5);
+        assert_eq!(ForVec::new(&values), v);
+        assert!(ForVec::new(&[]).is_empty());
         // A width above 32 or a truncated blob is an error, not a panic.
         let mut bad = blob.clone();
         bad[5 + 16 + 4] = 33;

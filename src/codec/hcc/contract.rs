@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use super::{HccBvh, HccError, file};
+use super::{HccBvh, HccError, HccOptions, file};
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
 use crate::codec::{ByteSize, Codec, CodecKind, OpenOptions};
@@ -13,21 +13,21 @@ use crate::mesh::Mesh;
 impl Codec for HccBvh {
     const KIND: CodecKind = CodecKind::Hcc;
     const MAGIC: [u8; 8] = file::MAGIC;
-    /// Nothing to choose: the canonical tree's leaf size picks one triangle
-    /// a leaf (the paper's form) or multi-triangle leaves.
-    type Options = ();
+    /// Vertex format and vertex ids; the canonical tree's leaf size picks
+    /// one triangle a leaf (the paper's form) or multi-triangle leaves.
+    type Options = HccOptions;
     type Error = HccError;
 
-    fn encode(bvh: &CanonicalBvh, mesh: &Mesh, _: &()) -> Result<Self, HccError> {
-        HccBvh::encode(bvh, mesh)
+    fn encode(bvh: &CanonicalBvh, mesh: &Mesh, options: &HccOptions) -> Result<Self, HccError> {
+        HccBvh::encode_with(bvh, mesh, options)
     }
 
     fn triangle_vertices(&self, id: u32) -> [u32; 3] {
         self.triangle_vertex_indices(id)
     }
 
-    /// The stored mesh, triangles in id order (storage order: see the
-    /// module docs on triangle ids).
+    /// The stored mesh, triangles in input order (the input mesh itself
+    /// with `f32` vertices and vertex ids kept).
     fn decoded_mesh(&self) -> Mesh {
         HccBvh::decoded_mesh(self)
     }
@@ -59,10 +59,19 @@ impl Codec for HccBvh {
     }
 
     fn header_fields(&self) -> Vec<(&'static str, String)> {
+        let vertices = match self.vertex_bits() {
+            None => "f32 (lossless)".to_string(),
+            Some(b) => {
+                let [x, y, z] = self.vertex_error();
+                format!("{b}-bit grid over the mesh, error at most ({x:e}, {y:e}, {z:e})")
+            }
+        };
         vec![
             ("low-level trees", self.tree_count().to_string()),
             ("multi-triangle leaves", self.is_multi().to_string()),
+            ("vertices", vertices),
             ("stored vertices", self.stats().tree_vertices.to_string()),
+            ("vertex ids", self.has_vertex_ids().to_string()),
         ]
     }
 
@@ -77,6 +86,9 @@ impl Codec for HccBvh {
         vec![
             ("low_level_trees", st.trees.into()),
             ("multi_triangle_leaves", self.is_multi().into()),
+            ("vertex_bits", self.vertex_bits().into()),
+            ("vertex_error", self.vertex_error().to_vec().into()),
+            ("vertex_ids", self.has_vertex_ids().into()),
             ("duplicated_vertices", st.duplicated_fraction().into()),
             ("loose_extents", st.loose_extents.into()),
             ("bytes_per_triangle_by_part", parts.into()),

@@ -4,12 +4,14 @@
 use glam::Vec3A;
 
 use super::HccBvh;
+use super::block::{Block, slot_bits};
 use super::node::{
-    HighNode, INDEX_BITS, INDEX_MASK, Interconnection, TYPE_LEAF, TYPE_TEMPLATE_LEAF, TreeHeader,
-    field, mask_half, multi_range, node_type,
+    HighNode, INDEX_MASK, Interconnection, TYPE_LEAF, TYPE_TEMPLATE_LEAF, TreeHeader, field,
+    mask_half, multi_leaf, node_type,
 };
 use super::template::TEMPLATES;
-use crate::cursor::{Children, NodeCursor};
+use super::vertices::{F32Verts, TreeVerts, Vertices};
+use crate::cursor::NodeCursor;
 use crate::geom::{Aabb, Triangle};
 
 const KIND_HIGH: u8 = 3;
@@ -110,49 +112,88 @@ impl HccBvh {
         }
     }
 
-    #[inline(always)]
-    fn vertex(&self, h: &TreeHeader, local: u32) -> [f32; 3] {
-        self.vertices[(h.vertex_start + local) as usize]
+    /// Vertex `local` of tree `tree` (header `h`).
+    pub(super) fn point(&self, tree: u32, h: &TreeHeader, local: u32) -> [f32; 3] {
+        match &self.vertices {
+            Vertices::F32(v) => v[(h.vertex_start + local) as usize],
+            Vertices::Packed(q) => q.point(tree as usize, local),
+        }
     }
 
-    /// The corners (local vertex indices) of triangle slot `t`.
+    /// Tree `tree`'s vertices when they are `f32`s.
     #[inline(always)]
-    pub(super) fn multi_corners(&self, t: u32) -> [u32; 3] {
-        let w = self.triangles[t as usize];
-        [
-            w & INDEX_MASK,
-            w >> INDEX_BITS & INDEX_MASK,
-            w >> (2 * INDEX_BITS) & INDEX_MASK,
-        ]
+    fn f32_verts<'a>(&self, all: &'a [[f32; 3]], tree: u32) -> F32Verts<'a> {
+        F32Verts {
+            all,
+            start: self.headers[tree as usize].vertex_start,
+        }
     }
 
+    /// The block of the multi-triangle leaf word `w` of tree `tree`, and
+    /// its triangle count.
     #[inline(always)]
-    fn corners(&self, h: &TreeHeader, c: [u32; 3]) -> Triangle {
-        c.map(|i| Vec3A::from(self.vertex(h, i)))
+    pub(super) fn leaf_block(&self, tree: u32, w: u32) -> (Block, u32) {
+        let (off, count) = multi_leaf(w);
+        let at = u64::from(self.block_start[tree as usize]) * 8 + u64::from(off);
+        let sb = slot_bits(self.tree_triangles(tree as usize));
+        (Block::read(&self.blocks, at, sb), count)
     }
 
-    /// The tight box of a leaf word's triangles.
-    #[inline]
-    fn leaf_box(&self, h: &TreeHeader, w: u32) -> Aabb {
+    /// Calls `f` with the storage rank and local corners of each triangle
+    /// of the leaf at node word `pos` of tree `tree`.
+    #[inline(always)]
+    pub(super) fn leaf_triangles(&self, tree: u32, pos: u32, mut f: impl FnMut(u32, [u32; 3])) {
+        let w = self.nodes[pos as usize];
         if self.multi {
-            let (start, count) = multi_range(w);
-            let mut b = Aabb::EMPTY;
-            for t in h.first_triangle + start..h.first_triangle + start + count {
-                for p in self.corners(h, self.multi_corners(t)) {
-                    b.grow(p);
-                }
+            let first = self.headers[tree as usize].first_triangle;
+            let (b, count) = self.leaf_block(tree, w);
+            for j in 0..count {
+                f(first + b.slot + j, b.corners(&self.blocks, j));
             }
-            b
         } else {
-            Aabb::of_triangle(&self.corners(h, [field(w, 0), field(w, 1), field(w, 2)]))
+            f(
+                self.leaf_rank_of(pos),
+                [field(w, 0), field(w, 1), field(w, 2)],
+            );
+        }
+    }
+
+    /// The tight box of the leaf at node word `pos`'s triangles.
+    #[inline(always)]
+    fn leaf_box<V: TreeVerts>(&self, v: &V, tree: u32, pos: u32) -> Aabb {
+        let w = self.nodes[pos as usize];
+        if self.multi {
+            let (b, count) = self.leaf_block(tree, w);
+            let (mut lo, mut hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+            for j in 0..count {
+                let [c0, c1, c2] = b.corners(&self.blocks, j);
+                let (p0, p1, p2) = (v.point(c0), v.point(c1), v.point(c2));
+                lo = lo.min(p0.min(p1).min(p2));
+                hi = hi.max(p0.max(p1).max(p2));
+            }
+            Aabb::new(lo, hi)
+        } else {
+            let (p0, p1, p2) = (
+                v.point(field(w, 0)),
+                v.point(field(w, 1)),
+                v.point(field(w, 2)),
+            );
+            Aabb::new(p0.min(p1).min(p2), p0.max(p1).max(p2))
         }
     }
 
     /// Decodes the boxes of the sibling pair at word indices `l`, `l + 1`
     /// … or `l`, `r` for the roots of two templates, children of `parent`.
     #[inline(always)]
-    fn child_pair(&self, parent: &HccNode, l: u32, r: u32) -> (Aabb, Aabb, u32, u32) {
-        let h = &self.headers[parent.tree as usize];
+    fn child_pair<V: TreeVerts>(
+        &self,
+        v: &V,
+        parent: &HccNode,
+        l: u32,
+        r: u32,
+    ) -> (Aabb, Aabb, u32, u32) {
+        let tree = parent.tree;
+        let h = &self.headers[tree as usize];
         let (wl, wr) = (self.nodes[l as usize], self.nodes[r as usize]);
         let (tl, tr) = (node_type(wl), node_type(wr));
         let d = parent.bounds;
@@ -162,31 +203,31 @@ impl HccBvh {
                 let (mut bl, mut br) = (d, d);
                 for e in 0..6 {
                     let w = if e < 3 { wl } else { wr };
-                    let v = self.vertex(h, self.vertex_field(h, w, e % 3))[e % 3];
+                    let c = v.coord(self.vertex_field(h, w, e % 3), e % 3);
                     if mask >> e & 1 != 0 {
-                        set_extent(&mut br, e, v);
+                        set_extent(&mut br, e, c);
                     } else {
-                        set_extent(&mut bl, e, v);
+                        set_extent(&mut bl, e, c);
                     }
                 }
                 (bl, br)
             }
-            (true, true) => (self.leaf_box(h, wl), self.leaf_box(h, wr)),
+            (true, true) => (self.leaf_box(v, tree, l), self.leaf_box(v, tree, r)),
             (leaf_left, _) => {
                 let wi = if leaf_left { wr } else { wl };
                 let mut bi = d;
                 let mut j = 0;
                 for e in 0..6 {
                     if mask >> e & 1 == 0 {
-                        let v = self.vertex(h, self.vertex_field(h, wi, j))[e % 3];
-                        set_extent(&mut bi, e, v);
+                        let c = v.coord(self.vertex_field(h, wi, j), e % 3);
+                        set_extent(&mut bi, e, c);
                         j += 1;
                     }
                 }
                 if leaf_left {
-                    (self.leaf_box(h, wl), bi)
+                    (self.leaf_box(v, tree, l), bi)
                 } else {
-                    (bi, self.leaf_box(h, wr))
+                    (bi, self.leaf_box(v, tree, r))
                 }
             }
         };
@@ -201,27 +242,75 @@ impl HccBvh {
         self.leaf_rank[w] + (self.leaf_bits[w] & ((1u64 << b) - 1)).count_ones()
     }
 
-    /// Triangle `id`'s corners as indices into the stored vertex array
-    /// (the low-level trees' arrays one after the other, as
-    /// [`HccBvh::decoded_mesh`] gives them). With one triangle a leaf, the
-    /// leaf word of rank `id` is found by select over the leaf bits; with
-    /// several, the tree by a binary search over the first ids.
-    pub fn triangle_vertex_indices(&self, id: u32) -> [u32; 3] {
-        if self.multi {
-            let tree = self.headers.partition_point(|h| h.first_triangle <= id) - 1;
-            let base = self.headers[tree].vertex_start;
-            self.multi_corners(id).map(|c| base + c)
-        } else {
-            let w = self.leaf_rank.partition_point(|&r| r <= id) - 1;
-            let mut bits = self.leaf_bits[w];
-            for _ in 0..id - self.leaf_rank[w] {
-                bits &= bits - 1;
+    /// The node word of the leaf of rank `k` among all leaf words (select
+    /// over the leaf bits); `k` must be below the number of leaves.
+    fn select_leaf(&self, k: u32) -> u32 {
+        let w = self.leaf_rank.partition_point(|&r| r <= k) - 1;
+        (w * 64) as u32 + select_in_word(self.leaf_bits[w], k - self.leaf_rank[w])
+    }
+
+    /// The first leaf word at or after `pos` and before `end`.
+    fn next_leaf(&self, pos: u32, end: u32) -> Option<u32> {
+        let mut w = (pos / 64) as usize;
+        let mut bits = *self.leaf_bits.get(w)? & (u64::MAX << (pos % 64));
+        while bits == 0 {
+            w += 1;
+            if w * 64 >= end as usize {
+                return None;
             }
-            let pos = (w * 64) as u32 + bits.trailing_zeros();
-            let base = self.headers[self.tree_of_word(pos)].vertex_start;
-            let word = self.nodes[pos as usize];
-            [0, 1, 2].map(|j| base + field(word, j))
+            bits = *self.leaf_bits.get(w)?;
         }
+        let p = (w * 64) as u32 + bits.trailing_zeros();
+        (p < end).then_some(p)
+    }
+
+    /// The tree and local corners of the triangle of storage rank `rank`.
+    /// One triangle a leaf: the leaf word of rank `rank`, by select. Several:
+    /// the tree by a binary search over the trees' first ranks, then the
+    /// leaf by a binary search over the tree's node words (leaves' first
+    /// slots ascend in node-word order; the leaf bits find the next leaf).
+    fn locate(&self, rank: u32) -> (u32, [u32; 3]) {
+        if self.multi {
+            let tree = self.headers.partition_point(|h| h.first_triangle <= rank) - 1;
+            let h = &self.headers[tree];
+            let slot = rank - h.first_triangle;
+            let (end, _, _) = self.tree_ends(tree);
+            let block = |p: u32| self.leaf_block(tree as u32, self.nodes[p as usize]).0;
+            let Some(mut lo) = self.next_leaf(h.node_start, end) else {
+                return (tree as u32, [0; 3]);
+            };
+            let mut hi = end;
+            while hi - lo > 1 {
+                let mid = lo + (hi - lo) / 2;
+                match self.next_leaf(mid, hi) {
+                    Some(q) if block(q).slot <= slot => lo = q,
+                    _ => hi = mid,
+                }
+            }
+            let b = block(lo);
+            (
+                tree as u32,
+                b.corners(&self.blocks, slot.wrapping_sub(b.slot)),
+            )
+        } else {
+            let pos = self.select_leaf(rank);
+            let w = self.nodes[pos as usize];
+            (
+                self.tree_of_word(pos) as u32,
+                [field(w, 0), field(w, 1), field(w, 2)],
+            )
+        }
+    }
+
+    /// Triangle `id`'s corners as indices into [`HccBvh::decoded_mesh`]'s
+    /// vertices (the input's vertex indices when vertex ids are kept).
+    /// Finds the triangle's rank through the id map's shortcuts, then its
+    /// leaf (see `locate`).
+    pub fn triangle_vertex_indices(&self, id: u32) -> [u32; 3] {
+        let rank = self.ids.rank(id).unwrap_or(0);
+        let (tree, c) = self.locate(rank);
+        let base = self.headers[tree as usize].vertex_start;
+        c.map(|l| self.vertex_index(base + l))
     }
 
     /// The low-level tree holding node word `pos`.
@@ -231,51 +320,38 @@ impl HccBvh {
 }
 
 impl HccBvh {
-    /// The two children of the inner node `node` with their boxes.
-    // Always inlined, as `for_each_child` was with its closure: a call
-    // would return the pair through memory.
+    /// [`NodeCursor::for_each_triangle`] with the tree's vertices `v`.
     #[inline(always)]
-    fn children_of(&self, node: &HccNode) -> [(HccNode, Aabb); 2] {
-        if node.kind == KIND_HIGH {
-            let h = &self.high[node.pos as usize];
-            return [h.a, h.b].map(|c| {
-                let n = self.high_child(c);
-                (n, n.bounds)
-            });
-        }
-        let (l, r, bl, br, tl, tr) = if node.kind == TYPE_TEMPLATE_LEAF as u8 {
-            let h = &self.headers[node.tree as usize];
-            let w = self.nodes[node.pos as usize];
-            let ic = Interconnection::unpack(self.ics[(h.ic_start + field(w, 2)) as usize]);
-            let l = h.node_start + ic.left_start;
-            let r = l + TEMPLATES[ic.left_template as usize].nodes as u32;
-            (l, r, l, r, ic.left_template, ic.right_template)
-        } else {
-            let t = &TEMPLATES[node.template as usize];
-            let l = node.block + t.children(node.pos - node.block);
-            (
-                l,
-                l + 1,
-                node.block,
-                node.block,
-                node.template,
-                node.template,
-            )
-        };
-        let (bxl, bxr, kl, kr) = self.child_pair(node, l, r);
-        let child = |pos, block, template, kind: u32, bounds| HccNode {
-            bounds,
-            tree: node.tree,
-            pos,
-            block,
-            template,
-            kind: kind as u8,
-        };
-        [
-            (child(l, bl, tl, kl, bxl), bxl),
-            (child(r, br, tr, kr, bxr), bxr),
-        ]
+    fn triangles_with<V: TreeVerts>(
+        &self,
+        v: &V,
+        node: &HccNode,
+        f: &mut impl FnMut(u32, &Triangle),
+    ) {
+        self.leaf_triangles(node.tree, node.pos, |rank, [c0, c1, c2]| {
+            f(self.ids.id(rank), &[v.point(c0), v.point(c1), v.point(c2)]);
+        });
     }
+}
+
+/// The position of the set bit of rank `k` in `w` (`k < popcount(w)`): a
+/// byte at a time, then a bit at a time.
+#[inline]
+fn select_in_word(mut w: u64, mut k: u32) -> u32 {
+    let mut base = 0;
+    loop {
+        let c = (w & 0xFF).count_ones();
+        if k < c || base >= 56 {
+            break;
+        }
+        k -= c;
+        w >>= 8;
+        base += 8;
+    }
+    for _ in 0..k {
+        w &= w.wrapping_sub(1);
+    }
+    base + w.trailing_zeros().min(63)
 }
 
 impl NodeCursor for HccBvh {
@@ -304,16 +380,48 @@ impl NodeCursor for HccBvh {
 
     #[inline]
     fn for_each_child(&self, node: &HccNode, mut f: impl FnMut(HccNode, Aabb)) {
-        for (child, b) in self.children_of(node) {
-            f(child, b);
+        if node.kind == KIND_HIGH {
+            let h = &self.high[node.pos as usize];
+            for c in [h.a, h.b] {
+                let n = self.high_child(c);
+                f(n, n.bounds);
+            }
+            return;
         }
-    }
-
-    /// Both children written at once (a batch of two, known as such where
-    /// the traversal is compiled).
-    #[inline(always)]
-    fn children(&self, node: &HccNode, out: &mut Children<HccNode>) {
-        out.set(&self.children_of(node));
+        let (l, r, bl, br, tl, tr) = if node.kind == TYPE_TEMPLATE_LEAF as u8 {
+            let h = &self.headers[node.tree as usize];
+            let w = self.nodes[node.pos as usize];
+            let ic = Interconnection::unpack(self.ics[(h.ic_start + field(w, 2)) as usize]);
+            let l = h.node_start + ic.left_start;
+            let r = l + TEMPLATES[ic.left_template as usize].nodes as u32;
+            (l, r, l, r, ic.left_template, ic.right_template)
+        } else {
+            let t = &TEMPLATES[node.template as usize];
+            let l = node.block + t.children(node.pos - node.block);
+            (
+                l,
+                l + 1,
+                node.block,
+                node.block,
+                node.template,
+                node.template,
+            )
+        };
+        // One branch on the vertex format per expansion.
+        let (bxl, bxr, kl, kr) = match &self.vertices {
+            Vertices::F32(all) => self.child_pair(&self.f32_verts(all, node.tree), node, l, r),
+            Vertices::Packed(q) => self.child_pair(&q.tree(node.tree as usize), node, l, r),
+        };
+        let child = |pos, block, template, kind: u32, bounds| HccNode {
+            bounds,
+            tree: node.tree,
+            pos,
+            block,
+            template,
+            kind: kind as u8,
+        };
+        f(child(l, bl, tl, kl, bxl), bxl);
+        f(child(r, br, tr, kr, bxr), bxr);
     }
 
     #[inline]
@@ -321,28 +429,38 @@ impl NodeCursor for HccBvh {
         if node.kind == KIND_EMPTY {
             return;
         }
-        let h = &self.headers[node.tree as usize];
-        let w = self.nodes[node.pos as usize];
-        if self.multi {
-            let (start, count) = multi_range(w);
-            for t in h.first_triangle + start..h.first_triangle + start + count {
-                f(t, &self.corners(h, self.multi_corners(t)));
+        match &self.vertices {
+            Vertices::F32(all) => {
+                self.triangles_with(&self.f32_verts(all, node.tree), node, &mut f)
             }
-        } else {
-            let id = self.leaf_rank_of(node.pos);
-            f(
-                id,
-                &self.corners(h, [field(w, 0), field(w, 1), field(w, 2)]),
-            );
+            Vertices::Packed(q) => self.triangles_with(&q.tree(node.tree as usize), node, &mut f),
         }
     }
 
     fn triangle(&self, id: u32) -> Triangle {
-        let [a, b, c] = self.triangle_vertex_indices(id);
-        [a, b, c].map(|v| Vec3A::from(self.vertices[v as usize]))
+        let rank = self.ids.rank(id).unwrap_or(0);
+        let (tree, c) = self.locate(rank);
+        let h = &self.headers[tree as usize];
+        c.map(|l| Vec3A::from(self.point(tree, h, l)))
     }
 
     fn triangle_count(&self) -> usize {
         self.triangle_count as usize
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn select_in_word_finds_every_set_bit() {
+        for w in [1u64, u64::MAX, 0x8000_0000_0000_0001, 0xF0F0_0000_1234_5678] {
+            let mut k = 0;
+            for p in 0..64 {
+                if w >> p & 1 == 1 {
+                    assert_eq!(super::select_in_word(w, k), p, "{w:x} {k}");
+                    k += 1;
+                }
+            }
+        }
     }
 }

@@ -13,6 +13,8 @@
 //! - fewer than 8192 nodes (13-bit template positions in an
 //!   inter-connection). The paper's models never reach it, but a mesh of
 //!   many triangles over few vertices (a fan, repeated triangles) would;
+//! - fewer than 16384 triangles (multi-triangle leaves: the blocks' bit
+//!   offsets in a leaf word);
 //! - at most 512 template leaves (9-bit inter-connection indices). Template
 //!   leaves are exactly the inner nodes at depth 3, 7, 11… below the root,
 //!   because templates partition the tree top-down in layers of height 4.
@@ -24,7 +26,9 @@
 use crate::build::CanonicalBvh;
 use crate::mesh::Mesh;
 
-use super::node::{MAX_TREE_INTERCONNECTIONS, MAX_TREE_NODES, MAX_TREE_VERTICES};
+use super::node::{
+    MAX_TREE_INTERCONNECTIONS, MAX_TREE_NODES, MAX_TREE_TRIANGLES, MAX_TREE_VERTICES,
+};
 use super::template::MAX_HEIGHT;
 
 /// The decomposition: which canonical nodes are low-level roots and which
@@ -85,7 +89,7 @@ fn fits(
     generation: u32,
     walk: &mut Vec<(u32, u32)>,
 ) -> Result<(), usize> {
-    let (mut vertices, mut nodes, mut template_leaves) = (0usize, 0usize, 0usize);
+    let (mut vertices, mut nodes, mut template_leaves, mut triangles) = (0usize, 0, 0, 0);
     walk.clear();
     walk.push((root, 0));
     while let Some((n, depth)) = walk.pop() {
@@ -95,6 +99,10 @@ fn fits(
         }
         let node = &bvh.nodes[n as usize];
         if node.is_leaf() {
+            triangles += node.leaf_range().len();
+            if triangles >= MAX_TREE_TRIANGLES {
+                return Err(vertices);
+            }
             for &t in &bvh.leaf_triangles[node.leaf_range()] {
                 for v in mesh.triangles[t as usize] {
                     let s = &mut stamp[v as usize];

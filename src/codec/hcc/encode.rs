@@ -1,35 +1,49 @@
 //! Building an [`HccBvh`] from the canonical tree.
 
+use super::block;
 use super::decompose::decompose;
 use super::error::HccError;
+use super::ids::{IdMap, VertexIds};
 use super::node::{
     HIGH_LEAF, HighNode, INDEX_BITS, Interconnection, MAX_TREE_INTERCONNECTIONS, MAX_TREE_NODES,
-    MULTI_START_BITS, TYPE_INNER, TYPE_LEAF, TYPE_SHIFT, TYPE_TEMPLATE_LEAF, TreeHeader, pack_node,
+    MULTI_COUNT_SHIFT, MULTI_OFFSET_BITS, TYPE_INNER, TYPE_LEAF, TYPE_SHIFT, TYPE_TEMPLATE_LEAF,
+    TreeHeader, pack_node,
 };
 use super::template::{MAX_HEIGHT, MAX_TEMPLATE_NODES, TEMPLATES, id_of_mask};
-use super::{HccStats, MAX_LEAF_TRIANGLES};
+use super::vertices::{MAX_VERTEX_BITS, Quantized, Vertices};
+use super::{HccOptions, HccStats, MAX_LEAF_TRIANGLES};
 use crate::build::CanonicalBvh;
-use crate::codec::ByteSize;
 use crate::codec::common::MassProps;
+use crate::codec::common::bits::BitWriter;
 use crate::mesh::Mesh;
 
 /// An i-HCCMesh: the high-level tree and every low-level tree's header,
-/// node words, inter-connections and vertices (see the module docs).
+/// node words, inter-connections, vertices and (multi-triangle leaves)
+/// triangle blocks, with the maps to the input's numbering (see the module
+/// docs).
 #[derive(Clone, Debug)]
 pub struct HccBvh {
     pub(super) high: Vec<HighNode>,
     pub(super) headers: Vec<TreeHeader>,
     pub(super) nodes: Vec<u32>,
     pub(super) ics: Vec<u32>,
-    pub(super) vertices: Vec<[f32; 3]>,
-    /// Multi-triangle leaves: each triangle's three 9-bit corners, in id order.
-    pub(super) triangles: Vec<u32>,
-    /// One triangle a leaf: bit `p` set when node word `p` is a leaf.
+    pub(super) vertices: Vertices,
+    /// Multi-triangle leaves: every tree's block stream (see `block`).
+    pub(super) blocks: Vec<u8>,
+    /// Multi-triangle leaves: each tree's first byte in `blocks`.
+    pub(super) block_start: Vec<u32>,
+    /// Bit `p` set when node word `p` is a leaf.
     pub(super) leaf_bits: Vec<u64>,
     /// Leaves before each word of `leaf_bits`.
     pub(super) leaf_rank: Vec<u32>,
+    /// Storage rank ↔ input triangle id.
+    pub(super) ids: IdMap,
+    /// Each stored vertex's input index (when kept).
+    pub(super) vertex_ids: Option<VertexIds>,
     pub(super) multi: bool,
     pub(super) triangle_count: u32,
+    /// Vertices of the input mesh.
+    pub(super) mesh_vertices: u32,
     pub(super) mass: MassProps,
     pub(super) stats: HccStats,
 }
@@ -50,7 +64,9 @@ struct Tight {
     verts: Vec<[u32; 6]>,
 }
 
-fn tight(bvh: &CanonicalBvh, mesh: &Mesh) -> Tight {
+/// The tight boxes of `bvh`'s nodes over `triangles` with positions
+/// `points` (the decoded positions: quantized ones when quantizing).
+fn tight(bvh: &CanonicalBvh, triangles: &[[u32; 3]], points: &[[f32; 3]]) -> Tight {
     let n = bvh.nodes.len();
     let mut boxes = vec![[0.0f32; 6]; n];
     let mut verts = vec![[0u32; 6]; n];
@@ -69,8 +85,8 @@ fn tight(bvh: &CanonicalBvh, mesh: &Mesh) -> Tight {
             ];
             let mut v = [0u32; 6];
             for &t in &bvh.leaf_triangles[node.leaf_range()] {
-                for c in mesh.triangles[t as usize] {
-                    let p = mesh.vertices[c as usize];
+                for c in triangles[t as usize] {
+                    let p = points[c as usize];
                     for e in 0..6 {
                         if outer(e, p[e % 3], b[e]) {
                             b[e] = p[e % 3];
@@ -101,34 +117,32 @@ fn tight(bvh: &CanonicalBvh, mesh: &Mesh) -> Tight {
     Tight { boxes, verts }
 }
 
-/// Scratch shared by the low-level trees of one encode.
-struct Scratch {
+/// What one encode reads and accumulates besides the structure itself.
+struct Scratch<'a> {
+    bvh: &'a CanonicalBvh,
+    mesh: &'a Mesh,
+    tight: Tight,
     /// Local position of each canonical node in its low-level tree.
     pos_of: Vec<u32>,
     /// Local vertex index of each mesh vertex, valid where `stamp` is the
     /// current tree.
     local_of: Vec<u32>,
     stamp: Vec<u32>,
-    /// Triangles in the trees encoded so far.
-    triangles_so_far: u32,
+    /// The mesh vertex of each stored vertex (all trees so far).
+    stored: Vec<u32>,
+    /// The input id of each stored triangle, in rank order.
+    rank_ids: Vec<u32>,
 }
 
-impl Scratch {
-    /// The local index of mesh vertex `v` in tree `tree`, appending the
-    /// vertex to the tree's array (which starts at `base`) on first use.
-    fn local_vertex(
-        &mut self,
-        tree: u32,
-        v: u32,
-        mesh: &Mesh,
-        verts: &mut Vec<[f32; 3]>,
-        base: u32,
-    ) -> u32 {
+impl Scratch<'_> {
+    /// The local index of mesh vertex `v` in tree `tree`, whose array
+    /// starts at stored vertex `base`, appending it on first use.
+    fn local_vertex(&mut self, tree: u32, v: u32, base: u32) -> u32 {
         let v = v as usize;
         if self.stamp[v] != tree {
             self.stamp[v] = tree;
-            self.local_of[v] = verts.len() as u32 - base;
-            verts.push(mesh.vertices[v]);
+            self.local_of[v] = self.stored.len() as u32 - base;
+            self.stored.push(v as u32);
         }
         self.local_of[v]
     }
@@ -152,7 +166,7 @@ struct TreeBuild {
 impl TreeBuild {
     /// Lays out the template rooted at canonical node `root` at the end of
     /// the node array; returns its id and first local position.
-    fn alloc_template(&mut self, bvh: &CanonicalBvh, s: &mut Scratch, root: u32) -> (u8, u32) {
+    fn alloc_template(&mut self, bvh: &CanonicalBvh, pos_of: &mut [u32], root: u32) -> (u8, u32) {
         let mut list = [0u32; MAX_TEMPLATE_NODES];
         let mut depth = [0usize; MAX_TEMPLATE_NODES];
         list[0] = root;
@@ -172,7 +186,7 @@ impl TreeBuild {
         let id = id_of_mask(mask).expect("a breadth-first shape of height at most 4");
         let start = self.canon_at.len() as u32;
         for (k, &n) in list[..len].iter().enumerate() {
-            s.pos_of[n as usize] = start + k as u32;
+            pos_of[n as usize] = start + k as u32;
             self.canon_at.push(n);
             let ty = if bvh.nodes[n as usize].is_leaf() {
                 TYPE_LEAF
@@ -201,11 +215,21 @@ impl TreeBuild {
 }
 
 impl HccBvh {
-    /// Encodes `bvh` (built over `mesh`). A tree with one triangle a leaf
-    /// gives the paper's i-HCCMesh; one built with
+    /// Encodes `bvh` (built over `mesh`) with the default options
+    /// (lossless `f32` vertices, input vertex ids kept). A tree with one
+    /// triangle a leaf gives the paper's i-HCCMesh; one built with
     /// [`BuildOptions::max_leaf_triangles`](crate::build::BuildOptions)
     /// above 1 (at most [`MAX_LEAF_TRIANGLES`]) gives multi-triangle leaves.
     pub fn encode(bvh: &CanonicalBvh, mesh: &Mesh) -> Result<Self, HccError> {
+        Self::encode_with(bvh, mesh, &HccOptions::default())
+    }
+
+    /// Encodes `bvh` (built over `mesh`) with `options`.
+    pub fn encode_with(
+        bvh: &CanonicalBvh,
+        mesh: &Mesh,
+        options: &HccOptions,
+    ) -> Result<Self, HccError> {
         let multi = bvh.max_leaf_triangles > 1;
         if bvh.max_leaf_triangles > MAX_LEAF_TRIANGLES {
             return Err(HccError::LeafSize {
@@ -219,107 +243,152 @@ impl HccBvh {
                 mesh: mesh.triangles.len(),
             });
         }
+        if let Some(bits) = options.vertex_bits
+            && !(1..=MAX_VERTEX_BITS).contains(&bits)
+        {
+            return Err(HccError::VertexBits {
+                got: bits,
+                limit: MAX_VERTEX_BITS,
+            });
+        }
+        let (quant, qcoords, points) = quantize(mesh, options.vertex_bits)?;
+        let points: &[[f32; 3]] = points.as_deref().unwrap_or(&mesh.vertices);
         let mut out = HccBvh {
             high: Vec::new(),
             headers: Vec::new(),
             nodes: Vec::new(),
             ics: Vec::new(),
-            vertices: Vec::new(),
-            triangles: Vec::new(),
+            vertices: Vertices::default(),
+            blocks: Vec::new(),
+            block_start: Vec::new(),
             leaf_bits: Vec::new(),
             leaf_rank: Vec::new(),
+            ids: IdMap::default(),
+            vertex_ids: None,
             multi,
             triangle_count: mesh.triangles.len() as u32,
+            mesh_vertices: mesh.vertices.len() as u32,
             mass: MassProps::of_mesh(mesh),
             stats: HccStats::default(),
         };
-        if mesh.triangles.is_empty() {
-            return Ok(out);
-        }
-        let tight = tight(bvh, mesh);
-        let dec = decompose(bvh, mesh).map_err(|e| HccError::LeafTooBig {
-            node: e.node,
-            vertices: e.vertices,
-        })?;
-        let mut is_root = vec![false; bvh.nodes.len()];
-        for &r in &dec.roots {
-            is_root[r as usize] = true;
-        }
         let mut s = Scratch {
+            bvh,
+            mesh,
+            tight: Tight {
+                boxes: Vec::new(),
+                verts: Vec::new(),
+            },
             pos_of: vec![0; bvh.nodes.len()],
             local_of: vec![0; mesh.vertices.len()],
             stamp: vec![u32::MAX; mesh.vertices.len()],
-            triangles_so_far: 0,
+            stored: Vec::new(),
+            rank_ids: Vec::with_capacity(mesh.triangles.len()),
         };
-        // The high-level tree, depth-first, left first; its leaves number
-        // the low-level trees in the same order.
-        out.high.push(HighNode::zeroed_node());
-        let mut stack = vec![(0u32, 0u32)];
-        while let Some((c, h)) = stack.pop() {
-            let b = &tight.boxes[c as usize];
-            let mut node = HighNode {
-                min: [b[0], b[1], b[2]],
-                max: [b[3], b[4], b[5]],
-                a: out.high.len() as u32,
-                b: out.high.len() as u32 + 1,
-            };
-            if is_root[c as usize] {
-                node.a = out.headers.len() as u32;
-                node.b = HIGH_LEAF;
-                out.high[h as usize] = node;
-                out.encode_tree(bvh, mesh, &tight, &mut s, c)?;
-            } else {
-                let first = node.a;
-                out.high[h as usize] = node;
-                out.high.push(HighNode::zeroed_node());
-                out.high.push(HighNode::zeroed_node());
-                let cn = &bvh.nodes[c as usize];
-                stack.push((cn.b, first + 1));
-                stack.push((cn.a, first));
-            }
+        if !mesh.triangles.is_empty() {
+            s.tight = tight(bvh, &mesh.triangles, points);
+            out.encode_trees(&mut s)?;
         }
-        if !multi {
-            out.build_leaf_ranks();
-        }
+        out.build_leaf_ranks();
+        out.ids = IdMap::new(&s.rank_ids);
         let mut used = vec![false; mesh.vertices.len()];
         for t in &mesh.triangles {
             for &v in t {
                 used[v as usize] = true;
             }
         }
+        if options.vertex_ids {
+            let unused = (0..mesh.vertices.len())
+                .filter(|&v| !used[v])
+                .map(|v| (v as u32, mesh.vertices[v]))
+                .collect();
+            out.vertex_ids = Some(VertexIds::new(&s.stored, unused));
+        }
+        out.vertices = match (quant, qcoords) {
+            (Some(mut q), Some(qc)) => {
+                let mut grid = Vec::new();
+                for (k, h) in out.headers.iter().enumerate() {
+                    let end = out
+                        .headers
+                        .get(k + 1)
+                        .map_or(s.stored.len(), |n| n.vertex_start as usize);
+                    grid.clear();
+                    grid.extend(
+                        s.stored[h.vertex_start as usize..end]
+                            .iter()
+                            .map(|&v| qc[v as usize]),
+                    );
+                    q.push_tree(&grid);
+                }
+                Vertices::Packed(q)
+            }
+            _ => Vertices::F32(s.stored.iter().map(|&v| points[v as usize]).collect()),
+        };
         out.stats.trees = out.headers.len();
-        out.stats.tree_vertices = out.vertices.len();
+        out.stats.tree_vertices = s.stored.len();
         out.stats.mesh_vertices = used.iter().filter(|&&u| u).count();
         out.stats.high_nodes = out.high.len();
         Ok(out)
     }
 
+    /// The high-level tree, depth-first, left first; its leaves number the
+    /// low-level trees in the same order.
+    fn encode_trees(&mut self, s: &mut Scratch<'_>) -> Result<(), HccError> {
+        let dec = decompose(s.bvh, s.mesh).map_err(|e| HccError::LeafTooBig {
+            node: e.node,
+            vertices: e.vertices,
+        })?;
+        let mut is_root = vec![false; s.bvh.nodes.len()];
+        for &r in &dec.roots {
+            is_root[r as usize] = true;
+        }
+        self.high.push(HighNode::zeroed_node());
+        let mut stack = vec![(0u32, 0u32)];
+        while let Some((c, h)) = stack.pop() {
+            let b = &s.tight.boxes[c as usize];
+            let mut node = HighNode {
+                min: [b[0], b[1], b[2]],
+                max: [b[3], b[4], b[5]],
+                a: self.high.len() as u32,
+                b: self.high.len() as u32 + 1,
+            };
+            if is_root[c as usize] {
+                node.a = self.headers.len() as u32;
+                node.b = HIGH_LEAF;
+                self.high[h as usize] = node;
+                self.encode_tree(s, c)?;
+            } else {
+                let first = node.a;
+                self.high[h as usize] = node;
+                self.high.push(HighNode::zeroed_node());
+                self.high.push(HighNode::zeroed_node());
+                let cn = &s.bvh.nodes[c as usize];
+                stack.push((cn.b, first + 1));
+                stack.push((cn.a, first));
+            }
+        }
+        Ok(())
+    }
+
     /// Encodes the low-level tree rooted at canonical node `root`.
-    fn encode_tree(
-        &mut self,
-        bvh: &CanonicalBvh,
-        mesh: &Mesh,
-        tight: &Tight,
-        s: &mut Scratch,
-        root: u32,
-    ) -> Result<(), HccError> {
+    fn encode_tree(&mut self, s: &mut Scratch<'_>, root: u32) -> Result<(), HccError> {
+        let bvh = s.bvh;
         let tree = self.headers.len() as u32;
         let header = TreeHeader {
             node_start: self.nodes.len() as u32,
             ic_start: self.ics.len() as u32,
-            vertex_start: self.vertices.len() as u32,
-            first_triangle: s.triangles_so_far,
+            vertex_start: s.stored.len() as u32,
+            first_triangle: s.rank_ids.len() as u32,
         };
         self.headers.push(header);
         let mut t = TreeBuild::default();
         // Structure: templates top-down, the two child templates of a
         // template leaf next to each other, template leaves taken
         // depth-first so a subtree's templates stay close in memory.
-        let (root_template, _) = t.alloc_template(bvh, s, root);
+        let (root_template, _) = t.alloc_template(bvh, &mut s.pos_of, root);
         while let Some(n) = t.pending.pop() {
             let node = &bvh.nodes[n as usize];
-            let (lt, ls) = t.alloc_template(bvh, s, node.a);
-            let (rt, rs) = t.alloc_template(bvh, s, node.b);
+            let (lt, ls) = t.alloc_template(bvh, &mut s.pos_of, node.a);
+            let (rt, rs) = t.alloc_template(bvh, &mut s.pos_of, node.b);
             debug_assert_eq!(rs, ls + TEMPLATES[lt as usize].nodes as u32);
             t.ic_at[s.pos_of[n as usize] as usize] = t.ics.len() as u32;
             t.ics.push(Interconnection {
@@ -336,7 +405,6 @@ impl HccBvh {
                 interconnections: t.ics.len(),
             });
         }
-        // Leaves in storage order: vertices by first use, triangle ids.
         t.words = t
             .types
             .iter()
@@ -349,37 +417,86 @@ impl HccBvh {
                 }
             })
             .collect();
+        self.encode_leaves(s, &mut t, tree, &header)?;
+        if t.types[0] != TYPE_LEAF {
+            t.words[0] |= root_template as u32;
+        }
+        self.encode_boxes(s, &mut t, root);
+        self.nodes.extend_from_slice(&t.words);
+        self.ics.extend(t.ics.iter().map(Interconnection::pack));
+        // Template statistics: every template root (the tree root and the
+        // children of template leaves).
+        self.stats.templates[root_template as usize] += 1;
+        for ic in &t.ics {
+            self.stats.templates[ic.left_template as usize] += 1;
+            self.stats.templates[ic.right_template as usize] += 1;
+        }
+        Ok(())
+    }
+
+    /// The leaves in node-word order: their triangles' ranks (input ids in
+    /// `rank_ids`), the tree's vertices by first use, and the leaf words
+    /// (one triangle's corners, or a multi-triangle leaf's block).
+    fn encode_leaves(
+        &mut self,
+        s: &mut Scratch<'_>,
+        t: &mut TreeBuild,
+        tree: u32,
+        header: &TreeHeader,
+    ) -> Result<(), HccError> {
+        let (bvh, mesh) = (s.bvh, s.mesh);
+        let tree_triangles: u32 = t
+            .canon_at
+            .iter()
+            .zip(&t.types)
+            .filter(|p| *p.1 == TYPE_LEAF)
+            .map(|p| bvh.nodes[*p.0 as usize].leaf_range().len() as u32)
+            .sum();
+        let slot_bits = block::slot_bits(tree_triangles);
+        let mut stream = BitWriter::default();
+        let mut corners = Vec::new();
         for p in 0..t.canon_at.len() {
             if t.types[p] != TYPE_LEAF {
                 continue;
             }
             let node = &bvh.nodes[t.canon_at[p] as usize];
             let ids = &bvh.leaf_triangles[node.leaf_range()];
-            s.triangles_so_far += ids.len() as u32;
+            let slot = s.rank_ids.len() as u32 - header.first_triangle;
+            s.rank_ids.extend_from_slice(ids);
+            corners.clear();
+            for &id in ids {
+                let c = mesh.triangles[id as usize]
+                    .map(|v| s.local_vertex(tree, v, header.vertex_start));
+                corners.push(c);
+            }
             if self.multi {
-                let start = self.triangles.len() as u32 - header.first_triangle;
-                for &id in ids {
-                    let c = mesh.triangles[id as usize].map(|v| {
-                        s.local_vertex(tree, v, mesh, &mut self.vertices, header.vertex_start)
-                    });
-                    self.triangles
-                        .push(c[0] | c[1] << INDEX_BITS | c[2] << (2 * INDEX_BITS));
+                let at = block::write(&mut stream, slot, slot_bits, &corners);
+                if at >= 1 << MULTI_OFFSET_BITS {
+                    return Err(HccError::BlockLimits { tree, bits: at });
                 }
-                debug_assert!(start < 1 << MULTI_START_BITS);
-                t.words[p] |= start | (ids.len() as u32 - 1) << MULTI_START_BITS;
+                t.words[p] |= at as u32 | (ids.len() as u32 - 1) << MULTI_COUNT_SHIFT;
             } else {
-                let c = mesh.triangles[ids[0] as usize].map(|v| {
-                    s.local_vertex(tree, v, mesh, &mut self.vertices, header.vertex_start)
-                });
-                t.words[p] = pack_node(c, 0, TYPE_LEAF);
+                t.words[p] = pack_node(corners[0], 0, TYPE_LEAF);
             }
         }
-        let local = |v: u32| s.local_of[v as usize];
-        if t.types[0] != TYPE_LEAF {
-            t.words[0] |= root_template as u32;
+        if self.multi {
+            self.block_start.push(self.blocks.len() as u32);
+            self.blocks.extend_from_slice(&stream.finish());
+            if u32::try_from(self.blocks.len()).is_err() {
+                return Err(HccError::BlockLimits {
+                    tree,
+                    bits: self.blocks.len() as u64 * 8,
+                });
+            }
         }
-        // Boxes: top-down, each pair of children coded against the box
-        // their parent decodes to.
+        Ok(())
+    }
+
+    /// The boxes, top-down: each pair of children coded against the box
+    /// their parent decodes to.
+    fn encode_boxes(&mut self, s: &Scratch<'_>, t: &mut TreeBuild, root: u32) {
+        let (bvh, tight) = (s.bvh, &s.tight);
+        let local = |v: u32| s.local_of[v as usize];
         let mut stack = vec![(root, tight.boxes[root as usize])];
         while let Some((p, d)) = stack.pop() {
             let node = &bvh.nodes[p as usize];
@@ -456,16 +573,6 @@ impl HccBvh {
             stack.push((l, dl));
             stack.push((r, dr));
         }
-        self.nodes.extend_from_slice(&t.words);
-        self.ics.extend(t.ics.iter().map(Interconnection::pack));
-        // Template statistics: every template root (the tree root and the
-        // children of template leaves).
-        self.stats.templates[root_template as usize] += 1;
-        for ic in &t.ics {
-            self.stats.templates[ic.left_template as usize] += 1;
-            self.stats.templates[ic.right_template as usize] += 1;
-        }
-        Ok(())
     }
 
     /// Rebuilds the leaf rank/select bits from the node words.
@@ -487,51 +594,51 @@ impl HccBvh {
             })
             .collect();
     }
+}
 
-    /// Statistics of the encode: trees, duplicated vertices, templates.
-    pub fn stats(&self) -> &HccStats {
-        &self.stats
+/// Quantized copies of `mesh`'s vertices when `bits` is set: the grid, each
+/// vertex's grid coordinates, and its decoded position.
+#[allow(clippy::type_complexity)]
+fn quantize(
+    mesh: &Mesh,
+    bits: Option<u32>,
+) -> Result<
+    (
+        Option<Quantized>,
+        Option<Vec<[u32; 3]>>,
+        Option<Vec<[f32; 3]>>,
+    ),
+    HccError,
+> {
+    let Some(bits) = bits else {
+        return Ok((None, None, None));
+    };
+    let (lo, hi) = mesh.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
+    for a in 0..3 {
+        let extent = hi[a] - lo[a];
+        if !extent.is_finite() {
+            return Err(HccError::Extent { extent });
+        }
     }
-
-    /// Mass properties at density 1 (computed from the mesh when built).
-    pub fn mass(&self) -> MassProps {
-        self.mass
+    let mut q = Quantized::grid(bits, lo, hi);
+    let mut error = [0f32; 3];
+    let mut grid = Vec::with_capacity(mesh.vertices.len());
+    let mut points = Vec::with_capacity(mesh.vertices.len());
+    for v in &mesh.vertices {
+        let g: [u32; 3] = std::array::from_fn(|a| q.nearest(a, v[a]));
+        let p: [f32; 3] = std::array::from_fn(|a| q.value(a, g[a]));
+        for a in 0..3 {
+            error[a] = error[a].max((p[a] - v[a]).abs());
+        }
+        grid.push(g);
+        points.push(p);
     }
-
-    /// Whether leaves hold several triangles (`hcc-multi`).
-    pub fn is_multi(&self) -> bool {
-        self.multi
-    }
-
-    /// Number of low-level trees.
-    pub fn tree_count(&self) -> usize {
-        self.headers.len()
-    }
+    q.error = error;
+    Ok((Some(q), Some(grid), Some(points)))
 }
 
 impl HighNode {
     fn zeroed_node() -> Self {
         bytemuck::Zeroable::zeroed()
-    }
-}
-
-impl ByteSize for HccBvh {
-    fn bytes_by_part(&self) -> Vec<(&'static str, usize)> {
-        let mut parts = vec![
-            ("high-level", self.high.len() * size_of::<HighNode>()),
-            ("headers", self.headers.len() * size_of::<TreeHeader>()),
-            ("nodes", self.nodes.len() * 4),
-            ("interconnections", self.ics.len() * 4),
-            ("vertices", self.vertices.len() * 12),
-        ];
-        if self.multi {
-            parts.push(("triangles", self.triangles.len() * 4));
-        } else {
-            parts.push((
-                "leaf-ranks",
-                self.leaf_bits.len() * 8 + self.leaf_rank.len() * 4,
-            ));
-        }
-        parts
     }
 }

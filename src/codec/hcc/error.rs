@@ -47,6 +47,35 @@ pub enum HccError {
         /// Its inter-connections.
         interconnections: usize,
     },
+    /// Quantized vertices with a bit count the packing does not take.
+    #[error(
+        "{got} bits per quantized vertex coordinate: hcc takes 1 to {limit} (16 is the usual choice)"
+    )]
+    VertexBits {
+        /// The bits asked for.
+        got: u32,
+        /// The most supported.
+        limit: u32,
+    },
+    /// Quantized vertices over a mesh whose extent overflows `f32`.
+    #[error(
+        "the mesh's extent ({extent}) overflows f32, so no quantization grid spans it; keep f32 vertices or check the mesh's coordinates"
+    )]
+    Extent {
+        /// The extent along the first axis found not finite.
+        extent: f32,
+    },
+    /// A low-level tree's triangle blocks outgrew the leaf words' offset
+    /// field (the decomposition's triangle limit should prevent this).
+    #[error(
+        "low-level tree {tree}'s triangle blocks reach bit {bits}, more than a leaf word addresses (2^21) or the blocks array holds (2^32 bytes)"
+    )]
+    BlockLimits {
+        /// The low-level tree.
+        tree: u32,
+        /// The bit offset that did not fit.
+        bits: u64,
+    },
     /// Bytes that break the file frame (magic, truncation, checksums).
     #[error(transparent)]
     Format(#[from] crate::codec::common::FormatError),

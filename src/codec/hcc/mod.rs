@@ -22,9 +22,20 @@
 //!
 //! **A low-level tree** is a [`TreeHeader`](node::TreeHeader), a run of
 //! 4-byte node words, a run of inter-connections and the tree's own vertex
-//! array (`f32` coordinates: lossless, so the decoded triangles equal the
-//! input bit for bit). Vertices used by several low-level trees are stored
-//! once in each ([`HccStats::duplicated_fraction`]).
+//! array. Vertices used by several low-level trees are stored once in each
+//! ([`HccStats::duplicated_fraction`]).
+//!
+//! **Vertices** ([`HccOptions::vertex_bits`], module `vertices`): `f32`
+//! coordinates (the default: lossless, the decoded triangles equal the
+//! input bit for bit), or quantized on one grid over the mesh (16 bits
+//! gives the paper's precision) and bit-packed per tree as offsets from
+//! the tree's smallest grid point, so a vertex costs about 4 bytes instead
+//! of 12 or 6. The grid is the mesh's, not each tree's, so that copies of a
+//! vertex in several trees decode alike; the error bound is half a grid
+//! step per axis ([`HccBvh::vertex_error`] gives the largest error
+//! measured). Boxes are built from the decoded vertices, so a decoded box
+//! contains its subtree's decoded triangles without any rounding of its
+//! own.
 //!
 //! **Boxes** (§4.2). By the inheritance property, for each of the six
 //! extents one child of a node shares the parent's extent. Siblings are
@@ -63,50 +74,64 @@
 //! (inner nodes at template depth 3) point through a 9-bit field to an
 //! inter-connection that names the child templates.
 //!
-//! # Triangle ids
+//! # Triangle and vertex ids
 //!
-//! The i-HCCMesh stores triangles implicitly (a leaf holds corners, not an
-//! id), so cbvh numbers them by storage: a triangle's id is its rank among
-//! the leaves in node-word order, low-level tree by low-level tree. The
-//! ids are dense (`0..triangle_count`) and stable for a given encoding, and
-//! they are *not* the input mesh's ids: [`HccBvh::decoded_mesh`] gives the
-//! mesh with its triangles in id order. With one triangle a leaf,
-//! [`NodeCursor::triangle`](crate::cursor::NodeCursor::triangle) finds a
-//! triangle by rank/select over a bit per node word (a set bit marks a
-//! leaf) and a running count every 64 words: part `leaf-ranks`, about 0.4
-//! bytes a triangle. With several triangles a leaf, a leaf's word holds
-//! the position of its first triangle in its tree's triangle run, and the
-//! id is the tree's first id plus that position, so `triangle` is one
-//! binary search over the trees.
+//! Leaves store triangles implicitly, so a triangle's place in storage (its
+//! *rank*: leaves in node-word order, low-level tree by low-level tree) is
+//! not its input id, and the template layout cannot be bent to make it so.
+//! The cursor reports input ids, as every codec does (module `ids`): a
+//! rank → id array read at every leaf, and the inverse found through cycle
+//! shortcuts for [`NodeCursor::triangle`](crate::cursor::NodeCursor::triangle),
+//! part `ids` (about 2–2.5 bytes a triangle). A leaf word's rank comes from
+//! rank/select over a bit per node word (part `leaf-ranks`); a
+//! multi-triangle leaf's block holds its first slot in its tree.
 //!
-//! # Multi-triangle leaves (`hcc-multi`)
+//! With [`HccOptions::vertex_ids`] (the default) each stored vertex keeps
+//! its input index (part `vertex-ids`, about 1 byte a triangle) and the
+//! input vertices no triangle uses are kept aside, so that
+//! [`HccBvh::decoded_mesh`] is the input mesh itself (with `f32` vertices)
+//! and [`HccBvh::triangle_vertex_indices`] gives input vertex indices
+//! (smooth shading across low-level trees). Without it the decoded mesh's
+//! vertices are the trees' arrays one after the other, copies included.
+//!
+//! # Multi-triangle leaves
 //!
 //! A tree built with up to [`MAX_LEAF_TRIANGLES`] triangles a leaf gives
-//! leaves whose word holds an 18-bit first triangle and a 9-bit count − 1
-//! into the tree's triangle run, each triangle three 9-bit corners in a
-//! `u32`; the leaf's box is its triangles' box.
+//! leaves whose word holds the bit offset of a triangle block and the
+//! triangle count; a block (module `block`) holds the leaf's first slot
+//! and its corners as offsets from the leaf's smallest local vertex index
+//! in as few bits as the leaf needs (the tree's vertices are numbered by
+//! first use, so a leaf's corners are close). The leaf's box is its
+//! triangles' box.
 //!
 //! See [`node`] for the bit layouts.
 
+mod block;
 mod contract;
 mod decode;
 mod decompose;
 mod encode;
 mod error;
 mod file;
+mod ids;
 pub mod node;
 pub mod template;
+mod verify;
+mod vertices;
 
 pub use decode::HccNode;
 pub use encode::HccBvh;
 pub use error::HccError;
 
+use crate::codec::ByteSize;
+use crate::codec::common::MassProps;
 use crate::mesh::Mesh;
+use node::{HighNode, TreeHeader};
 
-/// The most triangles a multi-triangle leaf may hold: a leaf's corners
-/// (at most three each) must fit one low-level tree's 511 vertices, and a
-/// tree's triangles an 18-bit first-triangle field.
-pub const MAX_LEAF_TRIANGLES: usize = 64;
+/// The most triangles a multi-triangle leaf may hold (a 6-bit count in the
+/// leaf word; a leaf's corners must also fit one low-level tree's 511
+/// vertices).
+pub const MAX_LEAF_TRIANGLES: usize = node::MULTI_COUNT_LIMIT;
 
 /// Figures of one encode.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -142,29 +167,163 @@ impl HccStats {
     }
 }
 
+/// Encoding options of the i-HCCMesh ([`HccBvh::encode_with`]). The leaf
+/// size is the canonical tree's: one triangle a leaf gives the paper's
+/// form, more gives multi-triangle leaves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct HccOptions {
+    /// `None` (the default): `f32` vertices, lossless. `Some(bits)`: each
+    /// coordinate quantized to `bits` (1 to 24; 16 as the paper) on one
+    /// grid over the mesh, rounded to nearest.
+    pub vertex_bits: Option<u32>,
+    /// Keep each stored vertex's input index and the unused input
+    /// vertices (part `vertex-ids`), so that the decoded mesh is the
+    /// input's, vertex numbering included (default: on).
+    pub vertex_ids: bool,
+}
+
+impl Default for HccOptions {
+    fn default() -> Self {
+        Self {
+            vertex_bits: None,
+            vertex_ids: true,
+        }
+    }
+}
+
 impl HccBvh {
-    /// The mesh the structure stores, triangles in id order. Its vertex
-    /// array is the low-level trees' arrays one after the other (shared
-    /// vertices repeated); positions are the input's, bit for bit.
+    /// The mesh as stored, triangle `k` being input triangle `k`. With
+    /// vertex ids kept, its vertices are the input's (decoded positions);
+    /// without, the low-level trees' arrays one after the other (shared
+    /// vertices repeated).
     pub fn decoded_mesh(&self) -> Mesh {
-        let mut triangles = Vec::with_capacity(self.triangle_count as usize);
-        for (t, h) in self.headers.iter().enumerate() {
-            let end = self.headers.get(t + 1);
-            let base = h.vertex_start;
-            if self.multi {
-                let last = end.map_or(self.triangle_count, |n| n.first_triangle);
-                for id in h.first_triangle..last {
-                    triangles.push(self.multi_corners(id).map(|c| base + c));
+        let mut triangles = vec![[0u32; 3]; self.triangle_count as usize];
+        let mut vertices = match &self.vertex_ids {
+            Some(_) => vec![[0f32; 3]; self.mesh_vertices as usize],
+            None => Vec::with_capacity(self.stats.tree_vertices),
+        };
+        for (tree, h) in self.headers.iter().enumerate() {
+            let tree = tree as u32;
+            let (node_end, _, vertex_end) = self.tree_ends(tree as usize);
+            for pos in h.node_start..node_end {
+                if node::node_type(self.nodes[pos as usize]) == node::TYPE_LEAF {
+                    self.leaf_triangles(tree, pos, |rank, c| {
+                        let id = self.ids.id(rank) as usize;
+                        triangles[id] = c.map(|l| self.vertex_index(h.vertex_start + l));
+                    });
                 }
-            } else {
-                let last = end.map_or(self.nodes.len() as u32, |n| n.node_start);
-                for &w in &self.nodes[h.node_start as usize..last as usize] {
-                    if node::node_type(w) == node::TYPE_LEAF {
-                        triangles.push([0, 1, 2].map(|j| base + node::field(w, j)));
-                    }
+            }
+            for local in 0..vertex_end - h.vertex_start {
+                let p = self.point(tree, h, local);
+                match &self.vertex_ids {
+                    Some(v) => vertices[v.get(h.vertex_start + local) as usize] = p,
+                    None => vertices.push(p),
                 }
             }
         }
-        Mesh::new(self.vertices.clone(), triangles)
+        if let Some(v) = &self.vertex_ids {
+            for &(i, p) in &v.unused {
+                vertices[i as usize] = p;
+            }
+        }
+        Mesh::new(vertices, triangles)
+    }
+
+    /// The index, in [`HccBvh::decoded_mesh`]'s vertices, of stored vertex
+    /// `s` (the trees' arrays one after the other).
+    #[inline]
+    pub(super) fn vertex_index(&self, s: u32) -> u32 {
+        match &self.vertex_ids {
+            Some(v) => v.get(s),
+            None => s,
+        }
+    }
+
+    /// Statistics of the encode: trees, duplicated vertices, templates.
+    pub fn stats(&self) -> &HccStats {
+        &self.stats
+    }
+
+    /// Mass properties at density 1 (computed from the mesh when built).
+    pub fn mass(&self) -> MassProps {
+        self.mass
+    }
+
+    /// Whether leaves hold several triangles.
+    pub fn is_multi(&self) -> bool {
+        self.multi
+    }
+
+    /// Number of low-level trees.
+    pub fn tree_count(&self) -> usize {
+        self.headers.len()
+    }
+
+    /// Bits per quantized vertex coordinate (`None`: `f32` vertices).
+    pub fn vertex_bits(&self) -> Option<u32> {
+        self.vertices.quantized().map(|q| q.bits)
+    }
+
+    /// The largest distance per axis between an input vertex and its
+    /// decoded position, measured when encoding (zero for `f32` vertices);
+    /// at most half a grid step ([`HccBvh::vertex_step`]) per axis.
+    pub fn vertex_error(&self) -> [f32; 3] {
+        self.vertices.quantized().map_or([0.0; 3], |q| q.error)
+    }
+
+    /// The quantization grid's step per axis (zero for `f32` vertices).
+    pub fn vertex_step(&self) -> [f32; 3] {
+        self.vertices.quantized().map_or([0.0; 3], |q| q.step)
+    }
+
+    /// Whether each stored vertex keeps its input index.
+    pub fn has_vertex_ids(&self) -> bool {
+        self.vertex_ids.is_some()
+    }
+
+    /// Where low-level tree `k`'s node words, inter-connections and
+    /// vertices end (the next tree's starts).
+    pub(super) fn tree_ends(&self, k: usize) -> (u32, u32, u32) {
+        self.headers.get(k + 1).map_or(
+            (
+                self.nodes.len() as u32,
+                self.ics.len() as u32,
+                self.stats.tree_vertices as u32,
+            ),
+            |h| (h.node_start, h.ic_start, h.vertex_start),
+        )
+    }
+
+    /// Triangles of low-level tree `k`.
+    #[inline(always)]
+    pub(super) fn tree_triangles(&self, k: usize) -> u32 {
+        self.headers
+            .get(k + 1)
+            .map_or(self.triangle_count, |h| h.first_triangle)
+            - self.headers[k].first_triangle
+    }
+}
+
+impl ByteSize for HccBvh {
+    fn bytes_by_part(&self) -> Vec<(&'static str, usize)> {
+        let mut parts = vec![
+            ("high-level", self.high.len() * size_of::<HighNode>()),
+            ("headers", self.headers.len() * size_of::<TreeHeader>()),
+            ("nodes", self.nodes.len() * 4),
+            ("interconnections", self.ics.len() * 4),
+            ("vertices", self.vertices.bytes()),
+        ];
+        if self.multi {
+            parts.push(("triangles", self.blocks.len() + self.block_start.len() * 4));
+        }
+        parts.push((
+            "leaf-ranks",
+            self.leaf_bits.len() * 8 + self.leaf_rank.len() * 4,
+        ));
+        parts.push(("ids", self.ids.bytes()));
+        if let Some(v) = &self.vertex_ids {
+            parts.push(("vertex-ids", v.bytes()));
+        }
+        parts
     }
 }

@@ -5,15 +5,17 @@
 //!
 //! **Node word** (`u32`, HCCMesh Fig. 5; bit 0 is the least significant):
 //!
-//! | bits  | template intermediate | template leaf | leaf (one triangle) | leaf (several, `hcc-multi`) |
+//! | bits  | template intermediate | template leaf | leaf (one triangle) | leaf (several) |
 //! |-------|----------------------|---------------|---------------------|-----------------------------|
-//! | 0–8   | vertex index 0 | vertex index 0 | corner 0 | first triangle, bits 0–8 |
-//! | 9–17  | vertex index 1 | vertex index 1 | corner 1 | first triangle, bits 9–17 |
-//! | 18–26 | vertex index 2 | inter-connection index | corner 2 | triangle count − 1 |
+//! | 0–8   | vertex index 0 | vertex index 0 | corner 0 | block's bit offset, bits 0–8 |
+//! | 9–17  | vertex index 1 | vertex index 1 | corner 1 | block's bit offset, bits 9–17 |
+//! | 18–26 | vertex index 2 | inter-connection index | corner 2 | bits 18–20: offset bits 18–20; 21–26: triangle count − 1 |
 //! | 27–29 | reuse-mask half | reuse-mask half | reuse-mask half | reuse-mask half |
 //! | 30–31 | `0` | `1` | `2` | `2` |
 //!
-//! Vertex indices and corners index the low-level tree's vertex array. The
+//! Vertex indices and corners index the low-level tree's vertex array; a
+//! multi-triangle leaf's block (module [`block`](super::block)) is at the
+//! given bit offset of the tree's block stream. The
 //! root node of a low-level tree has no sibling and takes its box from the
 //! high-level tree, so an inner root's bits 0–4 hold its template id
 //! instead (a leaf root is always template 0).
@@ -53,11 +55,15 @@ pub const MASK_SHIFT: u32 = 27;
 /// Shift of the 2-bit node type.
 pub const TYPE_SHIFT: u32 = 30;
 
-/// Bits of a multi-triangle leaf's first-triangle field.
-pub const MULTI_START_BITS: u32 = 18;
-/// The most triangles a multi-triangle leaf may hold (a 9-bit count − 1;
-/// the encoder allows fewer, see [`super::MAX_LEAF_TRIANGLES`]).
-pub const MULTI_COUNT_LIMIT: usize = 1 << INDEX_BITS;
+/// Bits of a multi-triangle leaf's block offset (in its tree's stream).
+pub const MULTI_OFFSET_BITS: u32 = 21;
+/// Shift of a multi-triangle leaf's triangle count − 1 (6 bits).
+pub const MULTI_COUNT_SHIFT: u32 = MULTI_OFFSET_BITS;
+/// The most triangles a multi-triangle leaf may hold (a 6-bit count − 1).
+pub const MULTI_COUNT_LIMIT: usize = 1 << (3 * INDEX_BITS - MULTI_COUNT_SHIFT);
+/// Triangles a low-level tree may hold (so that its blocks fit the offset
+/// field: at most 2^14 · 27 + 2^12 · 27 bits).
+pub const MAX_TREE_TRIANGLES: usize = 1 << 14;
 
 /// The node type (bits 30–31).
 #[inline(always)]
@@ -88,12 +94,13 @@ pub fn pack_node(fields: [u32; 3], mask: u32, ty: u32) -> u32 {
         | ty << TYPE_SHIFT
 }
 
-/// A multi-triangle leaf's `(first triangle, count)` in its tree.
+/// A multi-triangle leaf's `(block bit offset, triangle count)` in its
+/// tree.
 #[inline(always)]
-pub fn multi_range(w: u32) -> (u32, u32) {
+pub fn multi_leaf(w: u32) -> (u32, u32) {
     (
-        w & ((1 << MULTI_START_BITS) - 1),
-        (w >> MULTI_START_BITS & INDEX_MASK) + 1,
+        w & ((1 << MULTI_OFFSET_BITS) - 1),
+        (w >> MULTI_COUNT_SHIFT & 63) + 1,
     )
 }
 
@@ -145,7 +152,7 @@ impl Interconnection {
 /// | 0–3   | `node_start`   | first node word of the tree |
 /// | 4–7   | `ic_start`     | first inter-connection of the tree |
 /// | 8–11  | `vertex_start` | first vertex of the tree |
-/// | 12–15 | `first_triangle` | id of the tree's first triangle |
+/// | 12–15 | `first_triangle` | storage rank of the tree's first triangle |
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct TreeHeader {
@@ -155,7 +162,8 @@ pub struct TreeHeader {
     pub ic_start: u32,
     /// First vertex of the tree's vertex array.
     pub vertex_start: u32,
-    /// Id of the tree's first triangle (ids are dense, tree by tree).
+    /// Storage rank of the tree's first triangle (ranks are dense, tree by
+    /// tree; the id map turns a rank into the input id).
     pub first_triangle: u32,
 }
 
