@@ -97,10 +97,7 @@ pub fn patches(
                     PatchSet::new(opts, size, record),
                 )
             },
-            |(kernel, set), i, ti, j, tj| {
-                let moved = tj.map(|p| pose.transform_point(p));
-                kernel.push_into(i, ti, j, &moved, set);
-            },
+            |(kernel, set), i, ti, j, tj| kernel.push_into(i, ti, j, tj, set),
         );
         for (mut kernel, mut set) in states {
             kernel.flush_into(&mut set);
@@ -128,10 +125,7 @@ pub fn interference(pos12: &PPose, s1: &CbvhShape, s2: &CbvhShape) -> u64 {
             0.0,
             FRONT_TASKS,
             Interference::default,
-            |t, _, ti, _, tj| {
-                let moved = tj.map(|p| pose.transform_point(p));
-                t.push(ti, &moved);
-            },
+            |t, _, ti, _, tj| t.push(ti, tj),
         );
         states
             .into_iter()

@@ -125,9 +125,27 @@ pub fn bvtt_from<A: NodeCursor, B: NodeCursor>(
     stats: &mut TraversalStats,
     mut f: impl FnMut(u32, &Triangle, u32, &Triangle) -> ControlFlow<()>,
 ) -> bool {
+    traverse(a, b, b_to_a, prediction, start, stats, |i, ti, j, tj, _| {
+        f(i, ti, j, tj)
+    })
+}
+
+/// The traversal behind [`bvtt_from`]: `f(i, tri_i, j, tri_j_local,
+/// tri_j_in_a)` also receives `B`'s triangle moved into `A`'s frame, which
+/// the leaf test computes anyway (once per triangle of a leaf pair, not once
+/// per reported pair).
+fn traverse<A: NodeCursor, B: NodeCursor>(
+    a: &A,
+    b: &B,
+    b_to_a: &Pose,
+    prediction: f32,
+    start: NodePair<A::Node, B::Node>,
+    stats: &mut TraversalStats,
+    mut f: impl FnMut(u32, &Triangle, u32, &Triangle, &Triangle) -> ControlFlow<()>,
+) -> bool {
     let mut stack: Vec<NodePair<A::Node, B::Node>> = Vec::with_capacity(128);
     stack.push(start);
-    let mut b_tris: Vec<(u32, Triangle, Aabb)> = Vec::new();
+    let mut b_tris: Vec<(u32, Triangle, Triangle, Aabb)> = Vec::new();
     let mut scratch = Scratch::new(&start);
     while let Some(pair) = stack.pop() {
         let (na, _, nb, _) = pair;
@@ -137,7 +155,7 @@ pub fn bvtt_from<A: NodeCursor, B: NodeCursor>(
             b_tris.clear();
             b.for_each_triangle(&nb, |j, tj| {
                 let moved = tj.map(|p| b_to_a.transform_point(p));
-                b_tris.push((j, *tj, Aabb::of_triangle(&moved)));
+                b_tris.push((j, *tj, moved, Aabb::of_triangle(&moved)));
             });
             let mut stop = false;
             a.for_each_triangle(&na, |i, ti| {
@@ -145,9 +163,9 @@ pub fn bvtt_from<A: NodeCursor, B: NodeCursor>(
                     return;
                 }
                 let bi = Aabb::of_triangle(ti).loosened(prediction);
-                for (j, tj, bj) in &b_tris {
+                for (j, tj, moved, bj) in &b_tris {
                     stats.primitive_tests += 1;
-                    if bi.intersects(bj) && f(i, ti, *j, tj).is_break() {
+                    if bi.intersects(bj) && f(i, ti, *j, tj, moved).is_break() {
                         stop = true;
                         return;
                     }
@@ -227,7 +245,9 @@ pub fn bvtt_front<A: NodeCursor, B: NodeCursor>(
 
 /// [`bvtt`] on rayon's threads: the front ([`bvtt_front`] with `target`
 /// pairs) is traversed task by task, each task with its own state from
-/// `init` and calling `leaf(state, i, tri_i, j, tri_j_local)` for its pairs.
+/// `init` and calling `leaf(state, i, tri_i, j, tri_j)` for its pairs, with
+/// `tri_j` already moved into `A`'s frame (unlike [`bvtt`]'s callback, which
+/// gets `B`'s own coordinates: the traversal has moved it for its leaf test).
 /// Returns the states in front order (so that combining them in order gives
 /// a result independent of the thread count) and the summed counters.
 pub fn bvtt_par<A: NodeCursor, B: NodeCursor, S: Send>(
@@ -245,10 +265,18 @@ pub fn bvtt_par<A: NodeCursor, B: NodeCursor, S: Send>(
     let task = |start| {
         let mut s = init();
         let mut st = TraversalStats::default();
-        bvtt_from(a, b, b_to_a, prediction, start, &mut st, |i, ti, j, tj| {
-            leaf(&mut s, i, ti, j, tj);
-            ControlFlow::Continue(())
-        });
+        traverse(
+            a,
+            b,
+            b_to_a,
+            prediction,
+            start,
+            &mut st,
+            |i, ti, j, _, tj| {
+                leaf(&mut s, i, ti, j, tj);
+                ControlFlow::Continue(())
+            },
+        );
         (s, st)
     };
     // On one thread the same tasks run in order on the caller's thread,

@@ -511,7 +511,16 @@ pub fn check_bvtt_par_and_min<A: NodeCursor, B: NodeCursor>(
                 prediction,
                 target,
                 Vec::new,
-                |s: &mut Vec<(u32, u32)>, i, _, j, _| s.push((i, j)),
+                |s: &mut Vec<(u32, u32)>, i, ti, j, tj| {
+                    // Both triangles arrive in A's frame.
+                    assert_eq!(*ti, tri(ma, i), "bvtt_par: triangle {i} of A");
+                    assert_eq!(
+                        *tj,
+                        tri(mb, j).map(|p| pose.transform_point(p)),
+                        "bvtt_par: triangle {j} of B"
+                    );
+                    s.push((i, j))
+                },
             );
             let mut got: Vec<(u32, u32)> = states.into_iter().flatten().collect();
             let n = got.len();
