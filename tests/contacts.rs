@@ -249,7 +249,7 @@ fn patches_cover_every_pair_parry_reports() {
                 })
                 .fold(f32::INFINITY, f32::min);
 
-            let set = cbvh_cbvh::patches(&pos12, &c1, &c2, prediction, &opts, true, None);
+            let set = cbvh_cbvh::patches(&pos12, &c1, &c2, &prediction, &opts, true, None);
             let members: BTreeSet<(u32, u32)> = set
                 .patches
                 .iter()
@@ -396,8 +396,15 @@ fn patches_do_not_depend_on_the_thread_count() {
             .build()
             .unwrap();
         pool.install(|| {
-            let s =
-                cbvh_cbvh::patches(&pos12, &c1, &c2, 0.01, &PatchOptions::default(), true, None);
+            let s = cbvh_cbvh::patches(
+                &pos12,
+                &c1,
+                &c2,
+                &0.01,
+                &PatchOptions::default(),
+                true,
+                None,
+            );
             s.patches
                 .iter()
                 .map(|p| {

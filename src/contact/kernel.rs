@@ -264,7 +264,25 @@ impl PairKernel {
         b: &Triangle,
         sink: &mut impl ContactSink,
     ) {
-        if self.batch.put(a, b, (i, j)) {
+        self.push_within(i, a, j, b, self.prediction, sink);
+    }
+
+    /// [`push_into`](Self::push_into) with this pair's own prediction
+    /// distance (at most the kernel's): a pair found where the shapes
+    /// barely move needs a smaller margin (see
+    /// [`MotionBound`](super::MotionBound)).
+    #[inline]
+    pub fn push_within(
+        &mut self,
+        i: u32,
+        a: &Triangle,
+        j: u32,
+        b: &Triangle,
+        prediction: f32,
+        sink: &mut impl ContactSink,
+    ) {
+        let pred = prediction.min(self.prediction).max(0.0);
+        if self.batch.put(a, b, (i, j), pred) {
             self.flush_into(sink);
         }
     }
@@ -292,7 +310,8 @@ impl PairKernel {
         let out = sat_dispatch(&self.batch, self.simd);
         self.stats.pairs += n as u64;
         for l in 0..n {
-            if out.sep[l] > self.prediction || out.sep[l].is_nan() {
+            let pred = self.batch.pred[l];
+            if out.sep[l] > pred || out.sep[l].is_nan() {
                 continue;
             }
             let lane = |c: &Corners| -> Triangle {
@@ -306,7 +325,7 @@ impl PairKernel {
                 self.stats.absorbed += 1;
                 continue;
             }
-            if self.finish(i, &a, j, &b, sep, axis, up) {
+            if self.finish(i, &a, j, &b, (sep, axis, up), pred) {
                 self.stats.contacts += 1;
                 sink.contact(&self.out);
             }
@@ -342,9 +361,8 @@ impl PairKernel {
         a: &Triangle,
         j: u32,
         b: &Triangle,
-        sep: f32,
-        axis: u8,
-        up: bool,
+        (sep, axis, up): (f32, u8, bool),
+        prediction: f32,
     ) -> bool {
         let c = &mut self.out;
         c.i = i;
@@ -366,7 +384,7 @@ impl PairKernel {
                     closest_points(a, b)
                 }
             };
-            if d > self.prediction {
+            if d > prediction {
                 return false;
             }
             let n = if d > 0.0 {
@@ -407,7 +425,7 @@ impl PairKernel {
             let poly = clip_to_prism(b, a, na);
             for (k, v) in poly.iter().enumerate() {
                 let d = n.dot(*v - a[0]);
-                if d <= self.prediction {
+                if d <= prediction {
                     c.push(PairPoint {
                         p1: *v - n * d,
                         p2: *v,
@@ -422,7 +440,7 @@ impl PairKernel {
             let poly = clip_to_prism(a, b, nb);
             for (k, v) in poly.iter().enumerate() {
                 let d = n.dot(b[0] - *v);
-                if d <= self.prediction {
+                if d <= prediction {
                     c.push(PairPoint {
                         p1: *v,
                         p2: *v + n * d,
@@ -476,7 +494,7 @@ impl Interference {
     /// Queues one pair (both triangles in the same frame).
     #[inline]
     pub fn push(&mut self, a: &Triangle, b: &Triangle) {
-        if self.batch.put(a, b, (0, 0)) {
+        if self.batch.put(a, b, (0, 0), 0.0) {
             self.flush();
         }
     }

@@ -6,7 +6,9 @@
 //!   test (does a triangle pair intersect);
 //! - [`patch`]: the reduction of many pair contacts into contact patches
 //!   (normals within a few degrees, near each other), each at most four
-//!   points that keep the patch's support area.
+//!   points that keep the patch's support area;
+//! - [`motion`]: the prediction distance bounded by how far each region of
+//!   a body moved since the last step.
 //!
 //! The parry integration ([`crate::parry`]) turns patches into parry
 //! `ContactManifold`s, one per patch, matched from step to step. This
@@ -16,6 +18,7 @@
 
 mod features;
 pub mod kernel;
+pub mod motion;
 pub mod patch;
 mod sat;
 
@@ -23,4 +26,5 @@ pub use kernel::{
     ContactSink, Interference, KernelStats, PairContact, PairKernel, PairPoint, pair_contact,
     triangles_intersect,
 };
+pub use motion::MotionBound;
 pub use patch::{Patch, PatchOptions, PatchPoint, PatchSet};

@@ -45,11 +45,16 @@ pub struct PatchOptions {
     pub gap_fraction: f32,
     /// Bound the prediction distance by the pair's motion: when a pair was
     /// also queried at the previous step, only triangle pairs within this
-    /// factor times the largest distance any point of shape 2 moved
-    /// relative to shape 1 since then (and at least a tenth of the
-    /// prediction) are considered, never more than the prediction. A
-    /// resting body then skips the pairs that are merely within the
-    /// speculative margin. `None` always uses the full prediction.
+    /// factor times the largest distance the nearby points of shape 2
+    /// moved relative to shape 1 since then (and at least a tenth of the
+    /// prediction) are considered, never more than the prediction. For two
+    /// cbvh shapes "nearby" is the box of shape 2's node in each node pair
+    /// of the two-tree traversal ([`MotionBound`](super::MotionBound)), so
+    /// a statue rocking on its base pays for the slow region at the
+    /// contact, not for its swinging head; against other shapes it is the
+    /// part of shape 2 that can touch shape 1. A resting body then skips
+    /// the pairs that are merely within the speculative margin. `None`
+    /// always uses the full prediction.
     pub motion_factor: Option<f32>,
 }
 

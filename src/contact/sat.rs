@@ -17,6 +17,8 @@ pub(super) struct Batch {
     pub(super) a: Corners,
     pub(super) b: Corners,
     pub(super) ids: [(u32, u32); LANES],
+    /// Each pair's prediction distance.
+    pub(super) pred: Lanes,
     pub(super) len: usize,
 }
 
@@ -26,16 +28,17 @@ impl Default for Batch {
             a: [[[0.0; LANES]; 3]; 3],
             b: [[[0.0; LANES]; 3]; 3],
             ids: [(0, 0); LANES],
+            pred: [0.0; LANES],
             len: 0,
         }
     }
 }
 
 impl Batch {
-    /// Queues the pair `a`, `b` with its ids in the next lane; returns
-    /// whether the batch is now full.
+    /// Queues the pair `a`, `b` with its ids and prediction distance in
+    /// the next lane; returns whether the batch is now full.
     #[inline]
-    pub(super) fn put(&mut self, a: &Triangle, b: &Triangle, ids: (u32, u32)) -> bool {
+    pub(super) fn put(&mut self, a: &Triangle, b: &Triangle, ids: (u32, u32), pred: f32) -> bool {
         let l = self.len;
         for c in 0..3 {
             for k in 0..3 {
@@ -44,6 +47,7 @@ impl Batch {
             }
         }
         self.ids[l] = ids;
+        self.pred[l] = pred;
         self.len += 1;
         self.len == LANES
     }

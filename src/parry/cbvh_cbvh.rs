@@ -20,7 +20,7 @@ use super::workspace::ManifoldUpdate;
 use crate::contact::{Interference, PairKernel, PatchOptions, PatchSet};
 use crate::cursor::TraversalStats;
 use crate::geom::Triangle;
-use crate::query::{bvtt, bvtt_min, bvtt_par};
+use crate::query::{Prediction, bvtt, bvtt_min, bvtt_par, bvtt_par_within};
 use crate::with_codec;
 
 /// Node pairs the parallel traversal starts from: enough tasks to balance
@@ -58,7 +58,7 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
                 prediction,
                 false,
                 manifolds,
-                |p| patches(pos12, s1, s2, p, opts, false, counters),
+                |m| patches(pos12, s1, s2, m, opts, false, counters),
             );
         }
         ContactMode::PerTrianglePair => {
@@ -69,13 +69,15 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
 }
 
 /// The contact patches of two cbvh shapes (in `s1`'s frame): the parallel
-/// two-tree traversal feeding the triangle-pair kernel. With `record`, every
+/// two-tree traversal feeding the triangle-pair kernel. `prediction` is a
+/// distance (`f32`) or a [`MotionBound`](crate::contact::MotionBound), which each node pair of the
+/// traversal bounds by the motion of its box of `s2`. With `record`, every
 /// patch lists its triangle pairs.
 pub fn patches(
     pos12: &PPose,
     s1: &CbvhShape,
     s2: &CbvhShape,
-    prediction: Real,
+    prediction: &impl Prediction,
     opts: &PatchOptions,
     record: bool,
     counters: Option<&ContactCounters>,
@@ -84,8 +86,9 @@ pub fn patches(
     let size = smaller_size(s1, s2);
     let mut merged = PatchSet::new(opts, size, record);
     let (mut candidates, mut contacts) = (0u64, 0u64);
+    let largest = prediction.at_most();
     with_codec!(s1.codec(), |a| with_codec!(s2.codec(), |b| {
-        let (states, _stats) = bvtt_par(
+        let (states, _stats) = bvtt_par_within(
             a,
             b,
             &pose,
@@ -93,11 +96,11 @@ pub fn patches(
             FRONT_TASKS,
             || {
                 (
-                    PairKernel::new(prediction).exact_separation(false),
+                    PairKernel::new(largest).exact_separation(false),
                     PatchSet::new(opts, size, record),
                 )
             },
-            |(kernel, set), i, ti, j, tj| kernel.push_into(i, ti, j, tj, set),
+            |(kernel, set), i, ti, j, tj, p| kernel.push_within(i, ti, j, tj, p, set),
         );
         for (mut kernel, mut set) in states {
             kernel.flush_into(&mut set);

@@ -66,7 +66,7 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
                 prediction,
                 flipped,
                 manifolds,
-                |p| patches(&pose, mesh, convex, p, opts, false, counters),
+                |m| patches(&pose, mesh, convex, m.prediction, opts, false, counters),
             );
         }
         ContactMode::PerTrianglePair => {

@@ -51,7 +51,7 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
                 prediction,
                 flipped,
                 manifolds,
-                |p| patches(&tm_in_mesh, mesh, tm, p, opts, false, counters),
+                |m| patches(&tm_in_mesh, mesh, tm, m.prediction, opts, false, counters),
             );
         }
         ContactMode::PerTrianglePair => {

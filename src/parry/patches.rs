@@ -27,7 +27,7 @@ use parry3d::query::{
 };
 use parry3d::shape::PackedFeatureId;
 
-use crate::contact::{PatchOptions, PatchPoint, PatchSet};
+use crate::contact::{MotionBound, PatchOptions, PatchPoint, PatchSet};
 
 /// How the dispatcher turns triangle pairs into contact manifolds.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -123,7 +123,9 @@ impl WorkspaceData for PatchWorkspace {
 /// contact: those inside shape 1's box (placed in shape 2's frame) grown by
 /// the prediction. A statue tipping over an edge turns about the contact,
 /// so its head moves far more than the region at the edge; bounding by the
-/// whole box would take the head's move.
+/// whole box would take the head's move. The returned [`MotionBound`]'s
+/// `prediction` is that pair-wide distance; a traversal can bound it
+/// further region by region (see [`crate::contact::motion`]).
 pub fn patch_workspace(
     workspace: &mut Option<ContactManifoldsWorkspace>,
     pos12: &PPose,
@@ -131,7 +133,7 @@ pub fn patch_workspace(
     local_box2: &crate::geom::Aabb,
     prediction: f32,
     opts: &PatchOptions,
-) -> f32 {
+) -> MotionBound {
     let ok = workspace
         .as_ref()
         .is_some_and(|w| w.0.downcast_ref::<PatchWorkspace>().is_some());
@@ -147,6 +149,7 @@ pub fn patch_workspace(
     let last = ws.last_pos12.replace(*pos12);
     match (opts.motion_factor, last) {
         (Some(k), Some(last)) if !local_box2.is_empty() => {
+            let floor = 0.1 * prediction;
             let box1_in_2 = local_box1
                 .transformed(&super::pose_from_parry(&pos12.inverse()))
                 .loosened(prediction);
@@ -157,7 +160,7 @@ pub fn patch_workspace(
             if region.is_empty() {
                 // Nothing of shape 2 can be in contact: no pair survives any
                 // prediction, so the smallest does.
-                return 0.1 * prediction;
+                return MotionBound::constant(floor);
             }
             // A rigid motion moves points affinely: the largest move over
             // the region is at one of its corners.
@@ -169,16 +172,25 @@ pub fn patch_workspace(
                     (*pos12 * c - last * c).length()
                 })
                 .fold(0.0f32, f32::max);
-            (k * moved).max(0.1 * prediction).min(prediction)
+            let pair = (k * moved).max(floor).min(prediction);
+            MotionBound::new(
+                pair,
+                &super::pose_from_parry(pos12),
+                &super::pose_from_parry(&last),
+                k,
+                floor,
+            )
         }
-        _ => prediction,
+        _ => MotionBound::constant(prediction),
     }
 }
 
 /// One step of patch contacts for a pair whose patches are computed in the
 /// frame of side A (the cbvh shape): sets up the pair's workspace, bounds
 /// the prediction by the pair's motion (`b_in_a` places side B; `local_box_a`
-/// and `local_box_b` are each side's own box), computes the patches with `compute(prediction)`
+/// and `local_box_b` are each side's own box), computes the patches with
+/// `compute(bound)` (which may use `bound.prediction` everywhere or bound it
+/// region by region)
 /// and replaces `manifolds` with them (`flipped`: A is parry's shape 2).
 #[allow(clippy::too_many_arguments)]
 pub fn patch_manifolds<M: Default + Clone, C: Default + Copy>(
@@ -190,9 +202,9 @@ pub fn patch_manifolds<M: Default + Clone, C: Default + Copy>(
     prediction: f32,
     flipped: bool,
     manifolds: &mut Vec<ContactManifold<M, C>>,
-    compute: impl FnOnce(f32) -> PatchSet,
+    compute: impl FnOnce(&MotionBound) -> PatchSet,
 ) {
-    let prediction = patch_workspace(
+    let bound = patch_workspace(
         workspace,
         b_in_a,
         local_box_a,
@@ -200,7 +212,7 @@ pub fn patch_manifolds<M: Default + Clone, C: Default + Copy>(
         prediction,
         opts,
     );
-    let set = compute(prediction);
+    let set = compute(&bound);
     emit(
         &set,
         &b_in_a.inverse(),
@@ -361,6 +373,7 @@ pub fn emit<M: Default + Clone, C: Default + Copy>(
 mod tests {
     use super::*;
     use crate::geom::Aabb;
+    use crate::query::Prediction;
     use parry3d::math::Rotation;
 
     /// Shape 2, a pole 10 tall standing on shape 1's unit box, tipping by
@@ -378,19 +391,25 @@ mod tests {
             PPose::from_translation(pivot) * r * PPose::from_translation(-pivot)
         };
         let mut ws = None;
-        let first = patch_workspace(&mut ws, &tip(0.0), &box1, &box2, prediction, &opts);
+        let first = patch_workspace(&mut ws, &tip(0.0), &box1, &box2, prediction, &opts).prediction;
         assert_eq!(first, prediction, "no previous pose: the full prediction");
-        let tipped = patch_workspace(&mut ws, &tip(0.01), &box1, &box2, prediction, &opts);
+        let tipped =
+            patch_workspace(&mut ws, &tip(0.01), &box1, &box2, prediction, &opts).prediction;
         // 2 × 0.0122 is under the floor of a tenth of the prediction; the
         // whole pole's move would have given 2 × 0.1.
         assert_eq!(tipped, 0.1 * prediction);
         // A translation moves every point alike: 2 × 0.3.
         let moved = PPose::from_translation(Vector::new(0.3, 0.0, 0.0)) * tip(0.01);
         let slid = patch_workspace(&mut ws, &moved, &box1, &box2, prediction, &opts);
-        assert!((slid - 0.6).abs() < 1e-3, "{slid}");
+        assert!((slid.prediction - 0.6).abs() < 1e-3, "{slid:?}");
+        // Region by region: the pole's foot (in shape 1's frame now) slid
+        // by 0.3 as well, so it gets the same 0.6.
+        let foot = Aabb::new(Vec3A::new(0.7, 0.9, 0.4), Vec3A::new(0.9, 1.1, 0.6));
+        let at_foot = slid.within(&foot);
+        assert!((at_foot - 0.6).abs() < 0.01, "{at_foot}");
         // Far apart: nothing can touch, the smallest prediction.
         let away = PPose::from_translation(Vector::new(50.0, 0.0, 0.0));
         let far = patch_workspace(&mut ws, &away, &box1, &box2, prediction, &opts);
-        assert_eq!(far, 0.1 * prediction);
+        assert_eq!(far.prediction, 0.1 * prediction);
     }
 }

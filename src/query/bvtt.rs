@@ -19,6 +19,33 @@ use crate::geom::{Aabb, Pose, Triangle};
 /// box in `A`'s frame.
 pub type NodePair<NA, NB> = (NA, Aabb, NB, Aabb);
 
+/// A node pair waiting on the traversal's stack, with its prediction.
+type Pending<NA, NB> = (NodePair<NA, NB>, f32);
+
+/// The prediction distance of a traversal, which may depend on where `B`'s
+/// points are: a pair whose `B` side lies in a region that barely moves
+/// needs a smaller margin than the largest (see
+/// [`MotionBound`](crate::contact::MotionBound)). A plain `f32` is the same
+/// distance everywhere.
+pub trait Prediction: Sync {
+    /// The largest distance: the root pair and the task front use it.
+    fn at_most(&self) -> f32;
+    /// The distance for the points of `B` inside `b_box` (in `A`'s frame);
+    /// never above [`at_most`](Self::at_most).
+    fn within(&self, b_box: &Aabb) -> f32;
+}
+
+impl Prediction for f32 {
+    #[inline]
+    fn at_most(&self) -> f32 {
+        *self
+    }
+    #[inline]
+    fn within(&self, _: &Aabb) -> f32 {
+        *self
+    }
+}
+
 /// The root pair, if the roots' boxes come within `prediction`.
 fn root_pair<A: NodeCursor, B: NodeCursor>(
     a: &A,
@@ -54,7 +81,9 @@ impl<NA: Copy, NB: Copy> Scratch<NA, NB> {
 
 /// One descent step from a pair that is not two leaves: the larger box (by
 /// half area, never a leaf) is split and the child pairs that still come
-/// within `prediction` are pushed, in child order.
+/// within `prediction` are pushed, in child order, each with its own
+/// prediction: the pair's, or when `B` is split, `bound`'s for the child's
+/// box if that is smaller.
 ///
 /// The split node's children are tested as one batch against the other
 /// node's box; when `B` is split, its children's boxes are moved into `A`'s
@@ -68,13 +97,13 @@ fn descend<A: NodeCursor, B: NodeCursor>(
     a: &A,
     b: &B,
     b_to_a: &Pose,
-    prediction: f32,
+    (prediction, bound): (f32, &impl Prediction),
     (na, box_a, nb, box_b): NodePair<A::Node, B::Node>,
     leaf_a: bool,
     leaf_b: bool,
     scratch: &mut Scratch<A::Node, B::Node>,
     stats: &mut TraversalStats,
-    mut push: impl FnMut(NodePair<A::Node, B::Node>),
+    mut push: impl FnMut(NodePair<A::Node, B::Node>, f32),
 ) {
     let descend_a = leaf_b || (!leaf_a && box_a.half_area() >= box_b.half_area());
     if descend_a {
@@ -85,7 +114,9 @@ fn descend<A: NodeCursor, B: NodeCursor>(
         // Loosen A's side, as the leaf test does, so that rounding
         // cannot prune a pair the leaf test would report.
         let mask = boxes.overlaps_grown(prediction, &box_b);
-        boxes.for_each_in(mask, |i| push((kids.node(i), boxes.get(i), nb, box_b)));
+        boxes.for_each_in(mask, |i| {
+            push((kids.node(i), boxes.get(i), nb, box_b), prediction)
+        });
     } else {
         let grown_a = box_a.loosened(prediction);
         let kids = &mut scratch.b;
@@ -93,7 +124,11 @@ fn descend<A: NodeCursor, B: NodeCursor>(
         stats.nodes_visited += kids.len() as u64;
         let moved = kids.boxes().transformed(b_to_a);
         let mask = moved.overlaps(&grown_a);
-        moved.for_each_in(mask, |i| push((na, box_a, kids.node(i), moved.get(i))));
+        moved.for_each_in(mask, |i| {
+            let child = moved.get(i);
+            let p = bound.within(&child).min(prediction);
+            push((na, box_a, kids.node(i), child), p)
+        });
     }
 }
 
@@ -125,29 +160,39 @@ pub fn bvtt_from<A: NodeCursor, B: NodeCursor>(
     stats: &mut TraversalStats,
     mut f: impl FnMut(u32, &Triangle, u32, &Triangle) -> ControlFlow<()>,
 ) -> bool {
-    traverse(a, b, b_to_a, prediction, start, stats, |i, ti, j, tj, _| {
-        f(i, ti, j, tj)
-    })
+    traverse(
+        a,
+        b,
+        b_to_a,
+        &prediction,
+        start,
+        prediction,
+        stats,
+        |i, ti, j, tj, _, _| f(i, ti, j, tj),
+    )
 }
 
 /// The traversal behind [`bvtt_from`]: `f(i, tri_i, j, tri_j_local,
-/// tri_j_in_a)` also receives `B`'s triangle moved into `A`'s frame, which
-/// the leaf test computes anyway (once per triangle of a leaf pair, not once
-/// per reported pair).
+/// tri_j_in_a, prediction)` also receives `B`'s triangle moved into `A`'s
+/// frame, which the leaf test computes anyway (once per triangle of a leaf
+/// pair, not once per reported pair), and the prediction the pair was
+/// found with (see [`Prediction`]; the start pair's is `start_prediction`).
+#[allow(clippy::too_many_arguments)]
 fn traverse<A: NodeCursor, B: NodeCursor>(
     a: &A,
     b: &B,
     b_to_a: &Pose,
-    prediction: f32,
+    bound: &impl Prediction,
     start: NodePair<A::Node, B::Node>,
+    start_prediction: f32,
     stats: &mut TraversalStats,
-    mut f: impl FnMut(u32, &Triangle, u32, &Triangle, &Triangle) -> ControlFlow<()>,
+    mut f: impl FnMut(u32, &Triangle, u32, &Triangle, &Triangle, f32) -> ControlFlow<()>,
 ) -> bool {
-    let mut stack: Vec<NodePair<A::Node, B::Node>> = Vec::with_capacity(128);
-    stack.push(start);
+    let mut stack: Vec<Pending<A::Node, B::Node>> = Vec::with_capacity(128);
+    stack.push((start, start_prediction));
     let mut b_tris: Vec<(u32, Triangle, Triangle, Aabb)> = Vec::new();
     let mut scratch = Scratch::new(&start);
-    while let Some(pair) = stack.pop() {
+    while let Some((pair, prediction)) = stack.pop() {
         let (na, _, nb, _) = pair;
         let leaf_a = a.is_leaf(&na);
         let leaf_b = b.is_leaf(&nb);
@@ -165,7 +210,7 @@ fn traverse<A: NodeCursor, B: NodeCursor>(
                 let bi = Aabb::of_triangle(ti).loosened(prediction);
                 for (j, tj, moved, bj) in &b_tris {
                     stats.primitive_tests += 1;
-                    if bi.intersects(bj) && f(i, ti, *j, tj, moved).is_break() {
+                    if bi.intersects(bj) && f(i, ti, *j, tj, moved, prediction).is_break() {
                         stop = true;
                         return;
                     }
@@ -180,13 +225,13 @@ fn traverse<A: NodeCursor, B: NodeCursor>(
             a,
             b,
             b_to_a,
-            prediction,
+            (prediction, bound),
             pair,
             leaf_a,
             leaf_b,
             &mut scratch,
             stats,
-            |p| stack.push(p),
+            |p, pred| stack.push((p, pred)),
         );
     }
     false
@@ -225,13 +270,13 @@ pub fn bvtt_front<A: NodeCursor, B: NodeCursor>(
                     a,
                     b,
                     b_to_a,
-                    prediction,
+                    (prediction, &prediction),
                     pair,
                     leaf_a,
                     leaf_b,
                     &mut scratch,
                     stats,
-                    |p| next.push(p),
+                    |p, _| next.push(p),
                 );
             }
         }
@@ -259,21 +304,48 @@ pub fn bvtt_par<A: NodeCursor, B: NodeCursor, S: Send>(
     init: impl Fn() -> S + Sync,
     leaf: impl Fn(&mut S, u32, &Triangle, u32, &Triangle) + Sync,
 ) -> (Vec<S>, TraversalStats) {
+    bvtt_par_within(
+        a,
+        b,
+        b_to_a,
+        &prediction,
+        target,
+        init,
+        |s, i, ti, j, tj, _| leaf(s, i, ti, j, tj),
+    )
+}
+
+/// [`bvtt_par`] with a prediction that depends on where `B`'s points are
+/// ([`Prediction`]): the front is found with its largest distance, and
+/// below the front each pair keeps the smallest distance of the `B` boxes
+/// above it. `leaf(state, i, tri_i, j, tri_j, prediction)` gets the pair's.
+pub fn bvtt_par_within<A: NodeCursor, B: NodeCursor, S: Send>(
+    a: &A,
+    b: &B,
+    b_to_a: &Pose,
+    bound: &impl Prediction,
+    target: usize,
+    init: impl Fn() -> S + Sync,
+    leaf: impl Fn(&mut S, u32, &Triangle, u32, &Triangle, f32) + Sync,
+) -> (Vec<S>, TraversalStats) {
     use rayon::prelude::*;
     let mut stats = TraversalStats::default();
+    let prediction = bound.at_most();
     let front = bvtt_front(a, b, b_to_a, prediction, target, &mut stats);
-    let task = |start| {
+    let task = |start: NodePair<A::Node, B::Node>| {
         let mut s = init();
         let mut st = TraversalStats::default();
+        let p = bound.within(&start.3).min(prediction);
         traverse(
             a,
             b,
             b_to_a,
-            prediction,
+            bound,
             start,
+            p,
             &mut st,
-            |i, ti, j, _, tj| {
-                leaf(&mut s, i, ti, j, tj);
+            |i, ti, j, _, tj, p| {
+                leaf(&mut s, i, ti, j, tj, p);
                 ControlFlow::Continue(())
             },
         );

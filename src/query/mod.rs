@@ -23,7 +23,9 @@ pub mod point;
 pub mod ray;
 
 pub use best::find_best;
-pub use bvtt::{bvtt, bvtt_from, bvtt_front, bvtt_min, bvtt_pairs, bvtt_par};
+pub use bvtt::{
+    Prediction, bvtt, bvtt_from, bvtt_front, bvtt_min, bvtt_pairs, bvtt_par, bvtt_par_within,
+};
 pub use overlap::{overlap, visit, visit_batch};
 pub use packet::{closest_hits, closest_hits_within};
 pub use point::{PointHit, closest_point};
