@@ -3,6 +3,7 @@
 use std::time::Instant;
 
 use cbvh::build::{BuildOptions, Layout, build};
+use cbvh::codec::clbvh::{ClOptions, CompactOptions};
 use cbvh::codec::hcc::HccOptions;
 use cbvh::codec::racbvh::RacOptions;
 use cbvh::codec::{AnyCodec, AnyOptions, ByteSize, CodecKind, OpenOptions};
@@ -20,9 +21,20 @@ pub struct BuildArgs {
     /// Node layout: depth-first, van-emde-boas or cache-efficient.
     #[arg(long, default_value = "depth-first")]
     pub layout: Layout,
-    /// Most triangles per leaf.
+    /// Most triangles per leaf of the canonical tree (the codecs'
+    /// leaves; CLBVH merges leaves up to --clbvh-leaf-size).
     #[arg(long, default_value_t = 1)]
     pub leaf_size: usize,
+    /// CLBVH: `M`, the most triangles its SAH collapse merges into one
+    /// leaf (1 to 10); subtrees of at most `8 · M` triangles become
+    /// compressed multi-leaf nodes (the paper's `N × M` threshold).
+    /// Unset: 4, or --leaf-size if larger.
+    #[arg(long, value_name = "M")]
+    pub clbvh_leaf_size: Option<usize>,
+    /// CLBVH: regular 8-wide nodes only, no compressed multi-leaf nodes
+    /// (the paper's uncompressed BVH8 reference).
+    #[arg(long)]
+    pub clbvh_uncompressed: bool,
     /// RACBVH: nodes per cluster (a power of two, 256 to 16384).
     #[arg(long, default_value_t = 4096)]
     pub cluster_nodes: u32,
@@ -98,6 +110,9 @@ pub fn run(a: BuildArgs) -> CliResult {
                     Some(0) => None,
                     Some(b) => Some(b),
                 };
+                let clbvh_m = a
+                    .clbvh_leaf_size
+                    .unwrap_or(ClOptions::default().leaf_size.max(a.leaf_size));
                 let options = AnyOptions {
                     racbvh: RacOptions {
                         cluster_nodes: a.cluster_nodes,
@@ -108,6 +123,15 @@ pub fn run(a: BuildArgs) -> CliResult {
                     hcc: HccOptions {
                         vertex_bits: bits(HccOptions::default().vertex_bits),
                         vertex_ids: !a.no_vertex_ids,
+                    },
+                    clbvh: ClOptions {
+                        leaf_size: clbvh_m,
+                        multi_leaf: !a.clbvh_uncompressed,
+                        ..Default::default()
+                    },
+                    clbvh_compact: CompactOptions {
+                        leaf_size: clbvh_m,
+                        multi_leaf: !a.clbvh_uncompressed,
                     },
                     ..Default::default()
                 };
