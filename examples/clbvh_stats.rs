@@ -6,8 +6,8 @@
 //! (timed casts alternate between the structures).
 //!
 //! ```text
-//! cargo run --release --example clbvh_stats -- [--tris 1000000] [--mesh FILE.off]
-//!     [--leaf-size 4] [--width 512] [--repeat 5] [--json]
+//! cargo run --release --example clbvh_stats -- [--gen statue] [--tris 1000000]
+//!     [--mesh FILE.off] [--leaf-size 4] [--width 512] [--repeat 5] [--json]
 //! ```
 
 use std::time::Instant;
@@ -29,7 +29,11 @@ mod ray_sets;
 /// Command-line options.
 #[derive(Parser)]
 struct Args {
-    /// Statue size in triangles (ignored with `--mesh`).
+    /// Generated model: statue, turbine, plant, robot or isosurface
+    /// (ignored with `--mesh`).
+    #[arg(long = "gen", default_value_t = Kind::Statue)]
+    gen_kind: Kind,
+    /// Generated model's size in triangles (ignored with `--mesh`).
     #[arg(long, default_value_t = 1_000_000)]
     tris: usize,
     /// A mesh file instead of the generated statue.
@@ -69,8 +73,8 @@ fn main() {
             p.display().to_string(),
         ),
         None => (
-            generate(Kind::Statue, a.tris, 0, &mut |_, _| {}).expect("generate"),
-            format!("statue {}", a.tris),
+            generate(a.gen_kind, a.tris, 0, &mut |_, _| {}).expect("generate"),
+            format!("{} {}", a.gen_kind, a.tris),
         ),
     };
     let n = mesh.triangle_count();
