@@ -98,22 +98,23 @@ impl Queries for Obvhs<'_> {
 }
 
 /// Renders the statue with `target` on `pool`: one warm-up render, then
-/// the best of `runs`; returns (rays, seconds of the best render).
-pub fn best_render(
+/// `runs` timed ones; returns (rays per render, seconds of each render).
+pub fn timed_renders(
     target: &dyn RayTarget,
     opts: &RenderOptions,
     pool: &rayon::ThreadPool,
     runs: usize,
-) -> (u64, f64) {
+) -> (u64, Vec<f64>) {
     let scene = Scene::single(target, None);
     pool.install(|| {
         let (_, warm) = render(&scene, opts, &|_, _| {}).expect("render");
-        let mut best = f64::INFINITY;
-        for _ in 0..runs {
-            let t0 = Instant::now();
-            render(&scene, opts, &|_, _| {}).expect("render");
-            best = best.min(t0.elapsed().as_secs_f64());
-        }
-        (warm.rays.total(), best)
+        let times = (0..runs)
+            .map(|_| {
+                let t0 = Instant::now();
+                render(&scene, opts, &|_, _| {}).expect("render");
+                t0.elapsed().as_secs_f64()
+            })
+            .collect();
+        (warm.rays.total(), times)
     })
 }
