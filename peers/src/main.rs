@@ -623,16 +623,22 @@ fn main() {
             }
 
             for (threads, pool) in &pools {
-                for p in &peers {
-                    let mut times = Vec::with_capacity(RUNS);
-                    let mut hits = 0;
-                    pool.install(|| {
-                        for _ in 0..RUNS {
+                // Round-robin: run k of every structure before run k + 1 of
+                // any, so that a burst of load from other processes on a
+                // shared machine spreads over all of them instead of
+                // landing on one structure's runs.
+                let mut all_times = vec![Vec::with_capacity(RUNS); peers.len()];
+                let mut all_hits = vec![0; peers.len()];
+                pool.install(|| {
+                    for _ in 0..RUNS {
+                        for (k, p) in peers.iter().enumerate() {
                             let t0 = Instant::now();
-                            hits = cast_all(rays, p);
-                            times.push(t0.elapsed().as_secs_f64());
+                            all_hits[k] = cast_all(rays, p);
+                            all_times[k].push(t0.elapsed().as_secs_f64());
                         }
-                    });
+                    }
+                });
+                for ((p, mut times), hits) in peers.iter().zip(all_times).zip(all_hits) {
                     let runs_ms: Vec<f64> = times.iter().map(|t| t * 1e3).collect();
                     let med = median(&mut times);
                     let mrays = rays.origins.len() as f64 / med / 1e6;
@@ -686,8 +692,22 @@ fn main() {
             targets.push((&clc_target, "cbvh clbvh-compact", peers[last + 1].build));
             targets.push((&hcc_target, "cbvh hcc", peers[last + 2].build));
             for (threads, pool) in &pools {
-                for &(t, name, build) in &targets {
-                    let (rays, mut runs) = whitted::timed_renders(t, &whitted_opts, pool, RUNS);
+                // One warm-up render each, then round-robin as above.
+                let mut all_runs = vec![Vec::with_capacity(RUNS); targets.len()];
+                let mut all_rays = vec![0; targets.len()];
+                for round in 0..=RUNS {
+                    for (k, &(t, _, _)) in targets.iter().enumerate() {
+                        let (rays, secs) = whitted::timed_render(t, &whitted_opts, pool);
+                        if round == 0 {
+                            all_rays[k] = rays;
+                        } else {
+                            all_runs[k].push(secs);
+                        }
+                    }
+                }
+                for ((&(t, name, build), mut runs), rays) in
+                    targets.iter().zip(all_runs).zip(all_rays)
+                {
                     let runs_ms: Vec<f64> = runs.iter().map(|s| s * 1e3).collect();
                     let secs = median(&mut runs);
                     let mrays = rays as f64 / secs / 1e6;

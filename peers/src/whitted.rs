@@ -97,24 +97,17 @@ impl Queries for Obvhs<'_> {
     }
 }
 
-/// Renders the statue with `target` on `pool`: one warm-up render, then
-/// `runs` timed ones; returns (rays per render, seconds of each render).
-pub fn timed_renders(
+/// Renders the statue once with `target` on `pool`; returns (rays,
+/// seconds).
+pub fn timed_render(
     target: &dyn RayTarget,
     opts: &RenderOptions,
     pool: &rayon::ThreadPool,
-    runs: usize,
-) -> (u64, Vec<f64>) {
+) -> (u64, f64) {
     let scene = Scene::single(target, None);
     pool.install(|| {
-        let (_, warm) = render(&scene, opts, &|_, _| {}).expect("render");
-        let times = (0..runs)
-            .map(|_| {
-                let t0 = Instant::now();
-                render(&scene, opts, &|_, _| {}).expect("render");
-                t0.elapsed().as_secs_f64()
-            })
-            .collect();
-        (warm.rays.total(), times)
+        let t0 = Instant::now();
+        let (_, stats) = render(&scene, opts, &|_, _| {}).expect("render");
+        (stats.rays.total(), t0.elapsed().as_secs_f64())
     })
 }
