@@ -6,15 +6,16 @@
 //! (timed casts alternate between the structures).
 //!
 //! ```text
-//! cargo run --release --example clbvh_stats -- [--tris 1000000] [--mesh FILE.off]
-//!     [--leaf-size 4] [--width 512] [--repeat 5] [--json]
+//! cargo run --release --example clbvh_stats -- [--gen statue] [--tris 1000000]
+//!     [--mesh FILE.off] [--leaf-size 4] [--compact-leaf-size 6] [--width 512]
+//!     [--repeat 5] [--json]
 //! ```
 
 use std::time::Instant;
 
 use cbvh::build::{BuildOptions, build};
 use cbvh::codec::ByteSize;
-use cbvh::codec::clbvh::{ClBvh, ClOptions, LeafKind};
+use cbvh::codec::clbvh::{COMPACT_LEAF_SIZE, ClBvh, ClOptions, LeafKind};
 use cbvh::codec::plain::PlainBvh;
 use cbvh::cursor::NodeCursor;
 use cbvh::geom::Ray;
@@ -29,15 +30,22 @@ mod ray_sets;
 /// Command-line options.
 #[derive(Parser)]
 struct Args {
-    /// Statue size in triangles (ignored with `--mesh`).
+    /// Generated model: statue, turbine, plant, robot or isosurface
+    /// (ignored with `--mesh`).
+    #[arg(long = "gen", default_value_t = Kind::Statue)]
+    gen_kind: Kind,
+    /// Generated model's size in triangles (ignored with `--mesh`).
     #[arg(long, default_value_t = 1_000_000)]
     tris: usize,
     /// A mesh file instead of the generated statue.
     #[arg(long)]
     mesh: Option<std::path::PathBuf>,
-    /// CLBVH leaf size `M` (threshold `8 · M`).
-    #[arg(long, default_value_t = 4)]
+    /// CLBVH leaf size `M` (threshold `8 · M`) of the 8-wide and fast trees.
+    #[arg(long, default_value_t = ClOptions::default().leaf_size)]
     leaf_size: usize,
+    /// `M` of the compact tree.
+    #[arg(long, default_value_t = COMPACT_LEAF_SIZE)]
+    compact_leaf_size: usize,
     /// Camera image width and height (`width²` primary rays).
     #[arg(long, default_value_t = 512)]
     width: usize,
@@ -69,8 +77,8 @@ fn main() {
             p.display().to_string(),
         ),
         None => (
-            generate(Kind::Statue, a.tris, 0, &mut |_, _| {}).expect("generate"),
-            format!("statue {}", a.tris),
+            generate(a.gen_kind, a.tris, 0, &mut |_, _| {}).expect("generate"),
+            format!("{} {}", a.gen_kind, a.tris),
         ),
     };
     let n = mesh.triangle_count();
@@ -78,15 +86,18 @@ fn main() {
     let bvh = build(&mesh, &BuildOptions::default(), &|_, _| {}).expect("build");
     let build_s = t.elapsed().as_secs_f64();
     let plain = PlainBvh::new(&bvh, &mesh);
-    let opts = |leaves, multi_leaf| ClOptions {
-        leaf_size: a.leaf_size,
+    let opts = |leaf_size, leaves, multi_leaf| ClOptions {
+        leaf_size,
         leaves,
         multi_leaf,
     };
     let configs = [
-        ("bvh8", opts(LeafKind::Fast, false)),
-        ("clbvh", opts(LeafKind::Fast, true)),
-        ("clbvh-compact", opts(LeafKind::Compact, true)),
+        ("bvh8", opts(a.leaf_size, LeafKind::Fast, false)),
+        ("clbvh", opts(a.leaf_size, LeafKind::Fast, true)),
+        (
+            "clbvh-compact",
+            opts(a.compact_leaf_size, LeafKind::Compact, true),
+        ),
     ];
     let mut trees = Vec::new();
     for (label, o) in configs {

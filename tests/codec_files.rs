@@ -249,6 +249,81 @@ fn cli_and_sims_use_codec_files_with_no_mesh_anywhere() {
 /// caller who did not call `verify`: the first triangle a query reads now
 /// checks the mesh sections once, so such a caller gets the original
 /// answers or a panic that names the damage, never other triangles.
+/// `cbvh build --clbvh-leaf-size M` reaches the CLBVH encoder (the file
+/// records `M`, and a larger `M` makes fewer, fuller multi-leaf nodes and
+/// a different file) and every `M` stays lossless: the files answer rays
+/// exactly as plain over the same mesh.
+#[test]
+fn cli_clbvh_leaf_size_changes_the_encoding_and_stays_lossless() {
+    let mut files = Vec::new();
+    for (codec, m) in [
+        ("clbvh", "1"),
+        ("clbvh", "8"),
+        ("clbvh-compact", "1"),
+        ("clbvh-compact", "8"),
+    ] {
+        let file = temp(&format!("cli-leaf-{codec}-{m}.clb"));
+        let f = file.to_str().unwrap();
+        let (ok, out, err) = cbvh(&[
+            "build",
+            "--gen",
+            "statue",
+            "--tris",
+            "4000",
+            "--codec",
+            codec,
+            "--clbvh-leaf-size",
+            m,
+            "--json",
+            "-o",
+            f,
+        ]);
+        assert!(ok, "{err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(v["leaf_size"].to_string(), m, "{out}");
+        files.push((file, v));
+    }
+    for pair in files.chunks(2) {
+        let (small, large) = (&pair[0].1, &pair[1].1);
+        assert!(
+            large["multi_leaf_nodes"].as_u64() < small["multi_leaf_nodes"].as_u64(),
+            "M=8 should make fewer multi-leaf nodes than M=1: {small} {large}"
+        );
+        assert_ne!(
+            std::fs::read(&pair[0].0).unwrap(),
+            std::fs::read(&pair[1].0).unwrap()
+        );
+    }
+    let first = AnyCodec::open(&files[0].0, &OpenOptions::default()).unwrap();
+    let mesh = first.decoded_mesh();
+    let plain = cbvh::codec::plain::PlainBvh::new(
+        &build(&mesh, &BuildOptions::default(), &|_, _| {}).unwrap(),
+        &mesh,
+    );
+    let want = hits(&plain, &mesh);
+    assert!(want.iter().any(Option::is_some));
+    for (file, _) in &files {
+        let c = AnyCodec::open(file, &OpenOptions::default()).unwrap();
+        assert_eq!(codec_hits(&c, &mesh), want, "{}", file.display());
+        std::fs::remove_file(file).unwrap();
+    }
+    // A canonical leaf larger than M is refused, not truncated.
+    let (ok, _, err) = cbvh(&[
+        "build",
+        "--gen",
+        "statue",
+        "--tris",
+        "4000",
+        "--codec",
+        "clbvh",
+        "--leaf-size",
+        "4",
+        "--clbvh-leaf-size",
+        "2",
+    ]);
+    assert!(!ok && err.contains("leaf size 2"), "{err}");
+}
+
 #[test]
 fn skipping_verify_never_gives_triangles_from_damaged_mesh_bytes() {
     let mesh = statue(2000);

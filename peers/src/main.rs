@@ -287,6 +287,30 @@ fn cast_slice(p: &Peer, os: &[Vec3A], ds: &[Vec3A], out: &mut [Option<f32>]) {
     }
 }
 
+/// A cbvh codec as a peer: single rays through `closest_hit`.
+fn cursor_peer<'a, C: cbvh::codec::Codec>(
+    name: &'static str,
+    target: &'a cbvh::render::CursorTarget<C>,
+    build: Duration,
+) -> Peer<'a> {
+    let c = target.cursor();
+    Peer {
+        name,
+        bytes: c.bytes_total(),
+        build,
+        cast: Box::new(move |o, d| {
+            cbvh::query::closest_hit(
+                c,
+                &cbvh::geom::Ray::new(o, d),
+                f32::INFINITY,
+                &mut cbvh::TraversalStats::default(),
+            )
+            .map(|h| h.t)
+        }),
+        packet: None,
+    }
+}
+
 fn main() {
     let args = parse_args();
     let mut rows: Vec<Row> = Vec::new();
@@ -389,23 +413,7 @@ fn main() {
         let build = t0.elapsed();
         drop(bvh);
         let rac_target = cbvh::render::CursorTarget::new(rac).with_name("cbvh racbvh");
-        let rac_ref = rac_target.cursor();
-        let rac = rac_ref;
-        let p_rac = Peer {
-            name: "cbvh racbvh",
-            bytes: rac.bytes_total(),
-            build,
-            cast: Box::new(move |o, d| {
-                cbvh::query::closest_hit(
-                    rac_ref,
-                    &cbvh::geom::Ray::new(o, d),
-                    f32::INFINITY,
-                    &mut cbvh::TraversalStats::default(),
-                )
-                .map(|h| h.t)
-            }),
-            packet: None,
-        };
+        let p_rac = cursor_peer("cbvh racbvh", &rac_target, build);
 
         // parry TriMesh.
         let t0 = Instant::now();
@@ -475,7 +483,6 @@ fn main() {
             packet: None,
         };
 
-
         // cbvh CLBVH, fast and compact leaves (issue 12), from the same
         // canonical tree (built again: its build time counts for each).
         let t0 = Instant::now();
@@ -491,9 +498,17 @@ fn main() {
             .unwrap_or_else(|e| die(&format!("clbvh-compact: {e}")));
         let clc_build = canonical + t0.elapsed();
         drop(bvh);
+        // cbvh i-HCCMesh (issue 11), lossless vertices, for the bytes.
+        let t0 = Instant::now();
+        let bvh = cbvh::build::build(&mesh, &cbvh::build::BuildOptions::default(), &|_, _| {})
+            .unwrap_or_else(|e| die(&format!("cbvh build: {e}")));
+        let hcc = cbvh::codec::hcc::HccBvh::encode(&bvh, &mesh)
+            .unwrap_or_else(|e| die(&format!("hcc: {e}")));
+        let hcc_build = t0.elapsed();
+        drop(bvh);
+        let hcc_target = cbvh::render::CursorTarget::new(hcc).with_name("cbvh hcc");
         let clb_target = cbvh::render::CursorTarget::new(clb).with_name("cbvh clbvh");
         let clc_target = cbvh::render::CursorTarget::new(clc).with_name("cbvh clbvh-compact");
-        let (clb_ref, clc_ref) = (clb_target.cursor(), clc_target.cursor());
         // The peers borrow the targets above, so the list is made after them.
         #[cfg(feature = "embree")]
         let embree = embree_peer::Embree::new(&mesh);
@@ -501,36 +516,9 @@ fn main() {
         let mut peers: Vec<Peer> = vec![p_cbvh, p_packets, p_rac, p_parry, p_obvhs];
         #[cfg(feature = "embree")]
         peers.push(embree.peer());
-        peers.push(Peer {
-            name: "cbvh clbvh",
-            bytes: clb_ref.bytes_total(),
-            build: clb_build,
-            cast: Box::new(move |o, d| {
-                cbvh::query::closest_hit(
-                    clb_ref,
-                    &cbvh::geom::Ray::new(o, d),
-                    f32::INFINITY,
-                    &mut cbvh::TraversalStats::default(),
-                )
-                .map(|h| h.t)
-            }),
-            packet: None,
-        });
-        peers.push(Peer {
-            name: "cbvh clbvh-compact",
-            bytes: clc_ref.bytes_total(),
-            build: clc_build,
-            cast: Box::new(move |o, d| {
-                cbvh::query::closest_hit(
-                    clc_ref,
-                    &cbvh::geom::Ray::new(o, d),
-                    f32::INFINITY,
-                    &mut cbvh::TraversalStats::default(),
-                )
-                .map(|h| h.t)
-            }),
-            packet: None,
-        });
+        peers.push(cursor_peer("cbvh clbvh", &clb_target, clb_build));
+        peers.push(cursor_peer("cbvh clbvh-compact", &clc_target, clc_build));
+        peers.push(cursor_peer("cbvh hcc", &hcc_target, hcc_build));
 
         let mut ray_sets = vec![camera_rays(lo, hi, args.width)];
         if args.random > 0 {
@@ -635,16 +623,22 @@ fn main() {
             }
 
             for (threads, pool) in &pools {
-                for p in &peers {
-                    let mut times = Vec::with_capacity(RUNS);
-                    let mut hits = 0;
-                    pool.install(|| {
-                        for _ in 0..RUNS {
+                // Round-robin: run k of every structure before run k + 1 of
+                // any, so that a burst of load from other processes on a
+                // shared machine spreads over all of them instead of
+                // landing on one structure's runs.
+                let mut all_times = vec![Vec::with_capacity(RUNS); peers.len()];
+                let mut all_hits = vec![0; peers.len()];
+                pool.install(|| {
+                    for _ in 0..RUNS {
+                        for (k, p) in peers.iter().enumerate() {
                             let t0 = Instant::now();
-                            hits = cast_all(rays, p);
-                            times.push(t0.elapsed().as_secs_f64());
+                            all_hits[k] = cast_all(rays, p);
+                            all_times[k].push(t0.elapsed().as_secs_f64());
                         }
-                    });
+                    }
+                });
+                for ((p, mut times), hits) in peers.iter().zip(all_times).zip(all_hits) {
                     let runs_ms: Vec<f64> = times.iter().map(|t| t * 1e3).collect();
                     let med = median(&mut times);
                     let mrays = rays.origins.len() as f64 / med / 1e6;
@@ -693,12 +687,29 @@ fn main() {
             let et = embree.target(&mesh);
             #[cfg(feature = "embree")]
             targets.push((&et, "embree", peers[5].build));
-            let last = peers.len() - 2;
+            let last = peers.len() - 3;
             targets.push((&clb_target, "cbvh clbvh", peers[last].build));
             targets.push((&clc_target, "cbvh clbvh-compact", peers[last + 1].build));
+            targets.push((&hcc_target, "cbvh hcc", peers[last + 2].build));
             for (threads, pool) in &pools {
-                for &(t, name, build) in &targets {
-                    let (rays, secs) = whitted::best_render(t, &whitted_opts, pool, 3);
+                // One warm-up render each, then round-robin as above.
+                let mut all_runs = vec![Vec::with_capacity(RUNS); targets.len()];
+                let mut all_rays = vec![0; targets.len()];
+                for round in 0..=RUNS {
+                    for (k, &(t, _, _)) in targets.iter().enumerate() {
+                        let (rays, secs) = whitted::timed_render(t, &whitted_opts, pool);
+                        if round == 0 {
+                            all_rays[k] = rays;
+                        } else {
+                            all_runs[k].push(secs);
+                        }
+                    }
+                }
+                for ((&(t, name, build), mut runs), rays) in
+                    targets.iter().zip(all_runs).zip(all_rays)
+                {
+                    let runs_ms: Vec<f64> = runs.iter().map(|s| s * 1e3).collect();
+                    let secs = median(&mut runs);
                     let mrays = rays as f64 / secs / 1e6;
                     eprintln!(
                         "[{n} tris] whitted 640x480, {name}, {threads} thread(s): {mrays:.2} M rays/s ({rays} rays)"
@@ -709,7 +720,7 @@ fn main() {
                         structure: name,
                         threads: *threads,
                         mrays,
-                        runs_ms: vec![secs * 1e3],
+                        runs_ms,
                         hits: 0,
                         bytes: t.bytes_total(),
                         build_s: build.as_secs_f64(),
@@ -758,12 +769,12 @@ fn main() {
     }
 
     println!(
-        "{:>9} {:>7} {:<15} {:>7} {:>10} {:>9} {:>8} {:>8}",
+        "{:>9} {:>7} {:<18} {:>7} {:>10} {:>9} {:>8} {:>8}",
         "tris", "rays", "structure", "threads", "M rays/s", "B/tri", "build s", "hits"
     );
     for r in &rows {
         println!(
-            "{:>9} {:>7} {:<15} {:>7} {:>10.2} {:>9.1} {:>8.2} {:>8}",
+            "{:>9} {:>7} {:<18} {:>7} {:>10.2} {:>9.1} {:>8.2} {:>8}",
             r.tris,
             r.rays,
             r.structure,
@@ -778,7 +789,7 @@ fn main() {
     println!("agreement with cbvh (per ray; distances within {T_REL_TOL} relative):");
     for a in &agreements {
         println!(
-            "{:>9} {:>7} {:<15} hits {:>8}  hit/miss mismatches {:>5}  distance mismatches {:>5} ({} nearer than cbvh)",
+            "{:>9} {:>7} {:<18} hits {:>8}  hit/miss mismatches {:>5}  distance mismatches {:>5} ({} nearer than cbvh)",
             a.tris, a.rays, a.structure, a.hits, a.hit_miss_mismatches, a.t_mismatches, a.t_nearer
         );
     }

@@ -97,23 +97,17 @@ impl Queries for Obvhs<'_> {
     }
 }
 
-/// Renders the statue with `target` on `pool`: one warm-up render, then
-/// the best of `runs`; returns (rays, seconds of the best render).
-pub fn best_render(
+/// Renders the statue once with `target` on `pool`; returns (rays,
+/// seconds).
+pub fn timed_render(
     target: &dyn RayTarget,
     opts: &RenderOptions,
     pool: &rayon::ThreadPool,
-    runs: usize,
 ) -> (u64, f64) {
     let scene = Scene::single(target, None);
     pool.install(|| {
-        let (_, warm) = render(&scene, opts, &|_, _| {}).expect("render");
-        let mut best = f64::INFINITY;
-        for _ in 0..runs {
-            let t0 = Instant::now();
-            render(&scene, opts, &|_, _| {}).expect("render");
-            best = best.min(t0.elapsed().as_secs_f64());
-        }
-        (warm.rays.total(), best)
+        let t0 = Instant::now();
+        let (_, stats) = render(&scene, opts, &|_, _| {}).expect("render");
+        (stats.rays.total(), t0.elapsed().as_secs_f64())
     })
 }

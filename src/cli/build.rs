@@ -3,6 +3,7 @@
 use std::time::Instant;
 
 use cbvh::build::{BuildOptions, Layout, build};
+use cbvh::codec::clbvh::{ClOptions, CompactOptions};
 use cbvh::codec::hcc::HccOptions;
 use cbvh::codec::racbvh::RacOptions;
 use cbvh::codec::{AnyCodec, AnyOptions, ByteSize, CodecKind, OpenOptions};
@@ -20,9 +21,20 @@ pub struct BuildArgs {
     /// Node layout: depth-first, van-emde-boas or cache-efficient.
     #[arg(long, default_value = "depth-first")]
     pub layout: Layout,
-    /// Most triangles per leaf.
+    /// Most triangles per leaf of the canonical tree (the codecs'
+    /// leaves; CLBVH merges leaves up to --clbvh-leaf-size).
     #[arg(long, default_value_t = 1)]
     pub leaf_size: usize,
+    /// CLBVH: `M`, the most triangles its SAH collapse merges into one
+    /// leaf (1 to 10); subtrees of at most `8 · M` triangles become
+    /// compressed multi-leaf nodes (the paper's `N × M` threshold).
+    /// Unset: 4 (clbvh) or 6 (clbvh-compact), or --leaf-size if larger.
+    #[arg(long, value_name = "M")]
+    pub clbvh_leaf_size: Option<usize>,
+    /// CLBVH: regular 8-wide nodes only, no compressed multi-leaf nodes
+    /// (the paper's uncompressed BVH8 reference).
+    #[arg(long)]
+    pub clbvh_uncompressed: bool,
     /// RACBVH: nodes per cluster (a power of two, 256 to 16384).
     #[arg(long, default_value_t = 4096)]
     pub cluster_nodes: u32,
@@ -89,60 +101,71 @@ pub fn run(a: BuildArgs) -> CliResult {
     let tris = mesh.triangle_count();
     let mesh_rss = peak_rss_bytes();
     let t0 = Instant::now();
-    let (parts, layout, extra): (Vec<(&str, usize)>, Option<Layout>, serde_json::Value) =
-        match a.codec {
-            Structure::Codec(kind) => {
-                let bvh = build_with_progress(&mesh, &a)?;
-                let bits = |default: Option<u32>| match a.vertex_bits {
-                    None => default,
-                    Some(0) => None,
-                    Some(b) => Some(b),
-                };
-                let options = AnyOptions {
-                    racbvh: RacOptions {
-                        cluster_nodes: a.cluster_nodes,
-                        bits: a.bits,
-                        vertex_bits: bits(RacOptions::default().vertex_bits),
-                        ..Default::default()
-                    },
-                    hcc: HccOptions {
-                        vertex_bits: bits(HccOptions::default().vertex_bits),
-                        vertex_ids: !a.no_vertex_ids,
-                    },
+    let (parts, layout, extra): (Vec<(&str, usize)>, Option<Layout>, serde_json::Value) = match a
+        .codec
+    {
+        Structure::Codec(kind) => {
+            let bvh = build_with_progress(&mesh, &a)?;
+            let bits = |default: Option<u32>| match a.vertex_bits {
+                None => default,
+                Some(0) => None,
+                Some(b) => Some(b),
+            };
+            let clbvh_m = |default: usize| a.clbvh_leaf_size.unwrap_or(default.max(a.leaf_size));
+            let options = AnyOptions {
+                racbvh: RacOptions {
+                    cluster_nodes: a.cluster_nodes,
+                    bits: a.bits,
+                    vertex_bits: bits(RacOptions::default().vertex_bits),
                     ..Default::default()
-                };
-                let pb = progress_bar("encoding", 0);
-                let codec =
-                    AnyCodec::encode_with_progress(kind, &bvh, &mesh, &options, &|done, total| {
-                        pb.set_length(total);
-                        pb.set_position(done);
-                    });
-                pb.finish_and_clear();
-                let codec = codec?;
-                drop(bvh);
-                if let Some(path) = &a.output {
-                    codec.save(path)?;
-                    // Read it back (and verify it) so that a bad file is
-                    // caught here.
-                    AnyCodec::open(path, &OpenOptions::default())?;
-                }
-                let extra: serde_json::Map<String, serde_json::Value> = codec
-                    .build_fields()
-                    .into_iter()
-                    .map(|(k, v)| (k.to_string(), v))
-                    .collect();
-                (codec.bytes_by_part(), Some(a.layout), extra.into())
+                },
+                hcc: HccOptions {
+                    vertex_bits: bits(HccOptions::default().vertex_bits),
+                    vertex_ids: !a.no_vertex_ids,
+                },
+                clbvh: ClOptions {
+                    leaf_size: clbvh_m(ClOptions::default().leaf_size),
+                    multi_leaf: !a.clbvh_uncompressed,
+                    ..Default::default()
+                },
+                clbvh_compact: CompactOptions {
+                    leaf_size: clbvh_m(CompactOptions::default().leaf_size),
+                    multi_leaf: !a.clbvh_uncompressed,
+                },
+                ..Default::default()
+            };
+            let pb = progress_bar("encoding", 0);
+            let codec =
+                AnyCodec::encode_with_progress(kind, &bvh, &mesh, &options, &|done, total| {
+                    pb.set_length(total);
+                    pb.set_position(done);
+                });
+            pb.finish_and_clear();
+            let codec = codec?;
+            drop(bvh);
+            if let Some(path) = &a.output {
+                codec.save(path)?;
+                // Read it back (and verify it) so that a bad file is
+                // caught here.
+                AnyCodec::open(path, &OpenOptions::default())?;
             }
-            Structure::Parry => {
-                let t = cbvh::parry::parry_trimesh(&mesh)
-                    .map_err(|e| format!("parry could not build a TriMesh: {e:?}"))?;
-                (
-                    cbvh::parry::trimesh_bytes_by_part(&t),
-                    None,
-                    serde_json::json!({}),
-                )
-            }
-        };
+            let extra: serde_json::Map<String, serde_json::Value> = codec
+                .build_fields()
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), v))
+                .collect();
+            (codec.bytes_by_part(), Some(a.layout), extra.into())
+        }
+        Structure::Parry => {
+            let t = cbvh::parry::parry_trimesh(&mesh)
+                .map_err(|e| format!("parry could not build a TriMesh: {e:?}"))?;
+            (
+                cbvh::parry::trimesh_bytes_by_part(&t),
+                None,
+                serde_json::json!({}),
+            )
+        }
+    };
     let secs = t0.elapsed().as_secs_f64();
     let total: usize = parts.iter().map(|p| p.1).sum();
     let per_tri = total as f64 / tris.max(1) as f64;
