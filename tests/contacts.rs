@@ -6,7 +6,7 @@
 use std::collections::BTreeSet;
 
 use cbvh::build::BuildOptions;
-use cbvh::contact::{PairKernel, PatchOptions, pair_contact, triangles_intersect};
+use cbvh::contact::{PairKernel, PatchOptions, PatchSet, pair_contact, triangles_intersect};
 use cbvh::geom::Triangle;
 use cbvh::mesh::Mesh;
 use cbvh::parry::{CbvhShape, ContactMode, Dispatcher, cbvh_cbvh, parry_trimesh};
@@ -275,6 +275,72 @@ fn patches_cover_every_pair_parry_reports() {
     }
     assert!(covered > 50, "the poses must produce contacts: {covered}");
     assert!(!c1.fallback_bvh_built() && !c2.fallback_bvh_built());
+}
+
+/// A patch set takes the pairs interior to a patch without their points
+/// (`ContactSink::absorb`); the patches it gives rapier are the same as when
+/// it gets every pair's points: same normals, deepest points, reduced points
+/// and member pairs. A fine statue pressed into a fine flat mesh, where many
+/// pairs are interior.
+#[test]
+fn absorbed_pairs_do_not_change_the_patches() {
+    let statue = mesh_of(Kind::Statue, 20_000, 7);
+    let floor = grid(160, 2.0);
+    let c1 = CbvhShape::plain(&floor, &BuildOptions::default()).unwrap();
+    let c2 = CbvhShape::plain(&statue, &BuildOptions::default()).unwrap();
+    // The statue's lowest point 2 mm below the floor's plane.
+    let low = statue
+        .vertices
+        .iter()
+        .map(|v| v[1])
+        .fold(f32::INFINITY, f32::min);
+    let pos12 = Pose::from_translation(Vector::new(0.05, -low - 0.002, -0.03));
+    let prediction = 0.01;
+    let opts = PatchOptions::default();
+    let size = 1.0;
+    let mut all = PatchSet::new(&opts, size, true);
+    let mut summary = PatchSet::new(&opts, size, true);
+    let mut k_all = PairKernel::new(prediction).exact_separation(false);
+    let mut k_sum = PairKernel::new(prediction).exact_separation(false);
+    let mut stats = cbvh::TraversalStats::default();
+    cbvh_cbvh::for_each_pair(&c1, &c2, &pos12, prediction, &mut stats, |i, a, j, b| {
+        let b = moved(b, &pos12);
+        k_all.push(i, a, j, &b, &mut |c| all.add(c));
+        k_sum.push_into(i, a, j, &b, &mut summary);
+        std::ops::ControlFlow::Continue(())
+    });
+    k_all.flush(&mut |c| all.add(c));
+    k_sum.flush_into(&mut summary);
+    assert_eq!(k_all.stats.contacts, k_sum.stats.contacts);
+    assert_eq!(k_all.stats.absorbed, 0);
+    assert!(
+        k_sum.stats.absorbed * 10 > k_sum.stats.contacts,
+        "interior pairs are absorbed: {} of {}",
+        k_sum.stats.absorbed,
+        k_sum.stats.contacts
+    );
+    let view = |s: &PatchSet| {
+        s.patches
+            .iter()
+            .map(|p| {
+                let (pts, n) = p.reduced();
+                let mut members = p.members.clone();
+                members.sort_unstable();
+                (
+                    p.normal.to_array(),
+                    p.pairs,
+                    members,
+                    pts[..n]
+                        .iter()
+                        .map(|q| (q.p1.to_array(), q.p2.to_array(), q.dist, q.i, q.j))
+                        .collect::<Vec<_>>(),
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    let (a, b) = (view(&all), view(&summary));
+    assert!(!a.is_empty());
+    assert_eq!(a, b);
 }
 
 /// The patch set does not depend on the thread count.

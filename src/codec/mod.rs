@@ -44,7 +44,9 @@
 //! 1. Its folder, `codec/<name>/`: `encode.rs` (from `&CanonicalBvh` and the
 //!    mesh into a `Result`; a value that does not fit is an error), the
 //!    cursor (`decode.rs`, [`NodeCursor`](crate::cursor::NodeCursor) with
-//!    conservative boxes), `file.rs` (its self-contained file: magic,
+//!    conservative boxes; a binary codec needs only `for_each_child`, a
+//!    wide one also overrides `children` to write its child boxes into the
+//!    batch's lanes at once), `file.rs` (its self-contained file: magic,
 //!    version, two-tier validation, atomic save), `error.rs` (a `thiserror`
 //!    enum with fields), [`ByteSize`], and `mod.rs` with the module docs
 //!    (the paper's choices and ours).

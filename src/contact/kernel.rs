@@ -113,6 +113,41 @@ impl PairContact {
     }
 }
 
+/// Where a [`PairKernel`] hands its contacts.
+///
+/// [`PairKernel::push`] and [`PairKernel::flush`] take a closure;
+/// [`PairKernel::push_into`] and [`PairKernel::flush_into`] a sink. A sink
+/// that keeps only a summary of
+/// the contacts (a [`PatchSet`](super::PatchSet) keeps each patch's deepest
+/// and extreme points) can also take a pair *without its points*, through
+/// [`absorb`](Self::absorb), when the points could not change that summary:
+/// the kernel then skips the witness and clipping work for the pair.
+pub trait ContactSink {
+    /// Offered before the points of an overlapping pair (or of a separated
+    /// pair under [`PairKernel::exact_separation`]`(false)`) are computed,
+    /// with the pair's unit normal (A to B, in A's frame), its signed
+    /// separation (every contact point of the pair is at least this far
+    /// along the normal) and triangle A (every point on shape 1 lies in its
+    /// hull, up to rounding). Returns whether the sink took the pair into
+    /// account; then [`contact`](Self::contact) is not called for it.
+    fn absorb(&mut self, _i: u32, _j: u32, _normal: Vec3A, _sep: f32, _a: &Triangle) -> bool {
+        false
+    }
+
+    /// A pair contact with its points.
+    fn contact(&mut self, c: &PairContact);
+}
+
+/// A closure as a sink that takes every contact with its points.
+struct FnSink<F>(F);
+
+impl<F: FnMut(&PairContact)> ContactSink for FnSink<F> {
+    #[inline]
+    fn contact(&mut self, c: &PairContact) {
+        (self.0)(c)
+    }
+}
+
 /// Counters of a kernel's work.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct KernelStats {
@@ -122,6 +157,8 @@ pub struct KernelStats {
     pub contacts: u64,
     /// Separated pairs whose exact distance was computed.
     pub exact_distances: u64,
+    /// Contacts the sink took without their points ([`ContactSink::absorb`]).
+    pub absorbed: u64,
 }
 
 impl KernelStats {
@@ -130,6 +167,7 @@ impl KernelStats {
         self.pairs += o.pairs;
         self.contacts += o.contacts;
         self.exact_distances += o.exact_distances;
+        self.absorbed += o.absorbed;
     }
 }
 
@@ -199,13 +237,32 @@ impl PairKernel {
         b: &Triangle,
         sink: &mut impl FnMut(&PairContact),
     ) {
+        self.push_into(i, a, j, b, &mut FnSink(sink));
+    }
+
+    /// [`push`](Self::push) into a [`ContactSink`], which may take pairs
+    /// without their points.
+    #[inline]
+    pub fn push_into(
+        &mut self,
+        i: u32,
+        a: &Triangle,
+        j: u32,
+        b: &Triangle,
+        sink: &mut impl ContactSink,
+    ) {
         if self.batch.put(a, b, (i, j)) {
-            self.flush(sink);
+            self.flush_into(sink);
         }
     }
 
     /// Runs the queued pairs.
     pub fn flush(&mut self, sink: &mut impl FnMut(&PairContact)) {
+        self.flush_into(&mut FnSink(sink));
+    }
+
+    /// [`flush`](Self::flush) into a [`ContactSink`].
+    pub fn flush_into(&mut self, sink: &mut impl ContactSink) {
         let n = self.batch.len;
         if n == 0 {
             return;
@@ -230,12 +287,37 @@ impl PairKernel {
             };
             let (a, b) = (lane(&self.batch.a), lane(&self.batch.b));
             let (i, j) = self.batch.ids[l];
-            if let Some(c) = self.finish(i, &a, j, &b, out.sep[l], out.axis[l], out.up[l]) {
+            let (sep, axis, up) = (out.sep[l], out.axis[l] as u8, out.up[l] != 0);
+            if (sep <= 0.0 || !self.exact) && self.absorbed(i, &a, j, &b, sep, axis, up, sink) {
                 self.stats.contacts += 1;
-                sink(&c);
+                self.stats.absorbed += 1;
+                continue;
+            }
+            if let Some(c) = self.finish(i, &a, j, &b, sep, axis, up) {
+                self.stats.contacts += 1;
+                sink.contact(&c);
             }
         }
         self.batch.len = 0;
+    }
+
+    /// Offers a pair whose normal is the best axis to the sink without its
+    /// points (see [`ContactSink::absorb`]); whether the sink took it.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn absorbed(
+        &self,
+        i: u32,
+        a: &Triangle,
+        j: u32,
+        b: &Triangle,
+        sep: f32,
+        axis: u8,
+        up: bool,
+        sink: &mut impl ContactSink,
+    ) -> bool {
+        let n = axis_direction(a, b, axis, up);
+        n.is_finite() && n != Vec3A::ZERO && sink.absorb(i, j, n, sep, a)
     }
 
     /// The contact of one pair from its test result (scalar part).

@@ -20,7 +20,7 @@ pub mod patch;
 mod sat;
 
 pub use kernel::{
-    Interference, KernelStats, PairContact, PairKernel, PairPoint, pair_contact,
+    ContactSink, Interference, KernelStats, PairContact, PairKernel, PairPoint, pair_contact,
     triangles_intersect,
 };
 pub use patch::{Patch, PatchOptions, PatchPoint, PatchSet};

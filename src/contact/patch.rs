@@ -26,8 +26,8 @@
 
 use glam::Vec3A;
 
-use super::kernel::PairContact;
-use crate::geom::Aabb;
+use super::kernel::{ContactSink, PairContact};
+use crate::geom::{Aabb, Triangle};
 use crate::hash::FastMap;
 
 /// A cell of the normal index: the normal's coordinates divided by the
@@ -146,17 +146,13 @@ impl Patch {
         }
     }
 
+    /// The point's coordinates along the eight directions of the octagon.
     #[inline]
-    fn offer(&mut self, p: PatchPoint) {
-        self.points += 1;
-        if p.dist < self.deepest.dist {
-            self.deepest = p;
-        }
-        self.bounds.grow(p.p1);
+    fn projections(&self, p: Vec3A) -> [f32; DIRS] {
         let b = &self.basis;
-        let (u, v) = (b[0].dot(p.p1), b[1].dot(p.p1));
+        let (u, v) = (b[0].dot(p), b[1].dot(p));
         const H: f32 = std::f32::consts::FRAC_1_SQRT_2;
-        let proj = [
+        [
             u,
             H * (u + v),
             v,
@@ -165,7 +161,17 @@ impl Patch {
             -H * (u + v),
             -v,
             H * (u - v),
-        ];
+        ]
+    }
+
+    #[inline]
+    fn offer(&mut self, p: PatchPoint) {
+        self.points += 1;
+        if p.dist < self.deepest.dist {
+            self.deepest = p;
+        }
+        self.bounds.grow(p.p1);
+        let proj = self.projections(p.p1);
         for (e, s) in self.extremes.iter_mut().zip(proj) {
             if s > e.0 {
                 *e = (s, p);
@@ -224,6 +230,52 @@ impl Patch {
     }
 }
 
+/// A patch set is a kernel sink that takes a pair without its points when
+/// they could not change the patch the pair joins: triangle A (which holds
+/// every point on shape 1) lies inside the patch's bounds and octagon, and
+/// the pair is no deeper than the patch's deepest point, each by a margin
+/// above rounding. The pair then counts as a member (and one point) of that
+/// patch, found by triangle A's centroid instead of the witness point. At
+/// the contact of two fine meshes most pairs are interior to their patch,
+/// and their witness and clipped points are never computed.
+impl ContactSink for PatchSet {
+    fn absorb(&mut self, i: u32, j: u32, normal: Vec3A, sep: f32, a: &Triangle) -> bool {
+        let centroid = (a[0] + a[1] + a[2]) * (1.0 / 3.0);
+        let Some(k) = self.find(normal, centroid) else {
+            return false;
+        };
+        let margin = self.margin;
+        let p = &self.patches[k];
+        if sep < p.deepest.dist + margin {
+            return false;
+        }
+        let inner = Aabb::new(p.bounds.min + margin, p.bounds.max - margin);
+        for v in a {
+            if !inner.contains_point(*v) {
+                return false;
+            }
+            let proj = p.projections(*v);
+            if p.extremes.iter().zip(proj).any(|(e, s)| s > e.0 - margin) {
+                return false;
+            }
+        }
+        self.last = k;
+        let record = self.record;
+        let p = &mut self.patches[k];
+        p.pairs += 1;
+        p.points += 1;
+        p.min_cos = p.min_cos.min(p.normal.dot(normal));
+        if record {
+            p.members.push((i, j));
+        }
+        true
+    }
+
+    fn contact(&mut self, c: &PairContact) {
+        self.add(c);
+    }
+}
+
 /// The patches of one body pair (or of one traversal task). See the module
 /// docs.
 #[derive(Clone, Debug)]
@@ -231,6 +283,8 @@ pub struct PatchSet {
     cos_angle: f32,
     max_angle: f32,
     gap: f32,
+    /// Rounding margin of [`ContactSink::absorb`]'s tests (a length).
+    margin: f32,
     record: bool,
     last: usize,
     /// Cell size of the normal index: the chord of the patch angle, so that
@@ -251,6 +305,7 @@ impl PatchSet {
             cos_angle: options.max_angle_deg.to_radians().cos(),
             max_angle: options.max_angle_deg.to_radians(),
             gap: (options.gap_fraction * size).max(0.0),
+            margin: 1e-5 * size.max(0.0),
             record,
             last: 0,
             cell: (2.0 * (options.max_angle_deg.to_radians() * 0.5).sin()).max(1e-3),
@@ -395,15 +450,28 @@ impl PatchSet {
     /// angle of the joined patch's normal (the angle between the two
     /// normals plus the joining patch's own cone).
     pub fn merge(&mut self, other: PatchSet) {
-        let acos = |c: f32| c.clamp(-1.0, 1.0).acos();
         for p in other.patches {
-            let cone = acos(p.min_cos);
-            let fits = |q: &Patch| {
-                q.normal.dot(p.normal) >= self.cos_angle
-                    && acos(q.normal.dot(p.normal)) + cone <= self.max_angle
-                    && q.bounds.loosened(self.gap).intersects(&p.bounds)
+            // The joined normal `q` must satisfy angle(q, p) + cone <=
+            // max_angle, i.e. q·p >= cos(max_angle - cone): one cosine per
+            // merged patch instead of an arc cosine per candidate.
+            let cone = p.min_cos.clamp(-1.0, 1.0).acos();
+            let slack = self.max_angle - cone;
+            let k = if slack < 0.0 {
+                None
+            } else {
+                let min_dot = slack.cos().max(self.cos_angle);
+                let fits = |q: &Patch| {
+                    q.normal.dot(p.normal) >= min_dot
+                        && q.bounds.loosened(self.gap).intersects(&p.bounds)
+                };
+                // As in `find`: a few patches are scanned faster than 27
+                // cells are hashed; both give the first fitting patch.
+                if self.patches.len() <= LINEAR_SCAN_PATCHES {
+                    self.patches.iter().position(fits)
+                } else {
+                    self.first_near(p.normal, fits)
+                }
             };
-            let k = self.first_near(p.normal, fits);
             match k {
                 Some(k) => {
                     let q = &mut self.patches[k];
@@ -414,7 +482,12 @@ impl PatchSet {
                     q.points = before + p.points;
                     q.bounds = q.bounds.union(&p.bounds);
                     q.pairs += p.pairs;
-                    q.min_cos = q.min_cos.min((acos(q.normal.dot(p.normal)) + cone).cos());
+                    // cos(angle(q, p) + cone), by the sum formula.
+                    let d = q.normal.dot(p.normal).clamp(-1.0, 1.0);
+                    let joined = d * p.min_cos
+                        - (1.0 - d * d).max(0.0).sqrt()
+                            * (1.0 - p.min_cos * p.min_cos).max(0.0).sqrt();
+                    q.min_cos = q.min_cos.min(joined);
                     q.members.extend(p.members);
                 }
                 None => {

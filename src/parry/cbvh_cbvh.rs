@@ -99,11 +99,11 @@ pub fn patches(
             },
             |(kernel, set), i, ti, j, tj| {
                 let moved = tj.map(|p| pose.transform_point(p));
-                kernel.push(i, ti, j, &moved, &mut |c| set.add(c));
+                kernel.push_into(i, ti, j, &moved, set);
             },
         );
         for (mut kernel, mut set) in states {
-            kernel.flush(&mut |c| set.add(c));
+            kernel.flush_into(&mut set);
             candidates += kernel.stats.pairs;
             contacts += kernel.stats.contacts;
             merged.merge(set);

@@ -92,12 +92,12 @@ pub fn patches(
             for j in tm.bvh().intersect_aabb(&b) {
                 let t = tm.triangle(j);
                 let moved = [to_mesh(t.a), to_mesh(t.b), to_mesh(t.c)];
-                kernel.push(i, tri, j, &moved, &mut |c| set.add(c));
+                kernel.push_into(i, tri, j, &moved, &mut set);
             }
             ControlFlow::Continue(())
         });
     });
-    kernel.flush(&mut |c| set.add(c));
+    kernel.flush_into(&mut set);
     if let Some(c) = counters {
         c.add(
             kernel.stats.pairs,

@@ -224,6 +224,10 @@ pub fn count_pair_manifolds<M, C>(
 
 const CODE_MASK: u32 = (1 << 30) - 1;
 
+/// Up to this many old manifolds, [`emit`] finds a patch's old manifold by
+/// scanning them rather than through hash maps built each step.
+const LINEAR_SCAN_MANIFOLDS: usize = 64;
+
 fn ids(i1: u32, i2: u32, feature: u8) -> (PackedFeatureId, PackedFeatureId) {
     (
         PackedFeatureId::face(i1 & CODE_MASK),
@@ -256,11 +260,16 @@ pub fn emit<M: Default + Clone, C: Default + Copy>(
         let q = n / cell;
         (q.x.round() as i32, q.y.round() as i32, q.z.round() as i32)
     };
+    // Few old manifolds (the usual case) are scanned faster than they are
+    // hashed; both find the same one.
+    let small = old.len() <= LINEAR_SCAN_MANIFOLDS;
     let mut by_cell: crate::hash::FastMap<(i32, i32, i32), Vec<u32>> = Default::default();
     let mut by_pair: crate::hash::FastMap<(u32, u32), u32> = Default::default();
-    for (k, m) in old.iter().enumerate() {
-        by_cell.entry(key(m.local_n1)).or_default().push(k as u32);
-        by_pair.insert((m.subshape1, m.subshape2), k as u32);
+    if !small {
+        for (k, m) in old.iter().enumerate() {
+            by_cell.entry(key(m.local_n1)).or_default().push(k as u32);
+            by_pair.insert((m.subshape1, m.subshape2), k as u32);
+        }
     }
     for patch in &set.patches {
         let (pts, n) = patch.reduced();
@@ -277,25 +286,32 @@ pub fn emit<M: Default + Clone, C: Default + Copy>(
         } else {
             (rep.i, rep.j)
         };
-        // Last step's manifold of the same representative pair, else the
-        // one with the closest normal.
-        let mut best: Option<(usize, f32)> = by_pair
-            .get(&(sub1, sub2))
-            .map(|&k| k as usize)
+        // Last step's manifold of the same representative pair (the last
+        // one, if several), else the one with the closest normal.
+        let same_pair = if small {
+            old.iter()
+                .rposition(|m| (m.subshape1, m.subshape2) == (sub1, sub2))
+        } else {
+            by_pair.get(&(sub1, sub2)).map(|&k| k as usize)
+        };
+        let mut best: Option<(usize, f32)> = same_pair
             .filter(|&k| !used[k] && old[k].local_n1.dot(local_n1) >= cos_angle)
             .map(|k| (k, 2.0));
-        let (x, y, z) = key(local_n1);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    for &k in by_cell.get(&(x + dx, y + dy, z + dz)).into_iter().flatten() {
-                        let k = k as usize;
-                        let d = old[k].local_n1.dot(local_n1);
-                        if !used[k]
-                            && d >= cos_angle
-                            && best.is_none_or(|b| d > b.1 || (d == b.1 && k < b.0))
-                        {
-                            best = Some((k, d));
+        let mut consider = |k: usize| {
+            let d = old[k].local_n1.dot(local_n1);
+            if !used[k] && d >= cos_angle && best.is_none_or(|b| d > b.1 || (d == b.1 && k < b.0)) {
+                best = Some((k, d));
+            }
+        };
+        if small {
+            (0..old.len()).for_each(&mut consider);
+        } else {
+            let (x, y, z) = key(local_n1);
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        for &k in by_cell.get(&(x + dx, y + dy, z + dz)).into_iter().flatten() {
+                            consider(k as usize);
                         }
                     }
                 }

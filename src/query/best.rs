@@ -2,7 +2,7 @@
 //! bounds (for shape casts and other branch-and-bound queries).
 
 use super::far_first;
-use crate::cursor::{MAX_CHILDREN, NodeCursor, TraversalStats};
+use crate::cursor::{Children, MAX_CHILDREN, NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Triangle};
 
 /// Finds the triangle with the smallest cost below `max_cost`.
@@ -29,7 +29,8 @@ pub fn find_best<C: NodeCursor, T>(
     let mut best_cost = max_cost;
     let mut best: Option<(u32, f32, T)> = None;
     let mut stack: Vec<(C::Node, f32)> = vec![(root, c0)];
-    let mut kids: [(f32, Option<C::Node>); MAX_CHILDREN] = [(0.0, None); MAX_CHILDREN];
+    let mut batch = Children::new(root);
+    let mut kids: [(f32, C::Node); MAX_CHILDREN] = [(0.0, root); MAX_CHILDREN];
     while let Some((node, cost)) = stack.pop() {
         if cost >= best_cost {
             continue;
@@ -46,21 +47,23 @@ pub fn find_best<C: NodeCursor, T>(
             });
             continue;
         }
+        // The cost is the caller's closure, so the batch is walked lane by
+        // lane, in child order.
+        c.children(&node, &mut batch);
+        let boxes = batch.boxes();
         let mut n = 0;
-        c.for_each_child(&node, |child, b| {
+        for i in 0..boxes.len() {
             stats.nodes_visited += 1;
-            let k = node_cost(&b);
+            let k = node_cost(&boxes.get(i));
             if k < best_cost {
-                kids[n] = (k, Some(child));
+                kids[n] = (k, batch.node(i));
                 n += 1;
             }
-        });
+        }
         let kids = &mut kids[..n];
         far_first(kids);
-        for (k, node) in kids.iter() {
-            if let Some(node) = node {
-                stack.push((*node, *k));
-            }
+        for &(k, node) in kids.iter() {
+            stack.push((node, k));
         }
     }
     best

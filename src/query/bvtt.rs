@@ -12,7 +12,7 @@
 
 use std::ops::ControlFlow;
 
-use crate::cursor::{NodeCursor, TraversalStats};
+use crate::cursor::{Children, NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Pose, Triangle};
 
 /// A node pair of the traversal: `A`'s node and box, `B`'s node and its
@@ -37,9 +37,31 @@ fn root_pair<A: NodeCursor, B: NodeCursor>(
     Some((ra, ba, rb, bb))
 }
 
+/// The batches [`descend`] fills: one for each tree's children.
+struct Scratch<NA, NB> {
+    a: Children<NA>,
+    b: Children<NB>,
+}
+
+impl<NA: Copy, NB: Copy> Scratch<NA, NB> {
+    fn new(&(na, _, nb, _): &NodePair<NA, NB>) -> Self {
+        Self {
+            a: Children::new(na),
+            b: Children::new(nb),
+        }
+    }
+}
+
 /// One descent step from a pair that is not two leaves: the larger box (by
 /// half area, never a leaf) is split and the child pairs that still come
-/// within `prediction` are pushed.
+/// within `prediction` are pushed, in child order.
+///
+/// The split node's children are tested as one batch against the other
+/// node's box; when `B` is split, its children's boxes are moved into `A`'s
+/// frame in one batch transform per expansion. Which side is split, and the
+/// order of the pushed pairs, are those of the box-by-box traversal before
+/// batches: the order in which triangle pairs reach the caller (and so the
+/// contact patches built from them) is unchanged.
 #[inline]
 #[allow(clippy::too_many_arguments)]
 fn descend<A: NodeCursor, B: NodeCursor>(
@@ -50,28 +72,28 @@ fn descend<A: NodeCursor, B: NodeCursor>(
     (na, box_a, nb, box_b): NodePair<A::Node, B::Node>,
     leaf_a: bool,
     leaf_b: bool,
+    scratch: &mut Scratch<A::Node, B::Node>,
     stats: &mut TraversalStats,
     mut push: impl FnMut(NodePair<A::Node, B::Node>),
 ) {
     let descend_a = leaf_b || (!leaf_a && box_a.half_area() >= box_b.half_area());
     if descend_a {
-        a.for_each_child(&na, |ca, cb| {
-            stats.nodes_visited += 1;
-            // Loosen A's side, as the leaf test does, so that rounding
-            // cannot prune a pair the leaf test would report.
-            if cb.loosened(prediction).intersects(&box_b) {
-                push((ca, cb, nb, box_b));
-            }
-        });
+        let kids = &mut scratch.a;
+        a.children(&na, kids);
+        let boxes = kids.boxes();
+        stats.nodes_visited += boxes.len() as u64;
+        // Loosen A's side, as the leaf test does, so that rounding
+        // cannot prune a pair the leaf test would report.
+        let mask = boxes.overlaps_grown(prediction, &box_b);
+        boxes.for_each_in(mask, |i| push((kids.node(i), boxes.get(i), nb, box_b)));
     } else {
         let grown_a = box_a.loosened(prediction);
-        b.for_each_child(&nb, |cb_node, cb| {
-            stats.nodes_visited += 1;
-            let moved = cb.transformed(b_to_a);
-            if moved.intersects(&grown_a) {
-                push((na, box_a, cb_node, moved));
-            }
-        });
+        let kids = &mut scratch.b;
+        b.children(&nb, kids);
+        stats.nodes_visited += kids.len() as u64;
+        let moved = kids.boxes().transformed(b_to_a);
+        let mask = moved.overlaps(&grown_a);
+        moved.for_each_in(mask, |i| push((na, box_a, kids.node(i), moved.get(i))));
     }
 }
 
@@ -106,6 +128,7 @@ pub fn bvtt_from<A: NodeCursor, B: NodeCursor>(
     let mut stack: Vec<NodePair<A::Node, B::Node>> = Vec::with_capacity(128);
     stack.push(start);
     let mut b_tris: Vec<(u32, Triangle, Aabb)> = Vec::new();
+    let mut scratch = Scratch::new(&start);
     while let Some(pair) = stack.pop() {
         let (na, _, nb, _) = pair;
         let leaf_a = a.is_leaf(&na);
@@ -135,9 +158,18 @@ pub fn bvtt_from<A: NodeCursor, B: NodeCursor>(
             }
             continue;
         }
-        descend(a, b, b_to_a, prediction, pair, leaf_a, leaf_b, stats, |p| {
-            stack.push(p)
-        });
+        descend(
+            a,
+            b,
+            b_to_a,
+            prediction,
+            pair,
+            leaf_a,
+            leaf_b,
+            &mut scratch,
+            stats,
+            |p| stack.push(p),
+        );
     }
     false
 }
@@ -158,6 +190,7 @@ pub fn bvtt_front<A: NodeCursor, B: NodeCursor>(
     let Some(root) = root_pair(a, b, b_to_a, prediction, stats) else {
         return Vec::new();
     };
+    let mut scratch = Scratch::new(&root);
     let mut front = vec![root];
     let mut next = Vec::new();
     while front.len() < target {
@@ -170,9 +203,18 @@ pub fn bvtt_front<A: NodeCursor, B: NodeCursor>(
                 next.push(pair);
             } else {
                 expanded = true;
-                descend(a, b, b_to_a, prediction, pair, leaf_a, leaf_b, stats, |p| {
-                    next.push(p)
-                });
+                descend(
+                    a,
+                    b,
+                    b_to_a,
+                    prediction,
+                    pair,
+                    leaf_a,
+                    leaf_b,
+                    &mut scratch,
+                    stats,
+                    |p| next.push(p),
+                );
             }
         }
         std::mem::swap(&mut front, &mut next);
@@ -200,18 +242,22 @@ pub fn bvtt_par<A: NodeCursor, B: NodeCursor, S: Send>(
     use rayon::prelude::*;
     let mut stats = TraversalStats::default();
     let front = bvtt_front(a, b, b_to_a, prediction, target, &mut stats);
-    let results: Vec<(S, TraversalStats)> = front
-        .into_par_iter()
-        .map(|start| {
-            let mut s = init();
-            let mut st = TraversalStats::default();
-            bvtt_from(a, b, b_to_a, prediction, start, &mut st, |i, ti, j, tj| {
-                leaf(&mut s, i, ti, j, tj);
-                ControlFlow::Continue(())
-            });
-            (s, st)
-        })
-        .collect();
+    let task = |start| {
+        let mut s = init();
+        let mut st = TraversalStats::default();
+        bvtt_from(a, b, b_to_a, prediction, start, &mut st, |i, ti, j, tj| {
+            leaf(&mut s, i, ti, j, tj);
+            ControlFlow::Continue(())
+        });
+        (s, st)
+    };
+    // On one thread the same tasks run in order on the caller's thread,
+    // without handing them to the pool and waiting for it.
+    let results: Vec<(S, TraversalStats)> = if rayon::current_num_threads() <= 1 {
+        front.into_iter().map(task).collect()
+    } else {
+        front.into_par_iter().map(task).collect()
+    };
     let mut states = Vec::with_capacity(results.len());
     for (s, st) in results {
         stats.add(&st);
@@ -273,6 +319,7 @@ pub fn bvtt_min<A: NodeCursor, B: NodeCursor, T>(
     }
     let mut stack: Vec<PairEntry<A::Node, B::Node>> = vec![(d0, ra, ba, rb, bb)];
     let mut kids: Vec<PairEntry<A::Node, B::Node>> = Vec::with_capacity(8);
+    let (mut batch_a, mut batch_b) = (Children::new(ra), Children::new(rb));
     while let Some((d, na, box_a, nb, box_b)) = stack.pop() {
         if d >= best_cost {
             continue;
@@ -297,16 +344,21 @@ pub fn bvtt_min<A: NodeCursor, B: NodeCursor, T>(
         }
         kids.clear();
         if leaf_b || (!leaf_a && box_a.half_area() >= box_b.half_area()) {
-            a.for_each_child(&na, |ca, cb| {
-                stats.nodes_visited += 1;
-                kids.push((box_dist(&cb, &box_b), ca, cb, nb, box_b));
-            });
+            a.children(&na, &mut batch_a);
+            let boxes = batch_a.boxes();
+            stats.nodes_visited += boxes.len() as u64;
+            let d = boxes.box_distances(&box_b, true);
+            for (i, &d) in d[..boxes.len()].iter().enumerate() {
+                kids.push((d, batch_a.node(i), boxes.get(i), nb, box_b));
+            }
         } else {
-            b.for_each_child(&nb, |cn, cb| {
-                stats.nodes_visited += 1;
-                let moved = cb.transformed(b_to_a);
-                kids.push((box_dist(&box_a, &moved), na, box_a, cn, moved));
-            });
+            b.children(&nb, &mut batch_b);
+            stats.nodes_visited += batch_b.len() as u64;
+            let moved = batch_b.boxes().transformed(b_to_a);
+            let d = moved.box_distances(&box_a, false);
+            for (i, &d) in d[..moved.len()].iter().enumerate() {
+                kids.push((d, na, box_a, batch_b.node(i), moved.get(i)));
+            }
         }
         kids.sort_unstable_by(|x, y| y.0.total_cmp(&x.0));
         stack.extend(kids.drain(..).filter(|k| k.0 < best_cost));

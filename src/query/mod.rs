@@ -24,7 +24,7 @@ pub mod ray;
 
 pub use best::find_best;
 pub use bvtt::{bvtt, bvtt_from, bvtt_front, bvtt_min, bvtt_pairs, bvtt_par};
-pub use overlap::{overlap, visit};
+pub use overlap::{overlap, visit, visit_batch};
 pub use packet::{closest_hits, closest_hits_within};
 pub use point::{PointHit, closest_point};
 pub use ray::{RayHit, any_hit, any_hit_with, closest_hit, closest_hit_with};

@@ -2,25 +2,54 @@
 
 use std::ops::ControlFlow;
 
-use crate::cursor::{NodeCursor, TraversalStats};
+use crate::cursor::{ChildBoxes, Children, NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Triangle};
 
 /// Visits every triangle of every leaf whose path of boxes all pass
 /// `node_test`; `leaf_test(id, triangle)` may stop the visit early with
 /// `ControlFlow::Break`. Returns whether it was stopped.
+///
+/// `node_test` sees one box at a time; [`visit_batch`] takes a test over a
+/// node's children at once.
 pub fn visit<C: NodeCursor>(
     c: &C,
     stats: &mut TraversalStats,
     mut node_test: impl FnMut(&Aabb) -> bool,
+    leaf_test: impl FnMut(u32, &Triangle) -> ControlFlow<()>,
+) -> bool {
+    visit_batch(
+        c,
+        stats,
+        |b| {
+            let mut m = 0;
+            for i in 0..b.len() {
+                m |= u32::from(node_test(&b.get(i))) << i;
+            }
+            m
+        },
+        leaf_test,
+    )
+}
+
+/// [`visit`] with a node test over a batch of boxes: `node_test(boxes)`
+/// returns the mask of the lanes that pass (see [`ChildBoxes`]; bits of
+/// padding lanes are ignored). The root is tested as a batch of one.
+/// Children are visited in child order, the last pushed first.
+pub fn visit_batch<C: NodeCursor>(
+    c: &C,
+    stats: &mut TraversalStats,
+    mut node_test: impl FnMut(&ChildBoxes) -> u32,
     mut leaf_test: impl FnMut(u32, &Triangle) -> ControlFlow<()>,
 ) -> bool {
     let (root, root_box) = c.root();
     stats.nodes_visited += 1;
-    if !node_test(&root_box) {
+    let root_batch = ChildBoxes::from_boxes(&[root_box]);
+    if node_test(&root_batch) & 1 == 0 {
         return false;
     }
     let mut stack = super::Stack::new(root);
     stack.push(root);
+    let mut batch = Children::new(root);
     while let Some(node) = stack.pop() {
         if c.is_leaf(&node) {
             let mut stop = false;
@@ -35,12 +64,11 @@ pub fn visit<C: NodeCursor>(
             }
             continue;
         }
-        c.for_each_child(&node, |child, b| {
-            stats.nodes_visited += 1;
-            if node_test(&b) {
-                stack.push(child);
-            }
-        });
+        c.children(&node, &mut batch);
+        let boxes = batch.boxes();
+        stats.nodes_visited += boxes.len() as u64;
+        let mask = node_test(boxes) & boxes.lanes();
+        boxes.for_each_in(mask, |i| stack.push(batch.node(i)));
     }
     false
 }
@@ -53,10 +81,10 @@ pub fn overlap<C: NodeCursor>(
     stats: &mut TraversalStats,
     mut f: impl FnMut(u32, &Triangle) -> ControlFlow<()>,
 ) -> bool {
-    visit(
+    visit_batch(
         c,
         stats,
-        |b| b.intersects(query),
+        |b| b.overlaps(query),
         |id, tri| {
             if Aabb::of_triangle(tri).intersects(query) {
                 f(id, tri)

@@ -18,12 +18,12 @@
 
 use super::ray::{RayHit, keep_closer};
 use super::{Stack, far_first};
-use crate::cursor::{MAX_CHILDREN, NodeCursor, TraversalStats};
+use crate::cursor::{Children, MAX_CHILDREN, NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Ray, SLAB_EXIT_SCALE, ray_triangle};
 
 /// A child to push: its entry distance for the packet's first ray, the
 /// child and its box.
-type Kid<N> = (f32, Option<(N, Aabb)>);
+type Kid<N> = (f32, (N, Aabb));
 
 /// The largest packet [`closest_hits`] takes.
 pub const MAX_PACKET: usize = 64;
@@ -218,7 +218,8 @@ pub fn closest_hits_within<C: NodeCursor>(
     };
     let mut stack = Stack::new((root, root_box, 0u64));
     stack.push((root, root_box, all));
-    let mut kids: [Kid<C::Node>; MAX_CHILDREN] = [(0.0, None); MAX_CHILDREN];
+    let mut batch = Children::new(root);
+    let mut kids: [Kid<C::Node>; MAX_CHILDREN] = [(0.0, (root, root_box)); MAX_CHILDREN];
     while let Some((node, b, mask)) = stack.pop() {
         stats.nodes_visited += 1;
         if mask.count_ones() > 4 && lanes.all_miss(&b, worst_t) {
@@ -247,23 +248,26 @@ pub fn closest_hits_within<C: NodeCursor>(
             }
             continue;
         }
-        // Children, far first (as seen by the set's first ray) so the
+        // far first (as seen by the set's first ray) so the
         // near one is popped next.
-        let r = &rays[first];
-        let mut k = 0;
-        c.for_each_child(&node, |child, cb| {
-            let t = r
-                .intersect_aabb(&cb, best_t[first])
-                .unwrap_or(f32::INFINITY);
-            kids[k] = (t, Some((child, cb)));
-            k += 1;
-        });
+        // Every child is pushed (the other rays may meet it); one slab test
+        // over the batch orders them.
+        c.children(&node, &mut batch);
+        let boxes = batch.boxes();
+        let (hit, t) = boxes.slab(&rays[first], best_t[first]);
+        let k = boxes.len();
+        for (i, kid) in kids[..k].iter_mut().enumerate() {
+            let ti = if hit >> i & 1 != 0 {
+                t[i]
+            } else {
+                f32::INFINITY
+            };
+            *kid = (ti, (batch.node(i), boxes.get(i)));
+        }
         let kids = &mut kids[..k];
         far_first(kids);
-        for (_, kid) in kids.iter() {
-            if let Some((child, cb)) = kid {
-                stack.push((*child, *cb, mask));
-            }
+        for &(_, (child, cb)) in kids.iter() {
+            stack.push((child, cb, mask));
         }
     }
 }

@@ -3,7 +3,7 @@
 use glam::Vec3A;
 
 use super::far_first;
-use crate::cursor::{MAX_CHILDREN, NodeCursor, TraversalStats};
+use crate::cursor::{Children, MAX_CHILDREN, NodeCursor, TraversalStats};
 use crate::geom::closest_point_on_triangle;
 
 /// The closest point found.
@@ -35,7 +35,8 @@ pub fn closest_point<C: NodeCursor>(
     let mut best: Option<(f32, u32, Vec3A)> = None;
     let mut stack = super::Stack::new((root, d0));
     stack.push((root, d0));
-    let mut kids: [(f32, Option<C::Node>); MAX_CHILDREN] = [(0.0, None); MAX_CHILDREN];
+    let mut batch = Children::new(root);
+    let mut kids: [(f32, C::Node); MAX_CHILDREN] = [(0.0, root); MAX_CHILDREN];
     while let Some((node, d2)) = stack.pop() {
         if d2 > best_d2 {
             continue;
@@ -53,21 +54,21 @@ pub fn closest_point<C: NodeCursor>(
             });
             continue;
         }
+        c.children(&node, &mut batch);
+        let boxes = batch.boxes();
+        stats.nodes_visited += boxes.len() as u64;
+        let d = boxes.distance_squared(p);
         let mut n = 0;
-        c.for_each_child(&node, |child, b| {
-            stats.nodes_visited += 1;
-            let d = b.distance_squared(p);
-            if d <= best_d2 {
-                kids[n] = (d, Some(child));
+        boxes.for_each_in(boxes.lanes(), |i| {
+            if d[i] <= best_d2 {
+                kids[n] = (d[i], batch.node(i));
                 n += 1;
             }
         });
         let kids = &mut kids[..n];
         far_first(kids);
-        for (d, k) in kids.iter() {
-            if let Some(k) = k {
-                stack.push((*k, *d));
-            }
+        for &(d, k) in kids.iter() {
+            stack.push((k, d));
         }
     }
     best.map(|(d2, triangle, point)| PointHit {

@@ -1,7 +1,7 @@
 //! Ray queries: closest hit and any hit.
 
 use super::{Stack, far_first};
-use crate::cursor::{MAX_CHILDREN, NodeCursor, TraversalStats};
+use crate::cursor::{Children, MAX_CHILDREN, NodeCursor, TraversalStats};
 use crate::geom::{Ray, SLAB_EXIT_SCALE, TriHit, Triangle, ray_triangle};
 
 /// The closest intersection of a ray with a mesh.
@@ -70,7 +70,8 @@ pub fn closest_hit_with<C: NodeCursor>(
     let mut best_t = t_max;
     let mut stack = Stack::new((root, t0));
     stack.push((root, t0));
-    let mut kids: [(f32, Option<C::Node>); MAX_CHILDREN] = [(0.0, None); MAX_CHILDREN];
+    let mut batch = Children::new(root);
+    let mut kids: [(f32, C::Node); MAX_CHILDREN] = [(0.0, root); MAX_CHILDREN];
     while let Some((node, t_enter)) = stack.pop() {
         if t_enter > best_t * SLAB_EXIT_SCALE {
             continue;
@@ -84,21 +85,21 @@ pub fn closest_hit_with<C: NodeCursor>(
             });
             continue;
         }
+        c.children(&node, &mut batch);
+        let boxes = batch.boxes();
+        stats.nodes_visited += boxes.len() as u64;
+        let (mask, t) = boxes.slab(ray, best_t);
         let mut n = 0;
-        c.for_each_child(&node, |child, b| {
-            stats.nodes_visited += 1;
-            if let Some(t) = ray.intersect_aabb(&b, best_t) {
-                kids[n] = (t, Some(child));
-                n += 1;
-            }
+        boxes.for_each_in(mask, |i| {
+            kids[n] = (t[i], batch.node(i));
+            n += 1;
         });
-        // Push far children first so the nearest is popped next.
+        // Push far children first so the nearest is popped next (children
+        // at equal distance in child order, as before batches).
         let kids = &mut kids[..n];
         far_first(kids);
-        for (t, k) in kids.iter() {
-            if let Some(k) = k {
-                stack.push((*k, *t));
-            }
+        for &(t, k) in kids.iter() {
+            stack.push((k, t));
         }
     }
     best
@@ -126,6 +127,7 @@ pub fn any_hit_with<C: NodeCursor>(
     }
     let mut stack = Stack::new(root);
     stack.push(root);
+    let mut batch = Children::new(root);
     while let Some(node) = stack.pop() {
         if c.is_leaf(&node) {
             let mut hit = false;
@@ -140,12 +142,13 @@ pub fn any_hit_with<C: NodeCursor>(
             }
             continue;
         }
-        c.for_each_child(&node, |child, b| {
-            stats.nodes_visited += 1;
-            if ray.intersect_aabb(&b, t_max).is_some() {
-                stack.push(child);
-            }
-        });
+        // Children in child order (the last one is popped first, as
+        // before batches).
+        c.children(&node, &mut batch);
+        let boxes = batch.boxes();
+        stats.nodes_visited += boxes.len() as u64;
+        let (mask, _) = boxes.slab(ray, t_max);
+        boxes.for_each_in(mask, |i| stack.push(batch.node(i)));
     }
     false
 }

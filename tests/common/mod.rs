@@ -5,7 +5,7 @@
 use std::collections::BTreeSet;
 use std::ops::ControlFlow;
 
-use cbvh::cursor::NodeCursor;
+use cbvh::cursor::{Children, NodeCursor};
 use cbvh::geom::{
     Aabb, Pose, Ray, Triangle, closest_point_on_triangle, ray_triangle, triangle_from_arrays,
 };
@@ -110,11 +110,26 @@ pub fn check_structure<C: NodeCursor>(c: &C, mesh: &Mesh) {
                 }
             });
         } else {
-            c.for_each_child(&n, |child, b| {
+            // The batch the traversals use and the child-by-child view
+            // agree: the same number of children, the same boxes to the
+            // bit, lane `i` being child `i`; the walk follows the batch's
+            // handles, so the checks below hold for those.
+            let mut one_by_one = Vec::new();
+            c.for_each_child(&n, |_, b| one_by_one.push(b));
+            let mut batch = Children::new(n);
+            c.children(&n, &mut batch);
+            assert_eq!(batch.len(), one_by_one.len(), "children vs for_each_child");
+            let bits = |b: &Aabb| {
+                let f = |v: Vec3A| v.to_array().map(f32::to_bits);
+                (f(b.min), f(b.max))
+            };
+            for (i, b) in one_by_one.iter().enumerate() {
+                let lane = batch.boxes().get(i);
+                assert_eq!(bits(&lane), bits(b), "lane {i}: {lane:?} vs {b:?}");
                 let mut chain = boxes.clone();
-                chain.push(b);
-                stack.push((child, chain));
-            });
+                chain.push(lane);
+                stack.push((batch.node(i), chain));
+            }
         }
     }
     assert!(

@@ -180,6 +180,11 @@ impl NodeCursor for ClBvhCompact {
     }
 
     #[inline]
+    fn children(&self, node: &Self::Node, out: &mut crate::cursor::Children<Self::Node>) {
+        self.0.children(node, out)
+    }
+
+    #[inline]
     fn for_each_triangle(&self, node: &Self::Node, f: impl FnMut(u32, &crate::geom::Triangle)) {
         self.0.for_each_triangle(node, f)
     }

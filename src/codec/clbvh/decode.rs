@@ -6,8 +6,9 @@ use super::node::{
     ChildRef, ENDS_WORDS, MULTI_WORDS, MultiLeafNode, TAG_INNER, TAG_LEAF, TAG_MULTI, ref_index,
     ref_tag,
 };
+use super::simd::{SoaBoxes, dequantize};
 use super::{ClBvh, LeafKind};
-use crate::cursor::NodeCursor;
+use crate::cursor::{ChildBoxes, Children, MAX_CHILDREN, NodeCursor};
 use crate::geom::{Aabb, Triangle};
 
 /// Lane value of a [`ClNode`] that stands for a whole node.
@@ -146,6 +147,55 @@ impl NodeCursor for ClBvh {
         }
     }
 
+    /// The node's child boxes go into the batch's lanes as rows: an inner
+    /// node's are stored as rows already, a multi-leaf node's eight 8-bit
+    /// boxes are dequantized at once ([`dequantize`], the same bits as
+    /// [`MultiLeafNode::child_box`]). Same children, same order, same boxes
+    /// as [`for_each_child`](NodeCursor::for_each_child).
+    #[inline]
+    fn children(&self, node: &ClNode, out: &mut Children<ClNode>) {
+        let at = ref_index(node.r);
+        if ref_tag(node.r) == TAG_INNER {
+            let n = &self.inner[at];
+            // Used lanes come first (`verify` proves it).
+            let used = n.child.iter().take_while(|&&r| r != 0).count();
+            let boxes = ChildBoxes::from_rows(
+                used,
+                [&n.min_x, &n.min_y, &n.min_z],
+                [&n.max_x, &n.max_y, &n.max_z],
+            );
+            let kids: [ClNode; MAX_CHILDREN] = std::array::from_fn(|k| ClNode {
+                r: n.child[k],
+                lane: WHOLE,
+            });
+            out.set_boxes(boxes, kids);
+        } else {
+            let m = MultiLeafNode::read(&self.arena, at);
+            let ends = self.ends(at);
+            // A lane is used when it holds triangles; the encoder puts the
+            // used lanes first, and a verified file may (harmlessly) not.
+            let mut lanes = 0u32;
+            let mut prev = 0;
+            for (k, &end) in ends.iter().enumerate() {
+                lanes |= u32::from(end > prev) << k;
+                prev = end;
+            }
+            if lanes & (lanes + 1) != 0 {
+                return scattered_lanes(self, node, out);
+            }
+            let used = lanes.count_ones() as usize;
+            let mut soa: SoaBoxes = [[0.0; 8]; 6];
+            dequantize(&m, &mut soa);
+            let [min_x, max_x, min_y, max_y, min_z, max_z] = &soa;
+            let boxes = ChildBoxes::from_rows(used, [min_x, min_y, min_z], [max_x, max_y, max_z]);
+            let kids: [ClNode; MAX_CHILDREN] = std::array::from_fn(|k| ClNode {
+                r: node.r,
+                lane: k as u32,
+            });
+            out.set_boxes(boxes, kids);
+        }
+    }
+
     #[inline]
     fn for_each_triangle(&self, node: &ClNode, f: impl FnMut(u32, &Triangle)) {
         let at = ref_index(node.r);
@@ -171,4 +221,12 @@ impl NodeCursor for ClBvh {
             LeafKind::Compact => self.slot_of.len(),
         }
     }
+}
+
+/// [`NodeCursor::children`] of a multi-leaf node whose used lanes are not
+/// the first ones: lane by lane (no file the encoder writes has one).
+#[cold]
+fn scattered_lanes(c: &ClBvh, node: &ClNode, out: &mut Children<ClNode>) {
+    out.clear();
+    c.for_each_child(node, |n, b| out.push(n, b));
 }

@@ -3,8 +3,27 @@
 use glam::Vec3A;
 
 use super::PlainBvh;
-use crate::cursor::{NodeCursor, prefetch};
+use super::node::PlainNode;
+use crate::cursor::{Children, NodeCursor, prefetch};
 use crate::geom::{Aabb, Triangle};
+
+impl PlainBvh {
+    /// The inner node `node` and its two children, with the grandchildren
+    /// asked for: a traversal that descends into a child reads them next,
+    /// and the far one is a cache miss otherwise.
+    #[inline]
+    fn child_nodes(&self, node: u32) -> (&PlainNode, &PlainNode, &PlainNode) {
+        let n = &self.nodes[node as usize];
+        let (l, r) = (&self.nodes[n.left as usize], &self.nodes[n.right as usize]);
+        for c in [l, r] {
+            if !c.is_leaf() {
+                prefetch(self.nodes.as_ptr().wrapping_add(c.left as usize));
+                prefetch(self.nodes.as_ptr().wrapping_add(c.right as usize));
+            }
+        }
+        (n, l, r)
+    }
+}
 
 impl NodeCursor for PlainBvh {
     /// A node index.
@@ -22,18 +41,15 @@ impl NodeCursor for PlainBvh {
 
     #[inline]
     fn for_each_child(&self, node: &u32, mut f: impl FnMut(u32, Aabb)) {
-        let n = &self.nodes[*node as usize];
-        let (l, r) = (&self.nodes[n.left as usize], &self.nodes[n.right as usize]);
-        // Ask for the grandchildren now: a traversal that descends into a
-        // child reads them next, and the far one is a cache miss otherwise.
-        for c in [l, r] {
-            if !c.is_leaf() {
-                prefetch(self.nodes.as_ptr().wrapping_add(c.left as usize));
-                prefetch(self.nodes.as_ptr().wrapping_add(c.right as usize));
-            }
-        }
+        let (n, l, r) = self.child_nodes(*node);
         f(n.left, l.aabb());
         f(n.right, r.aabb());
+    }
+
+    #[inline(always)]
+    fn children(&self, node: &u32, out: &mut Children<u32>) {
+        let (n, l, r) = self.child_nodes(*node);
+        out.set(&[(n.left, l.aabb()), (n.right, r.aabb())]);
     }
 
     #[inline]

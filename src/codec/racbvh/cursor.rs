@@ -4,7 +4,7 @@ use super::RacBvh;
 use super::cache;
 use super::node::INCOMPLETE;
 use crate::build::LEAF_FLAG;
-use crate::cursor::NodeCursor;
+use crate::cursor::{Children, NodeCursor};
 use crate::geom::{Aabb, Triangle};
 
 /// The cursor's node handle: the global node index with the node's words
@@ -34,21 +34,12 @@ impl RacNode {
     }
 }
 
-impl NodeCursor for RacBvh {
-    type Node = RacNode;
-
-    fn root(&self) -> (RacNode, Aabb) {
-        let w = self.words(0);
-        (RacNode::new(0, &w), self.box_of(&w))
-    }
-
-    #[inline]
-    fn is_leaf(&self, node: &RacNode) -> bool {
-        node.b & LEAF_FLAG != 0
-    }
-
-    #[inline]
-    fn for_each_child(&self, node: &RacNode, mut f: impl FnMut(RacNode, Aabb)) {
+impl RacBvh {
+    /// The two children of the inner node `node` with their boxes.
+    // Always inlined, as `for_each_child` was with its closure: a call
+    // would return the pair through memory.
+    #[inline(always)]
+    fn children_of(&self, node: &RacNode) -> [(RacNode, Aabb); 2] {
         // Fast path: both children complete in the thread's pinned cluster
         // (one thread-local look-up for the two).
         let cb = self.header.cluster_bits;
@@ -67,10 +58,39 @@ impl NodeCursor for RacBvh {
             }
             Some(out)
         });
-        let out = fast.unwrap_or_else(|| [self.words(node.a), self.words(node.b)]);
-        for (child, cw) in [node.a, node.b].into_iter().zip(out) {
-            f(RacNode::new(child, &cw), self.box_of(&cw));
+        let [wa, wb] = fast.unwrap_or_else(|| [self.words(node.a), self.words(node.b)]);
+        [
+            (RacNode::new(node.a, &wa), self.box_of(&wa)),
+            (RacNode::new(node.b, &wb), self.box_of(&wb)),
+        ]
+    }
+}
+
+impl NodeCursor for RacBvh {
+    type Node = RacNode;
+
+    fn root(&self) -> (RacNode, Aabb) {
+        let w = self.words(0);
+        (RacNode::new(0, &w), self.box_of(&w))
+    }
+
+    #[inline]
+    fn is_leaf(&self, node: &RacNode) -> bool {
+        node.b & LEAF_FLAG != 0
+    }
+
+    #[inline]
+    fn for_each_child(&self, node: &RacNode, mut f: impl FnMut(RacNode, Aabb)) {
+        for (child, b) in self.children_of(node) {
+            f(child, b);
         }
+    }
+
+    /// Both children written at once (a batch of two, known as such where
+    /// the traversal is compiled).
+    #[inline(always)]
+    fn children(&self, node: &RacNode, out: &mut Children<RacNode>) {
+        out.set(&self.children_of(node));
     }
 
     #[inline]
