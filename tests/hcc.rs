@@ -421,3 +421,56 @@ fn an_inner_root_whose_template_id_exceeds_its_vertex_count_verifies() {
         check_mesh(&h, &mesh);
     }
 }
+
+/// Quantized vertices: every decoded vertex within half a grid step (and
+/// `f32` rounding) of the input's, the reported error the largest one
+/// found, the input's triangle and vertex numbering kept, boxes still
+/// conservative over the decoded triangles, and fewer bytes than `f32`.
+#[test]
+fn quantized_vertices_stay_within_half_a_step() {
+    use cbvh::codec::ByteSize;
+    use cbvh::codec::hcc::HccOptions;
+    let mesh = cbvh::scene::generate(cbvh::scene::Kind::Turbine, 4000, 3, &mut |_, _| {}).unwrap();
+    for (bits, leaf) in [(16, 1), (10, 8), (24, 4)] {
+        let t = tree(&mesh, leaf, Layout::DepthFirst);
+        let o = HccOptions {
+            vertex_bits: Some(bits),
+            ..Default::default()
+        };
+        let h = HccBvh::encode_with(&t, &mesh, &o).unwrap();
+        h.verify().unwrap();
+        assert_eq!(h.vertex_bits(), Some(bits));
+        let d = h.decoded_mesh();
+        assert_eq!(d.triangles, mesh.triangles, "the numbering is kept");
+        let (step, err) = (h.vertex_step(), h.vertex_error());
+        let mut worst = [0f32; 3];
+        for (p, q) in mesh.vertices.iter().zip(&d.vertices) {
+            for a in 0..3 {
+                let e = (p[a] - q[a]).abs();
+                worst[a] = worst[a].max(e);
+                assert!(
+                    e <= 0.5 * step[a] + 4.0 * f32::EPSILON * p[a].abs(),
+                    "{bits} bits: {p:?} → {q:?}"
+                );
+            }
+        }
+        assert_eq!(worst, err, "the reported error is the largest found");
+        check_structure(&h, &d);
+        check_queries(&h, &d, 11);
+        let lossless = HccBvh::encode(&t, &mesh).unwrap();
+        assert!(h.bytes_total() < lossless.bytes_total());
+        let back = HccBvh::from_bytes(&h.to_bytes()).unwrap();
+        back.verify().unwrap();
+        assert_eq!(back.decoded_mesh(), d);
+        assert_eq!(back.vertex_error(), err);
+    }
+    let t = tree(&mesh, 1, Layout::DepthFirst);
+    let too_many = HccOptions {
+        vertex_bits: Some(25),
+        ..Default::default()
+    };
+    assert!(matches!(
+        HccBvh::encode_with(&t, &mesh, &too_many),
+        Err(HccError::VertexBits { got: 25, .. })
+    ));
+}

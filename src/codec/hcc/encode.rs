@@ -299,7 +299,7 @@ impl HccBvh {
         if options.vertex_ids {
             let unused = (0..mesh.vertices.len())
                 .filter(|&v| !used[v])
-                .map(|v| (v as u32, mesh.vertices[v]))
+                .map(|v| (v as u32, points[v]))
                 .collect();
             out.vertex_ids = Some(VertexIds::new(&s.stored, unused));
         }
