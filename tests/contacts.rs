@@ -51,6 +51,12 @@ fn check_pair(a: &Triangle, b: &Triangle, prediction: f32) -> Result<bool, TestC
     let boundary =
         triangles_intersect(a, b) && prediction.abs() <= tol || (exact - prediction).abs() <= tol;
     match (&ours, &parry) {
+        (Some(o), Some(p)) if p.dist > 0.0 && o.dist <= 0.0 && edges_cross(a, b) => {
+            // Parry's GJK reports a hair of separation for a thin overlap
+            // that an edge crossing the other triangle proves (seen at a
+            // depth of 0.0014 against parry's +1.9e-5): ours must overlap.
+            Ok(true)
+        }
         (Some(o), Some(p)) => {
             prop_assert!(
                 (o.dist - p.dist).abs() <= tol,
@@ -98,6 +104,39 @@ fn check_pair(a: &Triangle, b: &Triangle, prediction: f32) -> Result<bool, TestC
             Ok(false)
         }
     }
+}
+
+/// Whether an edge of one triangle crosses the other triangle, in `f64`:
+/// an oracle for "the triangles intersect" independent of both the kernel
+/// and parry (strict crossings only, so it never claims a touching pair).
+fn edges_cross(a: &Triangle, b: &Triangle) -> bool {
+    let d = |v: Vec3A| [v.x as f64, v.y as f64, v.z as f64];
+    let sub = |x: [f64; 3], y: [f64; 3]| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
+    let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+    let cross = |x: [f64; 3], y: [f64; 3]| {
+        [
+            x[1] * y[2] - x[2] * y[1],
+            x[2] * y[0] - x[0] * y[2],
+            x[0] * y[1] - x[1] * y[0],
+        ]
+    };
+    let seg_crosses = |p0: [f64; 3], p1: [f64; 3], t: [[f64; 3]; 3]| {
+        let n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
+        let (d0, d1) = (dot(n, sub(p0, t[0])), dot(n, sub(p1, t[0])));
+        if d0 * d1 >= 0.0 {
+            return false;
+        }
+        let s = d0 / (d0 - d1);
+        let x = [
+            p0[0] + (p1[0] - p0[0]) * s,
+            p0[1] + (p1[1] - p0[1]) * s,
+            p0[2] + (p1[2] - p0[2]) * s,
+        ];
+        (0..3).all(|k| dot(n, cross(sub(t[(k + 1) % 3], t[k]), sub(x, t[k]))) > 0.0)
+    };
+    let (ta, tb) = (a.map(d), b.map(d));
+    (0..3)
+        .any(|k| seg_crosses(ta[k], ta[(k + 1) % 3], tb) || seg_crosses(tb[k], tb[(k + 1) % 3], ta))
 }
 
 fn triangle() -> impl Strategy<Value = Triangle> {
