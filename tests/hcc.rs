@@ -474,3 +474,77 @@ fn quantized_vertices_stay_within_half_a_step() {
         Err(HccError::VertexBits { got: 25, .. })
     ));
 }
+
+#[test]
+fn tree_order_numbers_triangles_as_stored_without_maps() {
+    use cbvh::codec::hcc::HccOptions;
+    use cbvh::codec::{ByteSize, Codec, OpenOptions};
+    let mesh = cbvh::scene::generate(cbvh::scene::Kind::Statue, 3000, 7, &mut |_, _| {}).unwrap();
+    let n = mesh.triangles.len();
+    for (bits, leaf) in [(None, 1), (Some(16), 8), (Some(12), 1), (None, 4)] {
+        let t = tree(&mesh, leaf, Layout::CacheEfficient);
+        let kept = HccOptions {
+            vertex_bits: bits,
+            vertex_ids: false,
+            triangle_ids: true,
+        };
+        let a = HccBvh::encode_with(&t, &mesh, &kept).unwrap();
+        let b = HccBvh::encode_with(&t, &mesh, &HccOptions::tree_order(bits)).unwrap();
+        b.verify().unwrap();
+        assert!(a.has_triangle_ids() && !b.has_triangle_ids());
+        // The same tree, box for box; leaf by leaf the same triangles, `a`
+        // naming input ids and `b` storage ranks.
+        let mut pairs = Vec::new();
+        let mut stack = vec![(a.root(), b.root())];
+        while let Some(((na, ba), (nb, bb))) = stack.pop() {
+            assert_eq!(ba, bb);
+            assert_eq!(a.is_leaf(&na), b.is_leaf(&nb));
+            if a.is_leaf(&na) {
+                let (mut ta, mut tb) = (Vec::new(), Vec::new());
+                a.for_each_triangle(&na, |id, t| ta.push((id, *t)));
+                b.for_each_triangle(&nb, |id, t| tb.push((id, *t)));
+                assert_eq!(ta.len(), tb.len());
+                for ((ia, xa), (ib, xb)) in ta.into_iter().zip(tb) {
+                    assert_eq!(xa, xb);
+                    assert_eq!(b.triangle(ib), xb, "triangle({ib})");
+                    pairs.push((ia, ib));
+                }
+            } else {
+                let (mut ca, mut cb) = (Vec::new(), Vec::new());
+                a.for_each_child(&na, |c, x| ca.push((c, x)));
+                b.for_each_child(&nb, |c, x| cb.push((c, x)));
+                assert_eq!(ca.len(), cb.len());
+                stack.extend(ca.into_iter().zip(cb));
+            }
+        }
+        // Every rank once, and the decoded meshes agree through the pairs.
+        let mut ranks: Vec<u32> = pairs.iter().map(|p| p.1).collect();
+        ranks.sort_unstable();
+        assert!(ranks.iter().copied().eq(0..n as u32));
+        let (da, db) = (a.decoded_mesh(), b.decoded_mesh());
+        assert_eq!(db.triangles.len(), n);
+        for &(ia, ib) in &pairs {
+            let (xa, xb) = (
+                da.triangle_vertices(ia as usize),
+                db.triangle_vertices(ib as usize),
+            );
+            assert_eq!(xa, xb, "input {ia}, rank {ib}");
+            if bits.is_none() {
+                assert_eq!(xb, mesh.triangle_vertices(ia as usize));
+            }
+        }
+        // No map is stored: `b` is `a` less its `ids` part.
+        let part =
+            |c: &HccBvh, name: &str| c.bytes_by_part().iter().find(|p| p.0 == name).map(|p| p.1);
+        assert!(part(&a, "ids").is_some_and(|x| x > 0));
+        assert_eq!(part(&b, "ids"), None);
+        assert_eq!(part(&b, "vertex-ids"), None);
+        assert_eq!(b.bytes_total() + part(&a, "ids").unwrap(), a.bytes_total());
+        // The file keeps the numbering.
+        let back = <HccBvh as Codec>::from_bytes(&b.to_bytes(), &OpenOptions::default()).unwrap();
+        back.verify().unwrap();
+        assert!(!back.has_triangle_ids());
+        assert_eq!(back.decoded_mesh(), db);
+        assert_eq!(back.to_bytes(), b.to_bytes());
+    }
+}

@@ -307,10 +307,29 @@ impl HccBvh {
     /// Finds the triangle's rank through the id map's shortcuts, then its
     /// leaf (see `locate`).
     pub fn triangle_vertex_indices(&self, id: u32) -> [u32; 3] {
-        let rank = self.ids.rank(id).unwrap_or(0);
-        let (tree, c) = self.locate(rank);
+        let (tree, c) = self.locate(self.rank_of(id));
         let base = self.headers[tree as usize].vertex_start;
         c.map(|l| self.vertex_index(base + l))
+    }
+
+    /// The triangle id of storage rank `rank` (`< triangle_count`): the
+    /// input's id through the map, or the rank itself in tree order.
+    #[inline(always)]
+    pub(super) fn id_of(&self, rank: u32) -> u32 {
+        match &self.ids {
+            Some(m) => m.id(rank),
+            None => rank,
+        }
+    }
+
+    /// The storage rank of triangle `id`; 0 for an id out of range (or
+    /// one an unverified map cannot find).
+    fn rank_of(&self, id: u32) -> u32 {
+        match &self.ids {
+            Some(m) => m.rank(id).unwrap_or(0),
+            None if id < self.triangle_count => id,
+            None => 0,
+        }
     }
 
     /// The low-level tree holding node word `pos`.
@@ -329,7 +348,7 @@ impl HccBvh {
         f: &mut impl FnMut(u32, &Triangle),
     ) {
         self.leaf_triangles(node.tree, node.pos, |rank, [c0, c1, c2]| {
-            f(self.ids.id(rank), &[v.point(c0), v.point(c1), v.point(c2)]);
+            f(self.id_of(rank), &[v.point(c0), v.point(c1), v.point(c2)]);
         });
     }
 }
@@ -458,8 +477,7 @@ impl NodeCursor for HccBvh {
     }
 
     fn triangle(&self, id: u32) -> Triangle {
-        let rank = self.ids.rank(id).unwrap_or(0);
-        let (tree, c) = self.locate(rank);
+        let (tree, c) = self.locate(self.rank_of(id));
         let h = &self.headers[tree as usize];
         c.map(|l| Vec3A::from(self.point(tree, h, l)))
     }
