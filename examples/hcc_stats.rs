@@ -3,7 +3,8 @@
 //! closest-hit camera rays per second on one thread and the cost of
 //! `triangle(id)`; for `f32` and quantized vertices (`--vertex-bits`), one
 //! triangle a leaf and the multi-triangle-leaf curve (bytes per triangle
-//! and rays per second against triangles per leaf).
+//! and rays per second against triangles per leaf), each quantized row
+//! also in tree order (`-T`: no id maps stored, ids in storage order).
 //!
 //! ```text
 //! cargo run --release --example hcc_stats -- [--gen statue|turbine|... --tris N | --mesh FILE]
@@ -163,16 +164,23 @@ fn main() {
     let q = a.vertex_bits;
     let mut names = vec!["plain".to_string(), "racbvh".into(), "hcc".into()];
     let mut rows = vec![Row::Plain(plain), Row::Rac(rac), Row::Hcc(hcc)];
-    names.push(format!("hcc-q{q}"));
-    rows.push(Row::Hcc(
-        HccBvh::encode_with(&bvh, &mesh, &q_opts).expect("hcc quantized"),
-    ));
+    let tree_opts = HccOptions::tree_order(Some(a.vertex_bits));
+    for (name, o) in [
+        (format!("hcc-q{q}"), q_opts),
+        (format!("hcc-q{q}-T"), tree_opts),
+    ] {
+        names.push(name);
+        rows.push(Row::Hcc(
+            HccBvh::encode_with(&bvh, &mesh, &o).expect("hcc quantized"),
+        ));
+    }
     drop(bvh);
     for &k in &a.leaves {
         let t = tree(k);
         for (name, o) in [
             (format!("hcc-L{k}"), f32_opts),
             (format!("hcc-q{q}-L{k}"), q_opts),
+            (format!("hcc-q{q}-L{k}-T"), tree_opts),
         ] {
             names.push(name);
             rows.push(Row::Hcc(

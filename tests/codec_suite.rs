@@ -2,12 +2,15 @@
 //! [`Codec`], and run on every codec by one line at the end of this file:
 //!
 //! ```text
-//! codec_suite!(name, CodecType, lossless: [options, ...], lossy: [options, ...]);
+//! codec_suite!(name, CodecType, lossless: [options, ...], lossy: [options, ...]
+//!     [, renumbered: [options, ...]]);
 //! ```
 //!
 //! `lossless` options must decode the very mesh that was encoded (the
 //! suite asserts it); `lossy` ones (quantized vertices) are checked against
-//! their own decoded mesh. Every query is compared with brute force over the
+//! their own decoded mesh; `renumbered` ones (ids in the codec's own order,
+//! hcc's tree order) must decode the encoded triangles exactly, in any
+//! order, and are then checked against their own decoded mesh. Every query is compared with brute force over the
 //! decoded mesh, every box a cursor reports must contain every triangle
 //! below it, and damaged files must give errors, never panics. Tests of one
 //! codec's own API (RACBVH's cache, random access, options) stay in that
@@ -33,14 +36,39 @@ pub struct Variants<C: Codec> {
     pub lossless: Vec<C::Options>,
     /// Options that may move vertices (checked against the decoded mesh).
     pub lossy: Vec<C::Options>,
+    /// Options that renumber the triangles (their exact corners, any ids).
+    pub renumbered: Vec<C::Options>,
+}
+
+/// What an option set promises of the decoded mesh.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fidelity {
+    /// The encoded mesh itself.
+    Lossless,
+    /// The same triangles in the same order, corners moved a little.
+    Lossy,
+    /// The same triangles, corner for corner, in another order.
+    Renumbered,
 }
 
 impl<C: Codec> Variants<C> {
-    /// Every option set, with whether it is lossless.
-    fn all(&self) -> impl Iterator<Item = (&C::Options, bool)> {
-        let lossless = self.lossless.iter().map(|o| (o, true));
-        lossless.chain(self.lossy.iter().map(|o| (o, false)))
+    /// Every option set, with what it promises.
+    fn all(&self) -> impl Iterator<Item = (&C::Options, Fidelity)> {
+        let lossless = self.lossless.iter().map(|o| (o, Fidelity::Lossless));
+        let lossy = self.lossy.iter().map(|o| (o, Fidelity::Lossy));
+        let renumbered = self.renumbered.iter().map(|o| (o, Fidelity::Renumbered));
+        lossless.chain(lossy).chain(renumbered)
     }
+}
+
+/// A mesh's triangles as corner positions (bit patterns), sorted: equal
+/// for two meshes holding the same triangles in any order.
+fn triangle_multiset(m: &Mesh) -> Vec<[[u32; 3]; 3]> {
+    let mut v: Vec<[[u32; 3]; 3]> = (0..m.triangles.len())
+        .map(|t| m.triangle_vertices(t).map(|p| p.map(f32::to_bits)))
+        .collect();
+    v.sort_unstable();
+    v
 }
 
 fn tree(mesh: &Mesh, layout: Layout, leaf: usize) -> CanonicalBvh {
@@ -70,12 +98,25 @@ fn hits<C: NodeCursor>(c: &C, mesh: &Mesh) -> Vec<Option<RayHit>> {
 
 /// The decoded mesh: lossless options give the encoded mesh itself, lossy
 /// ones the same triangles with every corner within 2 % of the mesh's
-/// largest extent of the original.
-fn check_decoded<C: Codec>(c: &C, mesh: &Mesh, lossless: bool) -> Mesh {
+/// largest extent of the original, renumbered ones the same triangles with
+/// the same corners in another order.
+fn check_decoded<C: Codec>(c: &C, mesh: &Mesh, fidelity: Fidelity) -> Mesh {
     let dm = c.decoded_mesh();
-    if lossless {
-        assert_eq!(dm, *mesh, "{}: lossless options changed the mesh", C::KIND);
-        return dm;
+    match fidelity {
+        Fidelity::Lossless => {
+            assert_eq!(dm, *mesh, "{}: lossless options changed the mesh", C::KIND);
+            return dm;
+        }
+        Fidelity::Renumbered => {
+            assert_eq!(
+                triangle_multiset(&dm),
+                triangle_multiset(mesh),
+                "{}: renumbering options changed the triangles",
+                C::KIND
+            );
+            return dm;
+        }
+        Fidelity::Lossy => {}
     }
     assert_eq!(dm.triangles.len(), mesh.triangles.len());
     let (lo, hi) = mesh.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
@@ -131,8 +172,8 @@ fn check_contract<C: Codec>(c: &C, mesh: &Mesh, dm: &Mesh) {
 
 /// Structure (conservative boxes, every triangle once, triangles as
 /// decoded), every single-tree query against brute force, and the contract.
-fn check_all<C: Codec>(c: &C, mesh: &Mesh, lossless: bool, seed: u64) -> Mesh {
-    let dm = check_decoded(c, mesh, lossless);
+fn check_all<C: Codec>(c: &C, mesh: &Mesh, fidelity: Fidelity, seed: u64) -> Mesh {
+    let dm = check_decoded(c, mesh, fidelity);
     check_structure(c, &dm);
     check_queries(c, &dm, seed);
     check_best_first(c, &dm, seed);
@@ -144,8 +185,8 @@ fn check_all<C: Codec>(c: &C, mesh: &Mesh, lossless: bool, seed: u64) -> Mesh {
 pub fn soup_case<C: Codec>(v: &Variants<C>, seed: u64, n: usize, layout: usize, leaf: usize) {
     let mesh = soup(seed, n, 10.0);
     let bvh = tree(&mesh, Layout::ALL[layout % Layout::ALL.len()], leaf);
-    for (o, lossless) in v.all() {
-        check_all(&encode::<C>(&bvh, &mesh, o), &mesh, lossless, seed);
+    for (o, fidelity) in v.all() {
+        check_all(&encode::<C>(&bvh, &mesh, o), &mesh, fidelity, seed);
     }
 }
 
@@ -154,8 +195,8 @@ pub fn generated_case<C: Codec>(v: &Variants<C>, seed: u64, kind: usize) {
     let kind = [Kind::Statue, Kind::Turbine, Kind::Robot][kind % 3];
     let mesh = generate(kind, 1000, seed, &mut |_, _| {}).unwrap();
     let bvh = tree(&mesh, Layout::ALL[seed as usize % Layout::ALL.len()], 1);
-    for (o, lossless) in v.all() {
-        check_all(&encode::<C>(&bvh, &mesh, o), &mesh, lossless, seed);
+    for (o, fidelity) in v.all() {
+        check_all(&encode::<C>(&bvh, &mesh, o), &mesh, fidelity, seed);
     }
 }
 
@@ -183,9 +224,9 @@ pub fn two_tree_case<C: Codec>(v: &Variants<C>, seed: u64, na: usize, nb: usize)
 pub fn round_trip<C: Codec>(v: &Variants<C>) {
     let mesh = generate(Kind::Statue, 1500, 2, &mut |_, _| {}).unwrap();
     let bvh = tree(&mesh, Layout::CacheEfficient, 1);
-    for (k, (o, lossless)) in v.all().enumerate() {
+    for (k, (o, fidelity)) in v.all().enumerate() {
         let c = encode::<C>(&bvh, &mesh, o);
-        let dm = check_decoded(&c, &mesh, lossless);
+        let dm = check_decoded(&c, &mesh, fidelity);
         c.verify().unwrap();
         let want = hits(&c, &dm);
         let bytes = c.to_bytes();
@@ -283,12 +324,12 @@ pub fn edge_cases<C: Codec>(v: &Variants<C>) {
     for (name, mesh) in edge_meshes() {
         for (layout, leaf) in [(Layout::VanEmdeBoas, 1), (Layout::DepthFirst, 4)] {
             let bvh = tree(&mesh, layout, leaf);
-            for (o, lossless) in v.all() {
+            for (o, fidelity) in v.all() {
                 let c = C::encode(&bvh, &mesh, o)
                     .unwrap_or_else(|e| panic!("{}: {name}: encode {o:?}: {e}", C::KIND));
                 c.verify()
                     .unwrap_or_else(|e| panic!("{}: {name}: verify: {e}", C::KIND));
-                let dm = check_all(&c, &mesh, lossless, 5);
+                let dm = check_all(&c, &mesh, fidelity, 5);
                 if mesh.triangles.len() <= 200 {
                     check_bvtt(&c, &dm, &c, &dm, 9);
                 }
@@ -405,6 +446,10 @@ pub fn corruption<C: Codec>(v: &Variants<C>) {
 /// the given option sets.
 macro_rules! codec_suite {
     ($name:ident, $codec:ty, lossless: [$($ll:expr),* $(,)?], lossy: [$($ly:expr),* $(,)?]) => {
+        codec_suite!($name, $codec, lossless: [$($ll),*], lossy: [$($ly),*], renumbered: []);
+    };
+    ($name:ident, $codec:ty, lossless: [$($ll:expr),* $(,)?], lossy: [$($ly:expr),* $(,)?],
+        renumbered: [$($rn:expr),* $(,)?]) => {
         mod $name {
             use super::*;
             use proptest::prelude::*;
@@ -413,6 +458,7 @@ macro_rules! codec_suite {
                 Variants {
                     lossless: vec![$($ll),*],
                     lossy: vec![$($ly),*],
+                    renumbered: vec![$($rn),*],
                 }
             }
 
@@ -476,11 +522,21 @@ fn rac(bits: u32, vertex_bits: Option<u32>) -> cbvh::codec::racbvh::RacOptions {
 
 /// hcc options: `f32` or quantized vertices, with or without the input's
 /// vertex ids (without them the decoded mesh repeats shared vertices, so
-/// it is checked as a lossy one).
+/// it is checked as a lossy one), input triangle ids kept.
 fn hcc(vertex_bits: Option<u32>, vertex_ids: bool) -> cbvh::codec::hcc::HccOptions {
     cbvh::codec::hcc::HccOptions {
         vertex_bits,
         vertex_ids,
+        triangle_ids: true,
+    }
+}
+
+/// hcc in tree order: triangles numbered as stored (no triangle id map),
+/// with or without the input's vertex ids; `f32` vertices.
+fn hcc_tree_order(vertex_ids: bool) -> cbvh::codec::hcc::HccOptions {
+    cbvh::codec::hcc::HccOptions {
+        vertex_ids,
+        ..cbvh::codec::hcc::HccOptions::tree_order(None)
     }
 }
 
@@ -490,3 +546,4 @@ codec_suite!(racbvh, cbvh::codec::racbvh::RacBvh, lossless: [rac(16, None)], los
 codec_suite!(clbvh, cbvh::codec::clbvh::ClBvh, lossless: [Default::default()], lossy: []);
 codec_suite!(clbvh_compact, cbvh::codec::clbvh::ClBvhCompact, lossless: [Default::default()], lossy: []);
 codec_suite!(hcc, cbvh::codec::hcc::HccBvh, lossless: [hcc(None, true)], lossy: [hcc(None, false), hcc(Some(16), true), hcc(Some(8), false)]);
+codec_suite!(hcc_tree_order, cbvh::codec::hcc::HccBvh, lossless: [], lossy: [], renumbered: [hcc_tree_order(false), hcc_tree_order(true)]);

@@ -421,3 +421,130 @@ fn an_inner_root_whose_template_id_exceeds_its_vertex_count_verifies() {
         check_mesh(&h, &mesh);
     }
 }
+
+/// Quantized vertices: every decoded vertex within half a grid step (and
+/// `f32` rounding) of the input's, the reported error the largest one
+/// found, the input's triangle and vertex numbering kept, boxes still
+/// conservative over the decoded triangles, and fewer bytes than `f32`.
+#[test]
+fn quantized_vertices_stay_within_half_a_step() {
+    use cbvh::codec::ByteSize;
+    use cbvh::codec::hcc::HccOptions;
+    let mesh = cbvh::scene::generate(cbvh::scene::Kind::Turbine, 4000, 3, &mut |_, _| {}).unwrap();
+    for (bits, leaf) in [(16, 1), (10, 8), (24, 4)] {
+        let t = tree(&mesh, leaf, Layout::DepthFirst);
+        let o = HccOptions {
+            vertex_bits: Some(bits),
+            ..Default::default()
+        };
+        let h = HccBvh::encode_with(&t, &mesh, &o).unwrap();
+        h.verify().unwrap();
+        assert_eq!(h.vertex_bits(), Some(bits));
+        let d = h.decoded_mesh();
+        assert_eq!(d.triangles, mesh.triangles, "the numbering is kept");
+        let (step, err) = (h.vertex_step(), h.vertex_error());
+        let mut worst = [0f32; 3];
+        for (p, q) in mesh.vertices.iter().zip(&d.vertices) {
+            for a in 0..3 {
+                let e = (p[a] - q[a]).abs();
+                worst[a] = worst[a].max(e);
+                assert!(
+                    e <= 0.5 * step[a] + 4.0 * f32::EPSILON * p[a].abs(),
+                    "{bits} bits: {p:?} → {q:?}"
+                );
+            }
+        }
+        assert_eq!(worst, err, "the reported error is the largest found");
+        check_structure(&h, &d);
+        check_queries(&h, &d, 11);
+        let lossless = HccBvh::encode(&t, &mesh).unwrap();
+        assert!(h.bytes_total() < lossless.bytes_total());
+        let back = HccBvh::from_bytes(&h.to_bytes()).unwrap();
+        back.verify().unwrap();
+        assert_eq!(back.decoded_mesh(), d);
+        assert_eq!(back.vertex_error(), err);
+    }
+    let t = tree(&mesh, 1, Layout::DepthFirst);
+    let too_many = HccOptions {
+        vertex_bits: Some(25),
+        ..Default::default()
+    };
+    assert!(matches!(
+        HccBvh::encode_with(&t, &mesh, &too_many),
+        Err(HccError::VertexBits { got: 25, .. })
+    ));
+}
+
+#[test]
+fn tree_order_numbers_triangles_as_stored_without_maps() {
+    use cbvh::codec::hcc::HccOptions;
+    use cbvh::codec::{ByteSize, Codec, OpenOptions};
+    let mesh = cbvh::scene::generate(cbvh::scene::Kind::Statue, 3000, 7, &mut |_, _| {}).unwrap();
+    let n = mesh.triangles.len();
+    for (bits, leaf) in [(None, 1), (Some(16), 8), (Some(12), 1), (None, 4)] {
+        let t = tree(&mesh, leaf, Layout::CacheEfficient);
+        let kept = HccOptions {
+            vertex_bits: bits,
+            vertex_ids: false,
+            triangle_ids: true,
+        };
+        let a = HccBvh::encode_with(&t, &mesh, &kept).unwrap();
+        let b = HccBvh::encode_with(&t, &mesh, &HccOptions::tree_order(bits)).unwrap();
+        b.verify().unwrap();
+        assert!(a.has_triangle_ids() && !b.has_triangle_ids());
+        // The same tree, box for box; leaf by leaf the same triangles, `a`
+        // naming input ids and `b` storage ranks.
+        let mut pairs = Vec::new();
+        let mut stack = vec![(a.root(), b.root())];
+        while let Some(((na, ba), (nb, bb))) = stack.pop() {
+            assert_eq!(ba, bb);
+            assert_eq!(a.is_leaf(&na), b.is_leaf(&nb));
+            if a.is_leaf(&na) {
+                let (mut ta, mut tb) = (Vec::new(), Vec::new());
+                a.for_each_triangle(&na, |id, t| ta.push((id, *t)));
+                b.for_each_triangle(&nb, |id, t| tb.push((id, *t)));
+                assert_eq!(ta.len(), tb.len());
+                for ((ia, xa), (ib, xb)) in ta.into_iter().zip(tb) {
+                    assert_eq!(xa, xb);
+                    assert_eq!(b.triangle(ib), xb, "triangle({ib})");
+                    pairs.push((ia, ib));
+                }
+            } else {
+                let (mut ca, mut cb) = (Vec::new(), Vec::new());
+                a.for_each_child(&na, |c, x| ca.push((c, x)));
+                b.for_each_child(&nb, |c, x| cb.push((c, x)));
+                assert_eq!(ca.len(), cb.len());
+                stack.extend(ca.into_iter().zip(cb));
+            }
+        }
+        // Every rank once, and the decoded meshes agree through the pairs.
+        let mut ranks: Vec<u32> = pairs.iter().map(|p| p.1).collect();
+        ranks.sort_unstable();
+        assert!(ranks.iter().copied().eq(0..n as u32));
+        let (da, db) = (a.decoded_mesh(), b.decoded_mesh());
+        assert_eq!(db.triangles.len(), n);
+        for &(ia, ib) in &pairs {
+            let (xa, xb) = (
+                da.triangle_vertices(ia as usize),
+                db.triangle_vertices(ib as usize),
+            );
+            assert_eq!(xa, xb, "input {ia}, rank {ib}");
+            if bits.is_none() {
+                assert_eq!(xb, mesh.triangle_vertices(ia as usize));
+            }
+        }
+        // No map is stored: `b` is `a` less its `ids` part.
+        let part =
+            |c: &HccBvh, name: &str| c.bytes_by_part().iter().find(|p| p.0 == name).map(|p| p.1);
+        assert!(part(&a, "ids").is_some_and(|x| x > 0));
+        assert_eq!(part(&b, "ids"), None);
+        assert_eq!(part(&b, "vertex-ids"), None);
+        assert_eq!(b.bytes_total() + part(&a, "ids").unwrap(), a.bytes_total());
+        // The file keeps the numbering.
+        let back = <HccBvh as Codec>::from_bytes(&b.to_bytes(), &OpenOptions::default()).unwrap();
+        back.verify().unwrap();
+        assert!(!back.has_triangle_ids());
+        assert_eq!(back.decoded_mesh(), db);
+        assert_eq!(back.to_bytes(), b.to_bytes());
+    }
+}

@@ -49,6 +49,12 @@ pub struct BuildArgs {
     /// decoded mesh repeats the vertices low-level trees share.
     #[arg(long)]
     pub no_vertex_ids: bool,
+    /// hcc: number triangles and vertices in the tree's order, storing
+    /// neither id map (parts ids and vertex-ids): the smallest form. The
+    /// file's triangle ids and decoded mesh are then in that order, not the
+    /// input's.
+    #[arg(long)]
+    pub tree_order: bool,
     /// Write the codec's self-contained file here (any codec but parry);
     /// `cbvh info`, `cbvh render`, `cbvh build` and the sims open it like a
     /// mesh, and `cbvh::codec::AnyCodec::open` / `CbvhShape::open` in a
@@ -121,7 +127,8 @@ pub fn run(a: BuildArgs) -> CliResult {
                 },
                 hcc: HccOptions {
                     vertex_bits: bits(HccOptions::default().vertex_bits),
-                    vertex_ids: !a.no_vertex_ids,
+                    vertex_ids: !a.no_vertex_ids && !a.tree_order,
+                    triangle_ids: !a.tree_order,
                 },
                 clbvh: ClOptions {
                     leaf_size: clbvh_m(ClOptions::default().leaf_size),

@@ -60,7 +60,11 @@ pub trait Codec: NodeCursor + ByteSize + Send + Sync + Sized + 'static {
 
     /// The mesh as stored (quantized vertices decoded), triangle `k` being
     /// the triangle the cursor reports as id `k`, which is the input's
-    /// triangle `k`: every codec reports the input's ids.
+    /// triangle `k`: every codec reports the input's ids by default. An
+    /// option may renumber them (hcc's tree order,
+    /// [`HccOptions::triangle_ids`](super::hcc::HccOptions::triangle_ids));
+    /// the decoded mesh's triangles are then the input's permuted, and
+    /// every id the codec reports or takes is in that numbering.
     fn decoded_mesh(&self) -> Mesh;
 
     /// Mass properties at density 1, computed from the original mesh when

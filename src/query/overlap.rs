@@ -47,7 +47,7 @@ pub fn visit_batch<C: NodeCursor>(
     if node_test(&root_batch) & 1 == 0 {
         return false;
     }
-    let mut stack = super::Stack::new(root);
+    let mut stack = super::Stack::new();
     stack.push(root);
     let mut batch = Children::new(root);
     while let Some(node) = stack.pop() {

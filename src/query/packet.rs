@@ -216,7 +216,7 @@ pub fn closest_hits_within<C: NodeCursor>(
     } else {
         (1u64 << n) - 1
     };
-    let mut stack = Stack::new((root, root_box, 0u64));
+    let mut stack = Stack::new();
     stack.push((root, root_box, all));
     let mut batch = Children::new(root);
     let mut kids: [Kid<C::Node>; MAX_CHILDREN] = [(0.0, (root, root_box)); MAX_CHILDREN];

@@ -33,7 +33,7 @@ pub fn closest_point<C: NodeCursor>(
         return None;
     }
     let mut best: Option<(f32, u32, Vec3A)> = None;
-    let mut stack = super::Stack::new((root, d0));
+    let mut stack = super::Stack::new();
     stack.push((root, d0));
     let mut batch = Children::new(root);
     let mut kids: [(f32, C::Node); MAX_CHILDREN] = [(0.0, root); MAX_CHILDREN];

@@ -68,7 +68,7 @@ pub fn closest_hit_with<C: NodeCursor>(
     let t0 = ray.intersect_aabb(&root_box, t_max)?;
     let mut best: Option<RayHit> = None;
     let mut best_t = t_max;
-    let mut stack = Stack::new((root, t0));
+    let mut stack = Stack::new();
     stack.push((root, t0));
     let mut batch = Children::new(root);
     let mut kids: [(f32, C::Node); MAX_CHILDREN] = [(0.0, root); MAX_CHILDREN];
@@ -125,7 +125,7 @@ pub fn any_hit_with<C: NodeCursor>(
     if ray.intersect_aabb(&root_box, t_max).is_none() {
         return false;
     }
-    let mut stack = Stack::new(root);
+    let mut stack = Stack::new();
     stack.push(root);
     let mut batch = Children::new(root);
     while let Some(node) = stack.pop() {

@@ -13,7 +13,7 @@ use crate::mesh::Mesh;
 impl Codec for HccBvh {
     const KIND: CodecKind = CodecKind::Hcc;
     const MAGIC: [u8; 8] = file::MAGIC;
-    /// Vertex format and vertex ids; the canonical tree's leaf size picks
+    /// Vertex format, vertex ids and triangle ids; the canonical tree's leaf size picks
     /// one triangle a leaf (the paper's form) or multi-triangle leaves.
     type Options = HccOptions;
     type Error = HccError;
@@ -27,7 +27,8 @@ impl Codec for HccBvh {
     }
 
     /// The stored mesh, triangles in input order (the input mesh itself
-    /// with `f32` vertices and vertex ids kept).
+    /// with `f32` vertices and both id maps kept), or in storage order
+    /// without triangle ids.
     fn decoded_mesh(&self) -> Mesh {
         HccBvh::decoded_mesh(self)
     }
@@ -72,6 +73,14 @@ impl Codec for HccBvh {
             ("vertices", vertices),
             ("stored vertices", self.stats().tree_vertices.to_string()),
             ("vertex ids", self.has_vertex_ids().to_string()),
+            (
+                "triangle ids",
+                if self.has_triangle_ids() {
+                    "input's".to_string()
+                } else {
+                    "tree order".to_string()
+                },
+            ),
         ]
     }
 
@@ -89,6 +98,7 @@ impl Codec for HccBvh {
             ("vertex_bits", self.vertex_bits().into()),
             ("vertex_error", self.vertex_error().to_vec().into()),
             ("vertex_ids", self.has_vertex_ids().into()),
+            ("triangle_ids", self.has_triangle_ids().into()),
             ("duplicated_vertices", st.duplicated_fraction().into()),
             ("loose_extents", st.loose_extents.into()),
             ("bytes_per_triangle_by_part", parts.into()),

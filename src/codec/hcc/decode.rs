@@ -11,7 +11,7 @@ use super::node::{
 };
 use super::template::TEMPLATES;
 use super::vertices::{F32Verts, TreeVerts, Vertices};
-use crate::cursor::NodeCursor;
+use crate::cursor::{Children, NodeCursor};
 use crate::geom::{Aabb, Triangle};
 
 const KIND_HIGH: u8 = 3;
@@ -307,10 +307,29 @@ impl HccBvh {
     /// Finds the triangle's rank through the id map's shortcuts, then its
     /// leaf (see `locate`).
     pub fn triangle_vertex_indices(&self, id: u32) -> [u32; 3] {
-        let rank = self.ids.rank(id).unwrap_or(0);
-        let (tree, c) = self.locate(rank);
+        let (tree, c) = self.locate(self.rank_of(id));
         let base = self.headers[tree as usize].vertex_start;
         c.map(|l| self.vertex_index(base + l))
+    }
+
+    /// The triangle id of storage rank `rank` (`< triangle_count`): the
+    /// input's id through the map, or the rank itself in tree order.
+    #[inline(always)]
+    pub(super) fn id_of(&self, rank: u32) -> u32 {
+        match &self.ids {
+            Some(m) => m.id(rank),
+            None => rank,
+        }
+    }
+
+    /// The storage rank of triangle `id`; 0 for an id out of range (or
+    /// one an unverified map cannot find).
+    fn rank_of(&self, id: u32) -> u32 {
+        match &self.ids {
+            Some(m) => m.rank(id).unwrap_or(0),
+            None if id < self.triangle_count => id,
+            None => 0,
+        }
     }
 
     /// The low-level tree holding node word `pos`.
@@ -329,7 +348,7 @@ impl HccBvh {
         f: &mut impl FnMut(u32, &Triangle),
     ) {
         self.leaf_triangles(node.tree, node.pos, |rank, [c0, c1, c2]| {
-            f(self.ids.id(rank), &[v.point(c0), v.point(c1), v.point(c2)]);
+            f(self.id_of(rank), &[v.point(c0), v.point(c1), v.point(c2)]);
         });
     }
 }
@@ -354,39 +373,18 @@ fn select_in_word(mut w: u64, mut k: u32) -> u32 {
     base + w.trailing_zeros().min(63)
 }
 
-impl NodeCursor for HccBvh {
-    type Node = HccNode;
-
-    fn root(&self) -> (HccNode, Aabb) {
-        if self.headers.is_empty() {
-            let n = HccNode {
-                bounds: Aabb::EMPTY,
-                tree: 0,
-                pos: 0,
-                block: 0,
-                template: 0,
-                kind: KIND_EMPTY,
-            };
-            return (n, Aabb::EMPTY);
-        }
-        let n = self.high_child(0);
-        (n, n.bounds)
-    }
-
+impl HccBvh {
+    /// The two children of the inner node `node` with their boxes.
+    // Always inlined, as `for_each_child` was with its closure: a call
+    // would return the pair through memory.
     #[inline(always)]
-    fn is_leaf(&self, node: &HccNode) -> bool {
-        node.kind == TYPE_LEAF as u8 || node.kind == KIND_EMPTY
-    }
-
-    #[inline]
-    fn for_each_child(&self, node: &HccNode, mut f: impl FnMut(HccNode, Aabb)) {
+    fn children_of(&self, node: &HccNode) -> [(HccNode, Aabb); 2] {
         if node.kind == KIND_HIGH {
             let h = &self.high[node.pos as usize];
-            for c in [h.a, h.b] {
+            return [h.a, h.b].map(|c| {
                 let n = self.high_child(c);
-                f(n, n.bounds);
-            }
-            return;
+                (n, n.bounds)
+            });
         }
         let (l, r, bl, br, tl, tr) = if node.kind == TYPE_TEMPLATE_LEAF as u8 {
             let h = &self.headers[node.tree as usize];
@@ -420,8 +418,49 @@ impl NodeCursor for HccBvh {
             template,
             kind: kind as u8,
         };
-        f(child(l, bl, tl, kl, bxl), bxl);
-        f(child(r, br, tr, kr, bxr), bxr);
+        [
+            (child(l, bl, tl, kl, bxl), bxl),
+            (child(r, br, tr, kr, bxr), bxr),
+        ]
+    }
+}
+
+impl NodeCursor for HccBvh {
+    type Node = HccNode;
+
+    fn root(&self) -> (HccNode, Aabb) {
+        if self.headers.is_empty() {
+            let n = HccNode {
+                bounds: Aabb::EMPTY,
+                tree: 0,
+                pos: 0,
+                block: 0,
+                template: 0,
+                kind: KIND_EMPTY,
+            };
+            return (n, Aabb::EMPTY);
+        }
+        let n = self.high_child(0);
+        (n, n.bounds)
+    }
+
+    #[inline(always)]
+    fn is_leaf(&self, node: &HccNode) -> bool {
+        node.kind == TYPE_LEAF as u8 || node.kind == KIND_EMPTY
+    }
+
+    #[inline]
+    fn for_each_child(&self, node: &HccNode, mut f: impl FnMut(HccNode, Aabb)) {
+        for (child, b) in self.children_of(node) {
+            f(child, b);
+        }
+    }
+
+    /// Both children written at once (a batch of two, known as such where
+    /// the traversal is compiled).
+    #[inline(always)]
+    fn children(&self, node: &HccNode, out: &mut Children<HccNode>) {
+        out.set(&self.children_of(node));
     }
 
     #[inline]
@@ -438,8 +477,7 @@ impl NodeCursor for HccBvh {
     }
 
     fn triangle(&self, id: u32) -> Triangle {
-        let rank = self.ids.rank(id).unwrap_or(0);
-        let (tree, c) = self.locate(rank);
+        let (tree, c) = self.locate(self.rank_of(id));
         let h = &self.headers[tree as usize];
         c.map(|l| Vec3A::from(self.point(tree, h, l)))
     }

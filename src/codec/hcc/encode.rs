@@ -36,8 +36,9 @@ pub struct HccBvh {
     pub(super) leaf_bits: Vec<u64>,
     /// Leaves before each word of `leaf_bits`.
     pub(super) leaf_rank: Vec<u32>,
-    /// Storage rank ↔ input triangle id.
-    pub(super) ids: IdMap,
+    /// Storage rank ↔ input triangle id (`None`: the triangles are
+    /// numbered in storage order, [`HccOptions::triangle_ids`] off).
+    pub(super) ids: Option<IdMap>,
     /// Each stored vertex's input index (when kept).
     pub(super) vertex_ids: Option<VertexIds>,
     pub(super) multi: bool,
@@ -263,7 +264,7 @@ impl HccBvh {
             block_start: Vec::new(),
             leaf_bits: Vec::new(),
             leaf_rank: Vec::new(),
-            ids: IdMap::default(),
+            ids: None,
             vertex_ids: None,
             multi,
             triangle_count: mesh.triangles.len() as u32,
@@ -289,7 +290,7 @@ impl HccBvh {
             out.encode_trees(&mut s)?;
         }
         out.build_leaf_ranks();
-        out.ids = IdMap::new(&s.rank_ids);
+        out.ids = options.triangle_ids.then(|| IdMap::new(&s.rank_ids));
         let mut used = vec![false; mesh.vertices.len()];
         for t in &mesh.triangles {
             for &v in t {
@@ -299,7 +300,7 @@ impl HccBvh {
         if options.vertex_ids {
             let unused = (0..mesh.vertices.len())
                 .filter(|&v| !used[v])
-                .map(|v| (v as u32, mesh.vertices[v]))
+                .map(|v| (v as u32, points[v]))
                 .collect();
             out.vertex_ids = Some(VertexIds::new(&s.stored, unused));
         }

@@ -11,7 +11,7 @@
 //! |---|---|
 //! | 0–7 | magic `CBVHHCC\0` |
 //! | 8–11 | version (2) |
-//! | 12–15 | flags: bit 0 multi-triangle leaves, bit 1 quantized vertices, bit 2 vertex ids kept; others 0 |
+//! | 12–15 | flags: bit 0 multi-triangle leaves, bit 1 quantized vertices, bit 2 vertex ids kept, bit 3 tree order (no triangle id map; the `ids` section empty); others 0 |
 //! | 16–35 | counts: high-level nodes, low-level trees, node words, inter-connections, stored vertices |
 //! | 36–39 | triangle count |
 //! | 40–43 | input mesh's vertex count |
@@ -72,6 +72,7 @@ const NAMES: [&str; SECTIONS] = [
 const FLAG_MULTI: u32 = 1;
 const FLAG_QUANTIZED: u32 = 2;
 const FLAG_VERTEX_IDS: u32 = 4;
+const FLAG_TREE_ORDER: u32 = 8;
 
 fn words(b: &[u8]) -> impl Iterator<Item = u32> + '_ {
     b.chunks_exact(4)
@@ -112,7 +113,7 @@ impl HccBvh {
             ),
         };
         let starts = le(self.block_start.iter().copied());
-        let ids = self.ids.to_bytes();
+        let ids = self.ids.as_ref().map_or(Vec::new(), IdMap::to_bytes);
         let vids = self
             .vertex_ids
             .as_ref()
@@ -120,7 +121,8 @@ impl HccBvh {
         let q = self.vertices.quantized();
         let flags = u32::from(self.multi) * FLAG_MULTI
             + u32::from(q.is_some()) * FLAG_QUANTIZED
-            + u32::from(self.vertex_ids.is_some()) * FLAG_VERTEX_IDS;
+            + u32::from(self.vertex_ids.is_some()) * FLAG_VERTEX_IDS
+            + u32::from(self.ids.is_none()) * FLAG_TREE_ORDER;
         let mut out = Vec::with_capacity(HEADER_LEN + nodes.len() + verts.len() + ids.len());
         out.extend_from_slice(&MAGIC);
         for v in [
@@ -191,13 +193,14 @@ impl HccBvh {
             });
         }
         let flags = u32_at(b, 12);
-        if flags > FLAG_MULTI | FLAG_QUANTIZED | FLAG_VERTEX_IDS {
+        if flags > FLAG_MULTI | FLAG_QUANTIZED | FLAG_VERTEX_IDS | FLAG_TREE_ORDER {
             return Err(header_err("flags", "reserved bits are set"));
         }
-        let (multi, quantized, has_vids) = (
+        let (multi, quantized, has_vids, tree_order) = (
             flags & FLAG_MULTI != 0,
             flags & FLAG_QUANTIZED != 0,
             flags & FLAG_VERTEX_IDS != 0,
+            flags & FLAG_TREE_ORDER != 0,
         );
         let [
             n_high,
@@ -227,7 +230,7 @@ impl HccBvh {
             fixed(quantized, 16 * trees),
             if multi { None } else { Some(0) },
             fixed(multi, 4 * trees),
-            None,
+            if tree_order { Some(0) } else { None },
             if has_vids { None } else { Some(0) },
         ];
         let mut at = HEADER_LEN as u64;
@@ -319,7 +322,11 @@ impl HccBvh {
                     .collect(),
             )
         };
-        let ids = IdMap::parse(sec(8), triangle_count)?;
+        let ids = if tree_order {
+            None
+        } else {
+            Some(IdMap::parse(sec(8), triangle_count)?)
+        };
         let vertex_ids = if has_vids {
             Some(VertexIds::parse(sec(9), n_verts)?)
         } else {

@@ -220,7 +220,10 @@ impl IdMap {
     }
 
     /// Proves that `π` is a permutation of `0..len` and that `π⁻¹` finds
-    /// every id (O(`len · SHORTCUT`)).
+    /// every id, in O(`len`): each cycle is walked once, checking that
+    /// every mark's back pointer is the element `SHORTCUT` steps before it,
+    /// that marks are at most `SHORTCUT` apart along a marked cycle, and
+    /// that an unmarked cycle is short enough for `rank`'s walk.
     pub fn verify(&self) -> Result<(), &'static str> {
         let n = self.len();
         let mut seen = vec![false; n as usize];
@@ -230,14 +233,35 @@ impl IdMap {
                 return Err("the triangle ids are not a permutation");
             }
         }
-        for k in 0..self.back.len() {
-            if self.back.get(k) >= n {
-                return Err("a triangle id shortcut is out of range");
+        let t = SHORTCUT as usize;
+        let mut visited = vec![false; n as usize];
+        let mut cycle = Vec::new();
+        for start in 0..n {
+            if visited[start as usize] {
+                continue;
             }
-        }
-        for id in 0..n {
-            if self.rank(id).is_none_or(|r| self.id(r) != id) {
-                return Err("the triangle id shortcuts do not find an id");
+            cycle.clear();
+            let mut x = start;
+            while !std::mem::replace(&mut visited[x as usize], true) {
+                cycle.push(x);
+                x = self.id(x);
+            }
+            let len = cycle.len();
+            let marks: Vec<usize> = (0..len).filter(|&j| self.marked(cycle[j])).collect();
+            if marks.is_empty() {
+                if len > 2 * t + 3 {
+                    return Err("a long cycle of triangle ids has no shortcut");
+                }
+                continue;
+            }
+            for (k, &j) in marks.iter().enumerate() {
+                let next = marks.get(k + 1).copied().unwrap_or(marks[0] + len);
+                if next - j > t {
+                    return Err("the triangle id shortcuts are too far apart");
+                }
+                if self.back_of(cycle[j]) != cycle[(j + len - t % len) % len] {
+                    return Err("a triangle id shortcut points to the wrong place");
+                }
             }
         }
         Ok(())
@@ -396,6 +420,125 @@ mod tests {
             }
         }
         assert!(rejected > bytes.len() * 4, "{rejected} rejected");
+    }
+
+    /// `rank` finds every id: what `verify` has to guarantee.
+    fn sound(m: &IdMap) -> bool {
+        (0..m.len()).all(|id| m.rank(id).is_some_and(|r| m.id(r) == id))
+    }
+
+    /// A map from raw parts, bypassing `new`'s construction.
+    fn raw(ids: &[u32], back: &[u32], marked: &[u32]) -> IdMap {
+        let mut marks = vec![0u64; ids.len().div_ceil(64)];
+        for &x in marked {
+            marks[x as usize / 64] |= 1 << (x % 64);
+        }
+        let mark_rank = running_counts(&marks);
+        IdMap {
+            fwd: ForVec::new(ids),
+            back: ForVec::new(back),
+            marks,
+            mark_rank,
+        }
+    }
+
+    #[test]
+    fn verify_rejects_bad_shortcuts_and_permutations() {
+        let n = 100u32;
+        // One cycle 0 → 1 → … → 99 → 0: marks every SHORTCUT-th element,
+        // each pointing SHORTCUT steps back.
+        let ids: Vec<u32> = (0..n).map(|i| (i + 1) % n).collect();
+        let good = IdMap::new(&ids);
+        good.verify().unwrap();
+        assert!(sound(&good));
+        let t = SHORTCUT;
+        let marked: Vec<u32> = (0..n).step_by(t as usize).collect();
+        let back: Vec<u32> = marked.iter().map(|&x| (x + n - t) % n).collect();
+        assert_eq!(raw(&ids, &back, &marked), good);
+
+        // A back pointer one step off.
+        let mut off = back.clone();
+        off[3] = (off[3] + 1) % n;
+        assert!(raw(&ids, &off, &marked).verify().is_err());
+        // A mark dropped (its back pointer with it): a gap of 2·SHORTCUT.
+        let (mut m2, mut b2) = (marked.clone(), back.clone());
+        m2.remove(5);
+        b2.remove(5);
+        let gap = raw(&ids, &b2, &m2);
+        assert!(gap.verify().is_err());
+        // No marks at all on a long cycle: `rank` gives up, `verify` says so.
+        let bare = raw(&ids, &[], &[]);
+        assert!(!sound(&bare));
+        assert!(bare.verify().is_err());
+        // Not a permutation: two ranks map to one id.
+        let mut dup = ids.clone();
+        dup[7] = dup[8];
+        assert!(raw(&dup, &back, &marked).verify().is_err());
+        // Out of range.
+        let mut far = ids.clone();
+        far[7] = n;
+        assert!(raw(&far, &back, &marked).verify().is_err());
+
+        // A short cycle needs no marks; the longest `rank` walks is accepted.
+        let short = 2 * SHORTCUT + 3;
+        let ids: Vec<u32> = (0..short).map(|i| (i + 1) % short).collect();
+        let m = raw(&ids, &[], &[]);
+        assert!(sound(&m));
+        m.verify().unwrap();
+    }
+
+    #[test]
+    fn verify_accepts_exactly_what_rank_can_walk() {
+        // Random damage to π, the back pointers and the marks: whatever
+        // `verify` accepts, `rank` must invert (the property the old
+        // O(len · SHORTCUT) check tested directly).
+        let mut s = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        };
+        let (mut accepted, mut rejected) = (0, 0);
+        for round in 0..400u64 {
+            let n = 1 + (next() % 120) as u32;
+            let ids = perm(n, round + 1);
+            let m = IdMap::new(&ids);
+            assert!(m.verify().is_ok() && sound(&m));
+            let mut back: Vec<u32> = (0..m.back.len()).map(|k| m.back.get(k)).collect();
+            let mut marked: Vec<u32> = (0..n).filter(|&x| m.marked(x)).collect();
+            let mut fwd = ids.clone();
+            match next() % 4 {
+                0 if !back.is_empty() => {
+                    let k = (next() % back.len() as u64) as usize;
+                    back[k] = (next() % u64::from(n)) as u32;
+                }
+                1 if !marked.is_empty() => {
+                    let k = (next() % marked.len() as u64) as usize;
+                    marked.remove(k);
+                    back.remove(k);
+                }
+                2 => {
+                    let x = (next() % u64::from(n)) as u32;
+                    if let Err(k) = marked.binary_search(&x) {
+                        marked.insert(k, x);
+                        back.insert(k, (next() % u64::from(n)) as u32);
+                    }
+                }
+                _ => {
+                    let (a, b) = (next() % u64::from(n), next() % u64::from(n));
+                    fwd.swap(a as usize, b as usize);
+                }
+            }
+            let bad = raw(&fwd, &back, &marked);
+            if bad.verify().is_ok() {
+                accepted += 1;
+                assert!(sound(&bad), "round {round}: verify accepted an unsound map");
+            } else {
+                rejected += 1;
+            }
+        }
+        assert!(accepted > 0 && rejected > 0, "{accepted} / {rejected}");
     }
 
     #[test]

@@ -86,6 +86,17 @@
 //! rank/select over a bit per node word (part `leaf-ranks`); a
 //! multi-triangle leaf's block holds its first slot in its tree.
 //!
+//! **Tree order** ([`HccOptions::triangle_ids`] off,
+//! [`HccOptions::tree_order`]): the map is not stored and a triangle's id
+//! *is* its rank. The cursor, `triangle(id)`, `triangle_vertices(id)` and
+//! [`HccBvh::decoded_mesh`] then all number triangles in storage order, so
+//! the shape is self-consistent (the parry shape, the renderer and the sims
+//! only ever pass back ids a leaf reported) but its ids are not the input's:
+//! a caller that keeps per-triangle data of its own must reorder it by the
+//! decoded mesh. Ties in queries still go to the smaller id, now the
+//! smaller rank, so an answer can differ from another codec's only in
+//! which of two equally near triangles it names.
+//!
 //! With [`HccOptions::vertex_ids`] (the default) each stored vertex keeps
 //! its input index (part `vertex-ids`, about 1 byte a triangle) and the
 //! input vertices no triangle uses are kept aside, so that
@@ -180,6 +191,14 @@ pub struct HccOptions {
     /// vertices (part `vertex-ids`), so that the decoded mesh is the
     /// input's, vertex numbering included (default: on).
     pub vertex_ids: bool,
+    /// Keep the input's triangle ids (part `ids`, about 2.5 bytes a
+    /// triangle; default: on). Off, the triangles are numbered in the
+    /// tree's order (storage rank: leaves in node-word order, low-level
+    /// tree by low-level tree) and no map is stored: leaves,
+    /// [`NodeCursor::triangle`](crate::cursor::NodeCursor::triangle) and
+    /// [`HccBvh::decoded_mesh`] all use that numbering, so the decoded
+    /// mesh's triangles are the input's, permuted.
+    pub triangle_ids: bool,
 }
 
 impl Default for HccOptions {
@@ -187,12 +206,29 @@ impl Default for HccOptions {
         Self {
             vertex_bits: None,
             vertex_ids: true,
+            triangle_ids: true,
+        }
+    }
+}
+
+impl HccOptions {
+    /// Everything in the tree's order: neither triangle nor vertex ids
+    /// kept (the smallest form). The decoded mesh is the input's triangles
+    /// in storage order, over the low-level trees' vertex arrays one after
+    /// the other (shared vertices repeated).
+    pub fn tree_order(vertex_bits: Option<u32>) -> Self {
+        Self {
+            vertex_bits,
+            vertex_ids: false,
+            triangle_ids: false,
         }
     }
 }
 
 impl HccBvh {
-    /// The mesh as stored, triangle `k` being input triangle `k`. With
+    /// The mesh as stored, triangle `k` being the triangle the cursor
+    /// reports as id `k`: input triangle `k`, or the triangle of storage
+    /// rank `k` in tree order ([`HccOptions::triangle_ids`] off). With
     /// vertex ids kept, its vertices are the input's (decoded positions);
     /// without, the low-level trees' arrays one after the other (shared
     /// vertices repeated).
@@ -208,7 +244,7 @@ impl HccBvh {
             for pos in h.node_start..node_end {
                 if node::node_type(self.nodes[pos as usize]) == node::TYPE_LEAF {
                     self.leaf_triangles(tree, pos, |rank, c| {
-                        let id = self.ids.id(rank) as usize;
+                        let id = self.id_of(rank) as usize;
                         triangles[id] = c.map(|l| self.vertex_index(h.vertex_start + l));
                     });
                 }
@@ -276,6 +312,12 @@ impl HccBvh {
         self.vertices.quantized().map_or([0.0; 3], |q| q.step)
     }
 
+    /// Whether triangles keep their input ids (otherwise they are numbered
+    /// in storage order; see [`HccOptions::triangle_ids`]).
+    pub fn has_triangle_ids(&self) -> bool {
+        self.ids.is_some()
+    }
+
     /// Whether each stored vertex keeps its input index.
     pub fn has_vertex_ids(&self) -> bool {
         self.vertex_ids.is_some()
@@ -320,7 +362,9 @@ impl ByteSize for HccBvh {
             "leaf-ranks",
             self.leaf_bits.len() * 8 + self.leaf_rank.len() * 4,
         ));
-        parts.push(("ids", self.ids.bytes()));
+        if let Some(ids) = &self.ids {
+            parts.push(("ids", ids.bytes()));
+        }
         if let Some(v) = &self.vertex_ids {
             parts.push(("vertex-ids", v.bytes()));
         }

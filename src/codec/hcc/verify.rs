@@ -28,16 +28,18 @@ impl HccBvh {
     /// index, triangle block and slot is in range; every node is reached
     /// once; every vertex and decoded box is finite and every box inside
     /// its parent's; the leaves hold `triangle_count` triangles, each rank
-    /// once; the id map is a permutation whose inverse finds every id; the
+    /// once; the id map (when kept) is a permutation whose inverse finds every id; the
     /// vertex ids cover the input vertices, copies decoding alike.
     pub fn verify(&self) -> Result<(), HccError> {
         let nt = self.headers.len();
         let stored = self.stats.tree_vertices;
         self.verify_vertices()?;
-        if self.ids.len() != self.triangle_count {
-            return Err(bad(0, 0, "the id map does not hold the triangle count"));
+        if let Some(ids) = &self.ids {
+            if ids.len() != self.triangle_count {
+                return Err(bad(0, 0, "the id map does not hold the triangle count"));
+            }
+            ids.verify().map_err(|what| bad(0, 0, what))?;
         }
-        self.ids.verify().map_err(|what| bad(0, 0, what))?;
         if nt == 0 {
             return if self.high.is_empty()
                 && self.nodes.is_empty()
