@@ -19,16 +19,8 @@ use cbvh::scene::Kind;
 use cbvh::sim::droptest::{Placement, place};
 use parry3d::math::{Pose, Rotation, Vector};
 
-fn arg_f32(name: &str, default: f32) -> f32 {
-    let args: Vec<String> = std::env::args().collect();
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|k| args.get(k + 1))
-        .map(|v| v.parse().unwrap_or_else(|_| panic!("{name}: a number")))
-        .unwrap_or(default)
-}
-
-fn arg(name: &str, default: usize) -> usize {
+/// The value after `name` on the command line, or `default`.
+fn arg<T: std::str::FromStr>(name: &str, default: T) -> T {
     let args: Vec<String> = std::env::args().collect();
     args.iter()
         .position(|a| a == name)
@@ -77,10 +69,10 @@ fn contacts(pos12: &Pose, turbine: &CbvhShape, statue: &CbvhShape, prediction: f
 }
 
 fn main() {
-    let statue_tris = arg("--statue-tris", 6_000_000);
-    let turbine_tris = arg("--turbine-tris", 600_000);
-    let reps = arg("--reps", 15);
-    let threads = arg("--threads", 1);
+    let statue_tris: usize = arg("--statue-tris", 6_000_000);
+    let turbine_tris: usize = arg("--turbine-tris", 600_000);
+    let reps: usize = arg("--reps", 15);
+    let threads: usize = arg("--threads", 1);
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build_global()
@@ -114,7 +106,7 @@ fn main() {
     );
     // rapier's default prediction distance (0.02 × the length unit); the
     // sim bounds it by the motion since the last step.
-    let prediction = arg_f32("--prediction", 0.02);
+    let prediction = arg("--prediction", 0.02f32);
     // The statue body's pose relative to the fixed turbine (both colliders
     // sit at their bodies' origins, so this is pos12).
     let p = pose_arg();
