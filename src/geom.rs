@@ -3,7 +3,7 @@
 //! Vectors are glam's (the same glam that parry3d uses through `glamx`), so
 //! the parry integration converts nothing. [`Aabb`] uses `Vec3A` for SIMD.
 
-use glam::{Mat3A, Vec3, Vec3A};
+use glam::{BVec3A, Mat3A, Vec3, Vec3A};
 
 /// An axis-aligned bounding box. An *empty* box has `min > max`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -249,6 +249,9 @@ pub struct Ray {
     pub dir: Vec3A,
     /// `1 / dir`, component-wise (infinite where a component is 0).
     pub inv_dir: Vec3A,
+    /// Where `inv_dir` is negative (`-0.0` directions included): on those
+    /// axes a box's maximum is the plane the ray enters by.
+    neg: BVec3A,
     /// Axis permutation of the watertight test: `kz` is the direction's
     /// dominant axis.
     k: [usize; 3],
@@ -278,6 +281,7 @@ impl Ray {
             origin,
             dir,
             inv_dir: dir.recip(),
+            neg: dir.recip().cmplt(Vec3A::ZERO),
             k: [kx, ky, kz],
             shear,
         }
@@ -289,26 +293,44 @@ impl Ray {
         self.origin + self.dir * t
     }
 
+    /// Per axis, whether the ray enters a box by its maximum plane (its
+    /// reciprocal direction is negative, `-0.0` directions included).
+    #[inline]
+    pub fn enters_by_max(&self) -> [bool; 3] {
+        [self.neg.test(0), self.neg.test(1), self.neg.test(2)]
+    }
+
     /// Slab test: the entry parameter if the ray meets `b` within
-    /// `[0, t_max]`, else `None`. Robust to zero direction components
-    /// (NaN from `0 * inf` is treated as "no constraint"), and conservative
-    /// under rounding (Ize, "Robust BVH ray traversal", JCGT 2013): the exit
-    /// distance is enlarged by [`SLAB_EXIT_SCALE`], so a box is never
-    /// rejected for a point inside it that the triangle test hits, even when
-    /// the box is the triangle's own tight box. Without it, two trees with
-    /// the same triangles but different boxes (plain's exact ones, RACBVH's
-    /// quantized ones) could disagree on grazing and tied hits.
+    /// `[0, t_max]`, else `None`.
+    ///
+    /// Each axis gives the distance to the plane the ray enters by (the
+    /// box's minimum, or its maximum where the direction is negative) and
+    /// to the one it leaves by; the entry is the largest of the first, the
+    /// exit the smallest of the second. A zero direction component gives
+    /// ±∞ for a plane off the origin, which rejects or does not constrain
+    /// as it should, and NaN (`0 · ∞`) for a plane through the origin: the
+    /// ray runs in the box's face, which does not constrain either, and the
+    /// folds skip NaN. (Sorting the two distances with `min`/`max` instead,
+    /// as many tracers do, turns a NaN near plane into `+∞` and misses rays
+    /// that run in a box's face, which far from the origin, where
+    /// coordinates are coarse, is common.)
+    ///
+    /// Conservative under rounding (Ize, "Robust BVH ray traversal", JCGT
+    /// 2013): the exit distance is enlarged by [`SLAB_EXIT_SCALE`], so a box
+    /// is never rejected for a point inside it that the triangle test hits,
+    /// even when the box is the triangle's own tight box. Without it, two
+    /// trees with the same triangles but different boxes (plain's exact
+    /// ones, RACBVH's quantized ones) could disagree on grazing and tied
+    /// hits.
     #[inline]
     pub fn intersect_aabb(&self, b: &Aabb, t_max: f32) -> Option<f32> {
-        let t1 = (b.min - self.origin) * self.inv_dir;
-        let t2 = (b.max - self.origin) * self.inv_dir;
-        // `min`/`max` of glam propagate the non-NaN operand on x86 SSE
-        // (minps returns the second operand when either is NaN), so order
-        // the operands so that a NaN slab yields ±inf, i.e. no constraint.
-        let tmin = t1.min(t2);
-        let tmax = t1.max(t2);
-        let t_enter = tmin.x.max(tmin.y).max(tmin.z).max(0.0);
-        let t_exit = tmax.x.min(tmax.y).min(tmax.z).min(t_max) * SLAB_EXIT_SCALE;
+        let near = Vec3A::select(self.neg, b.max, b.min);
+        let far = Vec3A::select(self.neg, b.min, b.max);
+        let tn = (near - self.origin) * self.inv_dir;
+        let tf = (far - self.origin) * self.inv_dir;
+        // `f32::max`/`min` return the other operand when one is NaN.
+        let t_enter = tn.x.max(tn.y).max(tn.z).max(0.0);
+        let t_exit = tf.x.min(tf.y).min(tf.z).min(t_max) * SLAB_EXIT_SCALE;
         if t_enter <= t_exit {
             Some(t_enter)
         } else {
@@ -467,6 +489,42 @@ mod tests {
         let miss = Ray::new(Vec3A::new(2.0, 0.5, -1.0), Vec3A::new(0.0, 0.0, 1.0));
         assert_eq!(miss.intersect_aabb(&b, f32::INFINITY), None);
         assert_eq!(r.intersect_aabb(&b, 0.5), None);
+    }
+
+    /// A ray running in a face of the box (a zero direction component and
+    /// the origin on that face's plane) meets the box, whichever face and
+    /// whichever sign of zero: the case that sorting the two plane
+    /// distances with `min`/`max` gets wrong on the minimum face.
+    #[test]
+    fn slab_test_accepts_rays_in_a_face() {
+        let b = Aabb::from_arrays([1.0, 2.0, 3.0], [2.0, 4.0, 6.0]);
+        for axis in 0..3 {
+            for on_max in [false, true] {
+                for zero in [0.0f32, -0.0] {
+                    for along in [1.0f32, -1.0] {
+                        // Along the next axis, from outside the box.
+                        let other = (axis + 1) % 3;
+                        let mut origin = b.center();
+                        origin[axis] = if on_max { b.max[axis] } else { b.min[axis] };
+                        origin[other] = if along > 0.0 {
+                            b.min[other] - 1.0
+                        } else {
+                            b.max[other] + 1.0
+                        };
+                        let mut dir = Vec3A::ZERO;
+                        dir[axis] = zero;
+                        dir[other] = along;
+                        let r = Ray::new(origin, dir);
+                        assert_eq!(r.intersect_aabb(&b, f32::INFINITY), Some(1.0), "{r:?}");
+                        // Just off the face, outside: a miss.
+                        let mut off = origin;
+                        off[axis] += if on_max { 0.5 } else { -0.5 };
+                        let r = Ray::new(off, dir);
+                        assert_eq!(r.intersect_aabb(&b, f32::INFINITY), None, "{r:?}");
+                    }
+                }
+            }
+        }
     }
 
     #[test]

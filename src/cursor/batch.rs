@@ -5,9 +5,9 @@
 //! A batch holds up to [`MAX_CHILDREN`] boxes, lane `i` being the node's
 //! `i`-th child. Lanes at and past [`len`](ChildBoxes::len) are *padding*:
 //! they hold [`Aabb::EMPTY`] and every test masks them out, so they never
-//! hit whatever the query (an empty box alone is not enough: the slab test
-//! treats an inverted box as its mirror image, and an empty box overlaps a
-//! query that spans all of space).
+//! hit whatever the query (an empty box alone is not enough: an empty box
+//! overlaps a query that spans all of space, and a ray whose direction is
+//! NaN on every axis meets any box).
 //!
 //! # Two forms
 //! More than two boxes are kept in structure-of-arrays form, per axis the
@@ -172,6 +172,10 @@ fn live(n: usize, k: usize) -> BVec4A {
 fn slab_rows(r: &Rows, n: usize, ray: &Ray, t_max: f32) -> (u32, [f32; MAX_CHILDREN]) {
     let o = ray.origin.to_array().map(Vec4::splat);
     let inv = ray.inv_dir.to_array().map(Vec4::splat);
+    // Per axis, the rows of the planes the ray enters and leaves by.
+    let by_max = ray.enters_by_max();
+    let near = axes(|a| if by_max[a] { &r.max[a] } else { &r.min[a] });
+    let far = axes(|a| if by_max[a] { &r.min[a] } else { &r.max[a] });
     let nan_limit = t_max.is_nan();
     let limit = Vec4::splat(if nan_limit { f32::INFINITY } else { t_max });
     let mut t = [Vec4::INFINITY; CHUNKS];
@@ -181,15 +185,13 @@ fn slab_rows(r: &Rows, n: usize, ray: &Ray, t_max: f32) -> (u32, [f32; MAX_CHILD
         let mut exit = limit;
         let mut bounded = BVec4A::splat(false);
         for a in 0..3 {
-            let t1 = (r.min[a][k] - o[a]) * inv[a];
-            let t2 = (r.max[a][k] - o[a]) * inv[a];
-            // As `Vec3A::min`/`max` in the single-box test; a NaN slab
-            // gives NaN here, which the folds pass over.
-            let far = t1.max(t2);
-            enter = t1.min(t2).max(enter);
-            exit = far.min(exit);
+            // `maxps`/`minps` return the second operand when either is
+            // NaN: a NaN plane distance (a ray in the plane) is skipped.
+            let tf = (far[a][k] - o[a]) * inv[a];
+            enter = ((near[a][k] - o[a]) * inv[a]).max(enter);
+            exit = tf.min(exit);
             if nan_limit {
-                bounded |= far.cmpeq(far);
+                bounded |= tf.cmpeq(tf);
             }
         }
         let mut exit = exit * SLAB_EXIT_SCALE;

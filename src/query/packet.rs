@@ -110,11 +110,16 @@ impl Lanes {
             let mut tmin = [0.0f32; 3];
             let mut tmax = [0.0f32; 3];
             for a in 0..3 {
-                let t1 = (bmin[a] - self.o[a][i]) * self.inv[a][i];
-                let t2 = (bmax[a] - self.o[a][i]) * self.inv[a][i];
-                // `minps`/`maxps` semantics, as glam's `Vec3A::min`/`max`.
-                tmin[a] = if t1 < t2 { t1 } else { t2 };
-                tmax[a] = if t1 > t2 { t1 } else { t2 };
+                let inv = self.inv[a][i];
+                // The planes the ray enters and leaves by, as the
+                // single-box test chooses them.
+                let (near, far) = if inv < 0.0 {
+                    (bmax[a], bmin[a])
+                } else {
+                    (bmin[a], bmax[a])
+                };
+                tmin[a] = (near - self.o[a][i]) * inv;
+                tmax[a] = (far - self.o[a][i]) * inv;
             }
             let enter = tmin[0].max(tmin[1]).max(tmin[2]).max(0.0);
             let exit = tmax[0].min(tmax[1]).min(tmax[2]).min(best_t[i]) * SLAB_EXIT_SCALE;
@@ -138,12 +143,11 @@ impl Lanes {
         for a in 0..3 {
             let (o, inv) = (&self.o[a], &self.inv[a]);
             for i in 0..MAX_PACKET {
-                let t1 = (bmin[a] - o[i]) * inv[i];
-                let t2 = (bmax[a] - o[i]) * inv[i];
-                let tmin = if t1 < t2 { t1 } else { t2 };
-                let tmax = if t1 > t2 { t1 } else { t2 };
-                enter[i] = tmin.max(enter[i]);
-                exit[i] = tmax.min(exit[i]);
+                let by_max = inv[i] < 0.0;
+                let near = if by_max { bmax[a] } else { bmin[a] };
+                let far = if by_max { bmin[a] } else { bmax[a] };
+                enter[i] = ((near - o[i]) * inv[i]).max(enter[i]);
+                exit[i] = ((far - o[i]) * inv[i]).min(exit[i]);
             }
         }
         let mut ok = [0u8; MAX_PACKET];
