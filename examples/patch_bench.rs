@@ -6,7 +6,10 @@
 //! of the pair are timed: the statue as tree A and as tree B.
 //!
 //! `cargo run --release --example patch_bench -- [--statue-tris N]
-//! [--turbine-tris M] [--pose tx,ty,tz,qx,qy,qz,qw] [--prediction P] [--reps R] [--threads T]`
+//! [--turbine-tris M] [--codec C] [--pose tx,ty,tz,qx,qy,qz,qw] [--prediction P] [--reps R]
+//! [--threads T]`; `--codec` names the codec of both shapes (`plain` by
+//! default, with the registry's default options, e.g. RACBVH's 64 MiB cluster
+//! cache).
 
 use std::time::Instant;
 
@@ -25,7 +28,10 @@ fn arg<T: std::str::FromStr>(name: &str, default: T) -> T {
     args.iter()
         .position(|a| a == name)
         .and_then(|k| args.get(k + 1))
-        .map(|v| v.parse().unwrap_or_else(|_| panic!("{name}: a number")))
+        .map(|v| {
+            v.parse()
+                .unwrap_or_else(|_| panic!("{name}: cannot parse {v:?}"))
+        })
         .unwrap_or(default)
 }
 
@@ -87,14 +93,9 @@ fn main() {
     }
     // Placed as the sim places it (its defaults).
     place(&mut statue, &turbine, &Placement::default());
+    let codec: CodecKind = arg("--codec", CodecKind::Plain);
     let build = |m| {
-        CbvhShape::build(
-            m,
-            &BuildOptions::default(),
-            CodecKind::Plain,
-            &AnyOptions::default(),
-        )
-        .expect("plain shape")
+        CbvhShape::build(m, &BuildOptions::default(), codec, &AnyOptions::default()).expect("shape")
     };
     let t = Instant::now();
     let (s_statue, s_turbine) = (build(&statue), build(&turbine));
