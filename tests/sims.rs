@@ -247,6 +247,7 @@ fn sims_check_every_flag_before_the_first_run() {
         "--plot /nonexistent-dir/x.png",
     );
     reject(&["--json", "/nonexistent-dir/x.json"], "cannot write there");
+    reject(&["--subdivide", "7"], "--subdivide 7 multiplies");
     // The documented X,Z form, with a negative value, runs.
     let json = temp("offset.json");
     let args: Vec<&str> = small
@@ -268,4 +269,35 @@ fn sims_check_every_flag_before_the_first_run() {
     std::fs::remove_file(&json).ok();
     // plain in both contact modes.
     assert_eq!(v["runs"].as_array().unwrap().len(), 2);
+    let robot_tris = v["scene"]["dropped_triangles"].as_u64().unwrap();
+    // --subdivide 2 drops the same robot with 16 times the triangles.
+    let args: Vec<&str> = small
+        .iter()
+        .copied()
+        .chain([
+            "--subdivide",
+            "2",
+            "--shapes",
+            "plain-patches",
+            "--json",
+            json.to_str().unwrap(),
+        ])
+        .collect();
+    let (ok, stderr) = run(bin, &args);
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    std::fs::remove_file(&json).ok();
+    assert_eq!(
+        v["scene"]["dropped_triangles"].as_u64().unwrap(),
+        16 * robot_tris
+    );
+    assert!(
+        v["scene"]["dropped"]
+            .as_str()
+            .unwrap()
+            .ends_with("subdivided 2×"),
+        "{}",
+        v["scene"]
+    );
 }

@@ -4,7 +4,8 @@
 //! `[u32; 3]` triangles. Files are loaded by extension with [`load`]
 //! (OFF, PLY ASCII/binary of either endianness, OBJ, STL ASCII/binary with
 //! coincident vertices welded) and written with [`save`] (binary PLY, OBJ).
-//! Polygons are fan-triangulated on input.
+//! Polygons are fan-triangulated on input. [`Mesh::subdivided`] splits every
+//! triangle into four, to test a scan at a higher resolution.
 //!
 //! Bad input never panics: every loader returns a [`MeshError`] that names
 //! the file, the place (line for text formats, byte offset for binary ones)
@@ -13,6 +14,7 @@
 mod error;
 mod io;
 mod stats;
+mod subdivide;
 
 pub use error::{MeshError, Place};
 pub use io::{
