@@ -1,0 +1,346 @@
+//! What the o-HCCMesh encoder and decoder compute alike, so that they stay
+//! symmetric: the contexts, the template layout of a low-level tree (the
+//! i-HCCMesh's own, rebuilt from template symbols), the corner cache of the
+//! streaming vertex indices, the edge look-up for parallelogram prediction
+//! and the predictor itself.
+
+use super::super::node::{
+    INDEX_BITS, MAX_TREE_INTERCONNECTIONS, MAX_TREE_NODES, MAX_TREE_VERTICES, TYPE_INNER,
+    TYPE_LEAF, TYPE_TEMPLATE_LEAF,
+};
+use super::super::template::{MAX_HEIGHT, MAX_TEMPLATE_NODES, TEMPLATE_COUNT, TEMPLATES};
+
+/// Context of the template symbols.
+pub const CTX_TEMPLATE: usize = 0;
+/// Contexts of the corner symbols, by corner slot (0, 1, 2).
+pub const CTX_CORNER: usize = 1;
+/// Contexts of parallelogram residuals, by axis.
+pub const CTX_PARA: usize = 4;
+/// Contexts of residuals against a neighbour (one or two corners known,
+/// no parallelogram), by axis.
+pub const CTX_NEAR: usize = 7;
+/// Contexts of residuals against the tree's last decoded vertex (no corner
+/// of the triangle known yet), by axis.
+pub const CTX_FAR: usize = 10;
+/// Number of contexts.
+pub const CONTEXTS: usize = 13;
+/// Names of the contexts' groups, for the figures by part.
+pub const fn part_of(ctx: usize) -> usize {
+    match ctx {
+        CTX_TEMPLATE => 0,
+        1..=3 => 1,
+        _ => 2,
+    }
+}
+
+/// Entries of the corner cache (most recently used vertices first).
+pub const CACHE: usize = 16;
+/// Corner symbol of a vertex seen for the first time (the next local id).
+pub const SYM_NEW: u32 = 0;
+/// The largest corner symbol: a vertex outside the cache, sent as its
+/// distance below the next id.
+pub const MAX_CORNER_SYM: u32 = CACHE as u32 + MAX_TREE_VERTICES as u32;
+/// Bits of a template symbol: the template id (5 bits) and, per node at
+/// template depth 3 without children in the template (at most 8), whether
+/// it is a template leaf.
+pub const MAX_TEMPLATE_SYM: u32 = (1 << 13) - 1;
+/// Incident triangles a vertex's list is searched for an edge, at most
+/// (the same bound both sides, so that the search is linear in the tree).
+pub const EDGE_SEARCH: usize = 16;
+
+/// A malformed symbol or structure (the decoder turns it into an error
+/// naming the tree).
+pub type Bad = &'static str;
+
+/// A low-level tree's node positions as templates are allocated: the
+/// i-HCCMesh's layout (`encode.rs`: templates breadth-first, the two child
+/// templates of a template leaf back to back, template leaves taken from
+/// a stack), rebuilt from template symbols.
+#[derive(Default)]
+pub struct Layout {
+    /// Node type of each position.
+    pub types: Vec<u32>,
+    /// Positions of each inner node's children (unused for leaves).
+    pub kids: Vec<[u32; 2]>,
+    /// Inter-connection index of each template leaf (`u32::MAX` otherwise).
+    pub ic_of: Vec<u32>,
+    /// Template leaves whose child templates are still to come.
+    pub pending: Vec<u32>,
+    /// Per inter-connection: left template, right template, left start.
+    pub ics: Vec<(u8, u8, u32)>,
+    /// Template id of the root template.
+    pub root_template: u8,
+}
+
+impl Layout {
+    /// Clears the layout for the next tree.
+    pub fn clear(&mut self) {
+        self.types.clear();
+        self.kids.clear();
+        self.ic_of.clear();
+        self.pending.clear();
+        self.ics.clear();
+    }
+
+    /// Lays out the template of symbol `sym` at the end; returns its id and
+    /// first position.
+    pub fn alloc(&mut self, sym: u32) -> Result<(u8, u32), Bad> {
+        let id = (sym & 31) as usize;
+        if id >= TEMPLATE_COUNT || sym > MAX_TEMPLATE_SYM {
+            return Err("a template symbol is out of range");
+        }
+        let t = TEMPLATES[id];
+        let start = self.types.len() as u32;
+        if self.types.len() + t.nodes as usize > MAX_TREE_NODES {
+            return Err("a low-level tree has more nodes than positions address");
+        }
+        let mut tl_bits = sym >> 5;
+        let mut depth = [0u8; MAX_TEMPLATE_NODES];
+        for i in 0..t.nodes as u32 {
+            if t.has_children(i) {
+                let c = t.children(i);
+                depth[c as usize] = depth[i as usize] + 1;
+                depth[c as usize + 1] = depth[i as usize] + 1;
+                self.types.push(TYPE_INNER);
+                self.kids.push([start + c, start + c + 1]);
+                self.ic_of.push(u32::MAX);
+            } else {
+                let deepest = depth[i as usize] as usize == MAX_HEIGHT - 1;
+                let ty = if deepest && tl_bits & 1 == 1 {
+                    TYPE_TEMPLATE_LEAF
+                } else {
+                    TYPE_LEAF
+                };
+                if deepest {
+                    tl_bits >>= 1;
+                }
+                if ty == TYPE_TEMPLATE_LEAF {
+                    self.pending.push(start + i);
+                }
+                self.types.push(ty);
+                self.kids.push([0; 2]);
+                self.ic_of.push(u32::MAX);
+            }
+        }
+        if tl_bits != 0 {
+            return Err("a template symbol marks nodes the template does not have");
+        }
+        Ok((id as u8, start))
+    }
+
+    /// Starts a tree with the root template's symbol.
+    pub fn root(&mut self, sym: u32) -> Result<(), Bad> {
+        self.clear();
+        let (id, _) = self.alloc(sym)?;
+        self.root_template = id;
+        Ok(())
+    }
+
+    /// Gives the next template leaf its two child templates (symbols
+    /// `left`, `right`); its inter-connection is the next one.
+    pub fn expand(&mut self, at: u32, left: u32, right: u32) -> Result<(), Bad> {
+        if self.ics.len() >= MAX_TREE_INTERCONNECTIONS {
+            return Err("a low-level tree has more inter-connections than 9 bits index");
+        }
+        let (lt, ls) = self.alloc(left)?;
+        let (rt, rs) = self.alloc(right)?;
+        self.ic_of[at as usize] = self.ics.len() as u32;
+        self.kids[at as usize] = [ls, rs];
+        self.ics.push((lt, rt, ls));
+        Ok(())
+    }
+}
+
+/// The template symbol of the template `id` laid out from position
+/// `start`, whose nodes have types `types` (by position).
+pub fn template_symbol(id: u8, start: usize, types: &[u32]) -> Option<u32> {
+    let t = TEMPLATES.get(id as usize)?;
+    let mut depth = [0u8; MAX_TEMPLATE_NODES];
+    let (mut bits, mut n) = (0u32, 0);
+    for i in 0..t.nodes as u32 {
+        if t.has_children(i) {
+            let c = t.children(i) as usize;
+            depth[c] = depth[i as usize] + 1;
+            depth[c + 1] = depth[i as usize] + 1;
+        } else if depth[i as usize] as usize == MAX_HEIGHT - 1 {
+            if *types.get(start + i as usize)? == TYPE_TEMPLATE_LEAF {
+                bits |= 1 << n;
+            }
+            n += 1;
+        }
+    }
+    Some(u32::from(id) | bits << 5)
+}
+
+/// The most recently used vertices of the tree, most recent first.
+pub struct CornerCache {
+    slots: [u16; CACHE],
+    len: usize,
+}
+
+impl Default for CornerCache {
+    fn default() -> Self {
+        Self {
+            slots: [0; CACHE],
+            len: 0,
+        }
+    }
+}
+
+impl CornerCache {
+    /// Empties the cache (a new tree).
+    pub fn clear(&mut self) {
+        self.len = 0;
+    }
+
+    /// The symbol of corner `v` when `next` vertices are known (encoder).
+    pub fn symbol(&self, v: u32, next: u32) -> u32 {
+        if v == next {
+            return SYM_NEW;
+        }
+        match self.slots[..self.len]
+            .iter()
+            .position(|&s| u32::from(s) == v)
+        {
+            Some(r) => 1 + r as u32,
+            None => 1 + CACHE as u32 + (next - 1 - v),
+        }
+    }
+
+    /// The vertex of corner symbol `sym` when `next` vertices are known
+    /// (decoder): `next` itself for a new one.
+    #[inline(always)]
+    pub fn vertex(&self, sym: u32, next: u32) -> Result<u32, Bad> {
+        if sym == SYM_NEW {
+            Ok(next)
+        } else if sym <= CACHE as u32 {
+            match self.slots[..self.len].get(sym as usize - 1) {
+                Some(&s) => Ok(u32::from(s)),
+                None => Err("a corner names an empty cache slot"),
+            }
+        } else {
+            let back = sym - 1 - CACHE as u32;
+            next.checked_sub(1 + back)
+                .ok_or("a corner names a vertex before the tree's first")
+        }
+    }
+
+    /// Moves `v` to the front (inserting it if absent).
+    #[inline(always)]
+    pub fn touch(&mut self, v: u32) {
+        let at = self.slots[..self.len]
+            .iter()
+            .position(|&s| u32::from(s) == v)
+            .unwrap_or_else(|| {
+                self.len = (self.len + 1).min(CACHE);
+                self.len - 1
+            });
+        self.slots.copy_within(0..at, 1);
+        self.slots[0] = v as u16;
+    }
+}
+
+/// Triangles by vertex, most recent first, to find the triangle across an
+/// edge: `head[v]` is `v`'s last corner (triangle · 3 + slot), `prev` links
+/// each corner to the vertex's previous one.
+#[derive(Default)]
+pub struct Adjacency {
+    head: Vec<u32>,
+    prev: Vec<u32>,
+    tris: Vec<[u32; 3]>,
+}
+
+const NONE: u32 = u32::MAX;
+
+impl Adjacency {
+    /// Empties it for a new tree.
+    pub fn clear(&mut self) {
+        if self.head.len() < MAX_TREE_VERTICES {
+            self.head.resize(MAX_TREE_VERTICES, NONE);
+        }
+        self.prev.clear();
+        self.tris.clear();
+    }
+
+    /// Vertex `v` is new: no triangles yet.
+    #[inline(always)]
+    pub fn new_vertex(&mut self, v: u32) {
+        self.head[v as usize] = NONE;
+    }
+
+    /// Adds triangle `c` (every corner known).
+    #[inline(always)]
+    pub fn add(&mut self, c: [u32; 3]) {
+        let t = self.tris.len() as u32;
+        for (k, &v) in c.iter().enumerate() {
+            self.prev.push(self.head[v as usize]);
+            self.head[v as usize] = 3 * t + k as u32;
+        }
+        self.tris.push(c);
+    }
+
+    /// The third corner of the most recent triangle with edge `a`–`b`
+    /// (either orientation), among `a`'s last [`EDGE_SEARCH`] triangles.
+    #[inline(always)]
+    pub fn opposite(&self, a: u32, b: u32) -> Option<u32> {
+        let mut at = self.head[a as usize];
+        for _ in 0..EDGE_SEARCH {
+            if at == NONE {
+                return None;
+            }
+            let t = self.tris[(at / 3) as usize];
+            let k = (at % 3) as usize;
+            let (n1, n2) = (t[(k + 1) % 3], t[(k + 2) % 3]);
+            if n1 == b {
+                return Some(n2);
+            }
+            if n2 == b {
+                return Some(n1);
+            }
+            at = self.prev[at as usize];
+        }
+        None
+    }
+}
+
+/// The prediction of corner `k` of triangle `c` (grid coordinates) and the
+/// residual contexts' base (`CTX_PARA`, `CTX_NEAR` or `CTX_FAR`), from the
+/// corners already known (`known`), the tree's vertices `pos`, the
+/// adjacency and the tree's last decoded vertex.
+#[inline(always)]
+pub fn predict(
+    c: [u32; 3],
+    k: usize,
+    known: [bool; 3],
+    pos: &[[u32; 3]],
+    adj: &Adjacency,
+    last: [u32; 3],
+    max_q: u32,
+) -> ([u32; 3], usize) {
+    let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+    match (known[a], known[b]) {
+        (true, true) => {
+            let (pa, pb) = (pos[c[a] as usize], pos[c[b] as usize]);
+            match adj.opposite(c[a], c[b]) {
+                Some(o) => {
+                    let po = pos[o as usize];
+                    let p = std::array::from_fn(|x| {
+                        let v = i64::from(pa[x]) + i64::from(pb[x]) - i64::from(po[x]);
+                        v.clamp(0, i64::from(max_q)) as u32
+                    });
+                    (p, CTX_PARA)
+                }
+                None => (
+                    std::array::from_fn(|x| ((u64::from(pa[x]) + u64::from(pb[x])) / 2) as u32),
+                    CTX_NEAR,
+                ),
+            }
+        }
+        (true, false) => (pos[c[a] as usize], CTX_NEAR),
+        (false, true) => (pos[c[b] as usize], CTX_NEAR),
+        (false, false) => (last, CTX_FAR),
+    }
+}
+
+/// A local vertex index fits the 9-bit fields.
+pub const _INDEX_FITS: () = assert!(MAX_TREE_VERTICES <= 1 << INDEX_BITS);
