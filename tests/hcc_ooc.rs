@@ -52,15 +52,15 @@ fn options() -> Vec<OocOptions> {
 }
 
 /// o → i equals the direct i-HCCMesh: file bytes and figures.
-fn check_same(mesh: &Mesh, layout: Layout, o: &OocOptions) {
-    let bvh = tree(mesh, layout, 1);
+fn check_same(mesh: &Mesh, layout: Layout, leaf: usize, o: &OocOptions) {
+    let bvh = tree(mesh, layout, leaf);
     let direct = HccBvh::encode_with(&bvh, mesh, &o.hcc()).expect("encode");
     let (bytes, sizes) = direct.to_ooc().expect("to_ooc");
     assert_eq!(sizes.total() as usize, bytes.len());
     let back = HccBvh::from_ooc(&bytes).expect("from_ooc");
     assert!(
         back.to_bytes() == direct.to_bytes(),
-        "{o:?}, {layout:?}, {} triangles: o → i differs from the direct i-HCCMesh",
+        "{o:?}, {layout:?}, leaves of {leaf}, {} triangles: o → i differs from the direct i-HCCMesh",
         mesh.triangles.len()
     );
     assert_eq!(back.stats(), direct.stats(), "{o:?}: figures differ");
@@ -91,7 +91,67 @@ fn o_to_i_decode_equals_the_directly_built_i_hccmesh() {
         };
         for &layout in layouts {
             for o in options() {
-                check_same(mesh, layout, &o);
+                check_same(mesh, layout, 1, &o);
+            }
+        }
+        // Multi-triangle leaves (the i-HCCMesh's §7 extension).
+        for leaf in [4, 64] {
+            check_same(mesh, Layout::DepthFirst, leaf, &OocOptions::default());
+        }
+    }
+}
+
+/// The shared suite's edge meshes beyond `edge_case_meshes`: a flat grid,
+/// collinear corners, coordinates far from the origin, duplicates.
+fn more_edge_meshes() -> Vec<(&'static str, Mesh)> {
+    let mut out: Vec<(&'static str, Mesh)> = Vec::new();
+    let mut vertices = Vec::new();
+    let mut triangles = Vec::new();
+    for y in 0..8u32 {
+        for x in 0..8u32 {
+            vertices.push([x as f32, y as f32, 0.0]);
+        }
+    }
+    for y in 0..7u32 {
+        for x in 0..7u32 {
+            let i = y * 8 + x;
+            triangles.push([i, i + 1, i + 8]);
+            triangles.push([i + 1, i + 9, i + 8]);
+        }
+    }
+    out.push(("flat", Mesh::new(vertices, triangles)));
+    let line: Vec<[f32; 3]> = (0..30).map(|i| [i as f32 * 0.5, i as f32, 2.0]).collect();
+    let tris = (0..28u32).map(|i| [i, i + 1, i + 2]).collect();
+    out.push(("collinear", Mesh::new(line, tris)));
+    let mut far = soup(3, 200, 5.0);
+    for v in &mut far.vertices {
+        for c in v.iter_mut() {
+            *c += 1e6;
+        }
+    }
+    out.push(("offset 1e6", far));
+    let mut dup = soup(4, 60, 3.0);
+    let twice: Vec<[u32; 3]> = dup
+        .triangles
+        .iter()
+        .chain(&dup.triangles)
+        .copied()
+        .collect();
+    dup.triangles = twice;
+    out.push(("duplicates", dup));
+    for (i, m) in edge_case_meshes().into_iter().enumerate() {
+        out.push((["one", "same", "point", "huge"][i], m));
+    }
+    out
+}
+
+#[test]
+fn edge_meshes_round_trip_in_every_option_and_leaf_size() {
+    for (name, mesh) in more_edge_meshes() {
+        for (layout, leaf) in [(Layout::VanEmdeBoas, 1), (Layout::DepthFirst, 4)] {
+            for o in options() {
+                eprintln!("{name}, {layout:?}, leaves of {leaf}, {o:?}");
+                check_same(&mesh, layout, leaf, &o);
             }
         }
     }
@@ -111,15 +171,10 @@ fn every_template_and_tree_shape_survives_the_round_trip() {
 }
 
 #[test]
-fn f32_vertices_and_multi_triangle_leaves_are_errors() {
+fn f32_vertices_are_an_error() {
     let mesh = mesh_of(Kind::Statue, 2_000);
     let direct = HccBvh::encode(&tree(&mesh, Layout::DepthFirst, 1), &mesh).unwrap();
     assert_eq!(direct.to_ooc().unwrap_err(), OocError::NotQuantized);
-    let multi = tree(&mesh, Layout::DepthFirst, 4);
-    assert_eq!(
-        HccOocBvh::encode_with(&multi, &mesh, &OocOptions::default()).unwrap_err(),
-        OocError::MultiLeaves
-    );
 }
 
 /// A tiny deterministic generator for the damage tests.
@@ -158,15 +213,19 @@ fn reframe(b: &mut [u8]) {
 #[test]
 fn damaged_and_forged_files_give_errors_not_panics() {
     let mesh = mesh_of(Kind::Statue, 3_000);
-    let bvh = tree(&mesh, Layout::DepthFirst, 1);
-    for o in [
-        OocOptions::default(),
-        OocOptions {
-            triangle_ids: true,
-            vertex_ids: true,
-            ..OocOptions::default()
-        },
+    for (leaf, o) in [
+        (1, OocOptions::default()),
+        (
+            1,
+            OocOptions {
+                triangle_ids: true,
+                vertex_ids: true,
+                ..OocOptions::default()
+            },
+        ),
+        (8, OocOptions::default()),
     ] {
+        let bvh = tree(&mesh, Layout::DepthFirst, leaf);
         let (bytes, _) = HccBvh::encode_with(&bvh, &mesh, &o.hcc())
             .unwrap()
             .to_ooc()

@@ -1,15 +1,18 @@
 //! o-HCCMesh decoding: the file's bytes into the i-HCCMesh the i-HCCMesh
 //! encoder builds from the same tree and options, byte for byte.
 
+use super::super::MAX_LEAF_TRIANGLES;
 use super::super::ids::{IdMap, VertexIds};
-use super::super::node::{HIGH_LEAF, HighNode, MAX_TREE_VERTICES, TYPE_LEAF, TreeHeader};
+use super::super::node::{
+    HIGH_LEAF, HighNode, MAX_TREE_TRIANGLES, MAX_TREE_VERTICES, TYPE_LEAF, TreeHeader,
+};
 use super::super::pair::{Extents, outer};
 use super::super::vertices::{MAX_VERTEX_BITS, Quantized, Vertices};
 use super::super::{HccBvh, HccStats};
 use super::OocError;
 use super::file::{self, Header, SEC_DICTS, SEC_HIGH, SEC_IDS, SEC_STARTS, SEC_TREES, SEC_VIDS};
 use super::model::{
-    Adjacency, CONTEXTS, CTX_CORNER, CTX_TEMPLATE, CornerCache, Layout, MAX_CORNER_SYM,
+    Adjacency, CONTEXTS, CTX_CORNER, CTX_LEAF, CTX_TEMPLATE, CornerCache, Layout, MAX_CORNER_SYM,
     MAX_TEMPLATE_SYM, predict,
 };
 use super::rebuild::Rebuild;
@@ -24,7 +27,9 @@ struct Scratch {
     lay: Layout,
     cache: CornerCache,
     adj: Adjacency,
-    corners: Vec<[u32; 3]>,
+    /// Per position, a leaf's first triangle in `tris` and its count.
+    spans: Vec<(u32, u32)>,
+    tris: Vec<[u32; 3]>,
     grid: Vec<[u32; 3]>,
     pts: Vec<[f32; 3]>,
     rebuild: Rebuild,
@@ -36,6 +41,8 @@ struct Out {
     nodes: Vec<u32>,
     ics: Vec<u32>,
     q: Quantized,
+    blocks: Vec<u8>,
+    block_start: Vec<u32>,
     stored: u32,
     triangles: u32,
     stats: HccStats,
@@ -47,6 +54,7 @@ fn raw_bits_limit(ctx: usize, bits: u32) -> u32 {
     let max = match ctx {
         CTX_TEMPLATE => MAX_TEMPLATE_SYM,
         1..=3 => MAX_CORNER_SYM,
+        CTX_LEAF => MAX_LEAF_TRIANGLES as u32 - 1,
         // Zig-zagged residuals of coordinates and predictions in
         // 0..2^bits: below 2^(bits + 1).
         _ => (1u32 << (bits + 1)) - 1,
@@ -90,6 +98,8 @@ pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
         nodes: Vec::with_capacity(cap(h.node_words)),
         ics: Vec::with_capacity(cap(h.interconnections)),
         q,
+        blocks: Vec::new(),
+        block_start: Vec::new(),
         stored: 0,
         triangles: 0,
         stats: HccStats::default(),
@@ -174,13 +184,13 @@ pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
         nodes: out.nodes,
         ics: out.ics,
         vertices: Vertices::Packed(out.q),
-        blocks: Vec::new(),
-        block_start: Vec::new(),
+        blocks: out.blocks,
+        block_start: out.block_start,
         leaf_bits: Vec::new(),
         leaf_rank: Vec::new(),
         ids,
         vertex_ids,
-        multi: false,
+        multi: h.multi,
         triangle_count: h.triangles,
         mesh_vertices: h.mesh_vertices,
         mass: h.mass,
@@ -188,6 +198,15 @@ pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
     };
     hcc.build_leaf_ranks();
     Ok(hcc)
+}
+
+/// A symbol that could not be read, in tree `k`.
+#[cold]
+fn symbol_error(k: u32, e: FormatError) -> OocError {
+    match e {
+        FormatError::Corrupt { what } => OocError::Corrupt { tree: k, what },
+        e => e.into(),
+    }
 }
 
 fn corrupt_file(what: &'static str) -> OocError {
@@ -263,11 +282,9 @@ fn decode_tree(
     out: &mut Out,
 ) -> Result<(), OocError> {
     let bad = |what| OocError::Corrupt { tree: k, what };
-    let sym = |ctx: usize, r: &mut BitReader<'_>| {
-        decs[ctx].get(r).map_err(|e| match e {
-            FormatError::Corrupt { what } => bad(what),
-            e => e.into(),
-        })
+    let sym = |ctx: usize, r: &mut BitReader<'_>| match decs[ctx].get(r) {
+        Ok(v) => Ok(v),
+        Err(e) => Err(symbol_error(k, e)),
     };
     let mut r = BitReader::new(bytes);
     // Structure.
@@ -281,63 +298,76 @@ fn decode_tree(
     if out.nodes.len() + n > h.node_words as usize {
         return Err(bad("the trees hold more node words than the header says"));
     }
-    // Leaves: corners, then each new vertex's residuals.
+    // Leaves: each triangle's corners, then its new vertices' residuals.
     s.cache.clear();
     s.adj.clear();
     s.grid.clear();
-    s.corners.clear();
-    s.corners.resize(n, [0; 3]);
+    s.tris.clear();
+    s.spans.clear();
+    s.spans.resize(n, (0, 0));
     let max_q = out.q.max_q();
     let mut last = [max_q / 2; 3];
     let mut next = 0u32;
-    let mut triangles = 0u32;
     for p in 0..n {
         if s.lay.types[p] != TYPE_LEAF {
             continue;
         }
-        let first_new = next;
-        let mut c = [0u32; 3];
-        for (slot, cs) in c.iter_mut().enumerate() {
-            let v = s
-                .cache
-                .vertex(sym(CTX_CORNER + slot, &mut r)?, next)
-                .map_err(bad)?;
-            if v == next {
-                if next as usize >= MAX_TREE_VERTICES {
-                    return Err(bad("the tree has more vertices than 9-bit indices address"));
+        let count = if h.multi {
+            sym(CTX_LEAF, &mut r)? + 1
+        } else {
+            1
+        };
+        if count as usize > MAX_LEAF_TRIANGLES || s.tris.len() + count as usize > MAX_TREE_TRIANGLES
+        {
+            return Err(bad(
+                "a leaf or the tree holds more triangles than the format allows",
+            ));
+        }
+        s.spans[p] = (s.tris.len() as u32, count);
+        for _ in 0..count {
+            let first_new = next;
+            let mut c = [0u32; 3];
+            for (slot, cs) in c.iter_mut().enumerate() {
+                let v = s
+                    .cache
+                    .decode(sym(CTX_CORNER + slot, &mut r)?, next)
+                    .map_err(bad)?;
+                if v == next {
+                    if next as usize >= MAX_TREE_VERTICES {
+                        return Err(bad("the tree has more vertices than 9-bit indices address"));
+                    }
+                    s.adj.new_vertex(v);
+                    next += 1;
                 }
-                s.adj.new_vertex(v);
-                next += 1;
+                *cs = v;
             }
-            s.cache.touch(v);
-            *cs = v;
+            let mut known = c.map(|v| v < first_new);
+            for slot in 0..3 {
+                if known[slot] {
+                    continue;
+                }
+                let v = c[slot];
+                debug_assert_eq!(v as usize, s.grid.len());
+                let (pred, ctx) = predict(c, slot, known, &s.grid, &s.adj, last, max_q);
+                let mut g = [0u32; 3];
+                for x in 0..3 {
+                    let d = unzigzag(u64::from(sym(ctx + x, &mut r)?));
+                    g[x] = u32::try_from(i64::from(pred[x]) + d)
+                        .ok()
+                        .filter(|&c| c <= max_q)
+                        .ok_or(bad("a vertex decodes outside the grid"))?;
+                }
+                s.grid.push(g);
+                last = g;
+                for j in 0..3 {
+                    known[j] |= c[j] == v;
+                }
+            }
+            s.adj.add(c);
+            s.tris.push(c);
         }
-        let mut known = c.map(|v| v < first_new);
-        for slot in 0..3 {
-            if known[slot] {
-                continue;
-            }
-            let v = c[slot];
-            debug_assert_eq!(v as usize, s.grid.len());
-            let (pred, ctx) = predict(c, slot, known, &s.grid, &s.adj, last, max_q);
-            let mut g = [0u32; 3];
-            for x in 0..3 {
-                let d = unzigzag(u64::from(sym(ctx + x, &mut r)?));
-                g[x] = u32::try_from(i64::from(pred[x]) + d)
-                    .ok()
-                    .filter(|&c| c <= max_q)
-                    .ok_or(bad("a vertex decodes outside the grid"))?;
-            }
-            s.grid.push(g);
-            last = g;
-            for j in 0..3 {
-                known[j] |= c[j] == v;
-            }
-        }
-        s.adj.add(c);
-        s.corners[p] = c;
-        triangles += 1;
     }
+    let triangles = s.tris.len() as u32;
     if r.overran() {
         return Err(bad("the tree's stream ends early"));
     }
@@ -353,14 +383,17 @@ fn decode_tree(
         vertex_start: out.stored,
         first_triangle: out.triangles,
     });
+    let multi = h.multi.then_some((&mut out.blocks, &mut out.block_start));
     let root = s.rebuild.tree(
         &s.lay,
-        &s.corners,
+        (&s.spans, &s.tris),
         &s.pts,
-        &mut out.nodes,
-        &mut out.ics,
+        (&mut out.nodes, &mut out.ics, multi),
         &mut out.stats,
     );
+    if u32::try_from(out.blocks.len()).is_err() {
+        return Err(bad("the trees' triangle blocks outgrow 4 GiB"));
+    }
     out.roots.push(root);
     out.q.push_tree(&s.grid);
     out.stored = out

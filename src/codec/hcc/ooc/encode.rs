@@ -4,13 +4,13 @@
 
 use super::super::HccBvh;
 use super::super::ids::{IdMap, VertexIds};
-use super::super::node::{Interconnection, TYPE_LEAF, field, node_type};
+use super::super::node::{Interconnection, TYPE_LEAF, node_type};
 use super::super::template::TEMPLATES;
 use super::super::vertices::Quantized;
 use super::OocError;
 use super::file::{self, Header, SECTIONS};
 use super::model::{
-    Adjacency, CONTEXTS, CTX_CORNER, CTX_TEMPLATE, CornerCache, Layout, part_of, predict,
+    Adjacency, CONTEXTS, CTX_CORNER, CTX_LEAF, CTX_TEMPLATE, CornerCache, Layout, part_of, predict,
     template_symbol,
 };
 use crate::codec::common::bits::{BitWriter, zigzag};
@@ -73,6 +73,63 @@ struct Model {
     cache: CornerCache,
     adj: Adjacency,
     grid: Vec<[u32; 3]>,
+    tris: Vec<[u32; 3]>,
+}
+
+/// The coding of one tree's triangles.
+struct TreeCoder {
+    max_q: u32,
+    last: [u32; 3],
+    next: u32,
+    n_verts: u32,
+}
+
+impl TreeCoder {
+    /// Codes triangle `c` (local corners) of tree `k`: its corner symbols,
+    /// then each new vertex's residuals.
+    fn triangle(
+        &mut self,
+        c: [u32; 3],
+        q: &Quantized,
+        k: usize,
+        m: &mut Model,
+        emit: &mut impl FnMut(usize, u32),
+    ) -> Result<(), &'static str> {
+        let first_new = self.next;
+        for (slot, &v) in c.iter().enumerate() {
+            if v > self.next {
+                return Err("vertices are not numbered by first use");
+            }
+            emit(CTX_CORNER + slot, m.cache.symbol(v, self.next));
+            if v == self.next {
+                if self.next >= self.n_verts {
+                    return Err("a leaf names a vertex past the tree's array");
+                }
+                m.adj.new_vertex(v);
+                self.next += 1;
+            }
+            m.cache.touch(v);
+        }
+        let mut known = c.map(|v| v < first_new);
+        for slot in 0..3 {
+            if known[slot] {
+                continue;
+            }
+            let v = c[slot];
+            let (pred, ctx) = predict(c, slot, known, &m.grid, &m.adj, self.last, self.max_q);
+            let g = q.grid_point(k, v);
+            for x in 0..3 {
+                emit(ctx + x, zigzag(i64::from(g[x]) - i64::from(pred[x])) as u32);
+            }
+            m.grid.push(g);
+            self.last = g;
+            for j in 0..3 {
+                known[j] |= c[j] == v;
+            }
+        }
+        m.adj.add(c);
+        Ok(())
+    }
 }
 
 /// Runs the model over low-level tree `k` of `hcc`, calling `emit(context,
@@ -137,52 +194,38 @@ fn model_tree(
     if m.lay.types != m.types || m.lay.ics.len() != ics.len() {
         return Err(bad("the node types are not the templates'"));
     }
-    // Leaves in node-word order: corners, then each new vertex.
+    // Leaves in node-word order: each triangle's corners, then its new
+    // vertices.
     m.cache.clear();
     m.adj.clear();
     m.grid.clear();
-    let max_q = q.max_q();
-    let mut last = [max_q / 2; 3];
-    let mut next = 0u32;
-    for (p, &w) in words.iter().enumerate() {
+    let mut t = TreeCoder {
+        max_q: q.max_q(),
+        last: [q.max_q() / 2; 3],
+        next: 0,
+        n_verts,
+    };
+    for p in 0..words.len() {
         if m.types[p] != TYPE_LEAF {
             continue;
         }
-        let c = [field(w, 0), field(w, 1), field(w, 2)];
-        let first_new = next;
-        for (slot, &v) in c.iter().enumerate() {
-            if v > next {
-                return Err(bad("vertices are not numbered by first use"));
-            }
-            emit(CTX_CORNER + slot, m.cache.symbol(v, next));
-            if v == next {
-                if next >= n_verts {
-                    return Err(bad("a leaf names a vertex past the tree's array"));
-                }
-                m.adj.new_vertex(v);
-                next += 1;
-            }
-            m.cache.touch(v);
+        m.tris.clear();
+        hcc.leaf_triangles(k as u32, h.node_start + p as u32, |_, c| m.tris.push(c));
+        if hcc.multi {
+            let count = m.tris.len() as u32;
+            emit(
+                CTX_LEAF,
+                count
+                    .checked_sub(1)
+                    .ok_or(bad("a leaf holds no triangle"))?,
+            );
         }
-        let mut known = c.map(|v| v < first_new);
-        for slot in 0..3 {
-            if known[slot] {
-                continue;
-            }
-            let v = c[slot];
-            let (pred, ctx) = predict(c, slot, known, &m.grid, &m.adj, last, max_q);
-            let g = q.grid_point(k, v);
-            for x in 0..3 {
-                emit(ctx + x, zigzag(i64::from(g[x]) - i64::from(pred[x])) as u32);
-            }
-            m.grid.push(g);
-            last = g;
-            for j in 0..3 {
-                known[j] |= c[j] == v;
-            }
+        for i in 0..m.tris.len() {
+            let c = m.tris[i];
+            t.triangle(c, q, k, m, emit).map_err(bad)?;
         }
-        m.adj.add(c);
     }
+    let next = t.next;
     if next != n_verts {
         return Err(bad("a stored vertex is used by no leaf"));
     }
@@ -234,9 +277,6 @@ fn high_shape(hcc: &HccBvh) -> Result<Vec<u8>, OocError> {
 /// by part.
 pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
     let q = hcc.vertices.quantized().ok_or(OocError::NotQuantized)?;
-    if hcc.multi {
-        return Err(OocError::MultiLeaves);
-    }
     let mut m = Model::default();
     // Pass 1: each context's symbol counts.
     let mut counts: Vec<FastMap<u32, u64>> = vec![FastMap::default(); CONTEXTS];
@@ -280,6 +320,7 @@ pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
         .as_ref()
         .map_or(Vec::new(), VertexIds::to_bytes);
     let header = Header {
+        multi: hcc.multi,
         vertex_ids: hcc.vertex_ids.is_some(),
         tree_order: hcc.ids.is_none(),
         high_nodes: hcc.high.len() as u32,

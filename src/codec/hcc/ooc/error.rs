@@ -14,11 +14,6 @@ pub enum OocError {
         "o-HCCMesh codes quantized vertices (parallelogram residuals on the grid): set vertex bits (16 is the paper's), not f32"
     )]
     NotQuantized,
-    /// o-HCCMesh codes one triangle a leaf (the paper's form).
-    #[error(
-        "o-HCCMesh codes one triangle a leaf (the paper's form); build the tree with leaf size 1"
-    )]
-    MultiLeaves,
     /// An i-HCCMesh that is not laid out as the i-HCCMesh encoder lays
     /// trees out (a damaged or foreign structure).
     #[error("low-level tree {tree}: {what}; the i-HCCMesh is not one this build's encoder wrote")]

@@ -41,10 +41,13 @@ pub const SEC_IDS: usize = 4;
 pub const SEC_VIDS: usize = 5;
 const FLAG_VERTEX_IDS: u32 = 1;
 const FLAG_TREE_ORDER: u32 = 2;
+const FLAG_MULTI: u32 = 4;
 
 /// The header's fields.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Header {
+    /// Multi-triangle leaves.
+    pub multi: bool,
     /// Input vertex ids kept (section `vertex ids`).
     pub vertex_ids: bool,
     /// Triangles in tree order (no `ids` section).
@@ -82,8 +85,9 @@ pub fn write(h: &Header, sections: &[&[u8]; SECTIONS]) -> Vec<u8> {
     let len: usize = sections.iter().map(|s| s.len()).sum();
     let mut out = Vec::with_capacity(HEADER_LEN + len);
     out.extend_from_slice(&MAGIC);
-    let flags =
-        u32::from(h.vertex_ids) * FLAG_VERTEX_IDS + u32::from(h.tree_order) * FLAG_TREE_ORDER;
+    let flags = u32::from(h.vertex_ids) * FLAG_VERTEX_IDS
+        + u32::from(h.tree_order) * FLAG_TREE_ORDER
+        + u32::from(h.multi) * FLAG_MULTI;
     for v in [
         VERSION,
         flags,
@@ -120,7 +124,7 @@ pub fn parse(b: &[u8]) -> Result<(Header, [&[u8]; SECTIONS]), OocError> {
         });
     }
     let flags = u32_at(b, 12);
-    if flags > FLAG_VERTEX_IDS | FLAG_TREE_ORDER {
+    if flags > FLAG_VERTEX_IDS | FLAG_TREE_ORDER | FLAG_MULTI {
         return Err(header_err("flags", "reserved bits are set"));
     }
     let f: [u32; 9] = std::array::from_fn(|k| u32_at(b, 16 + 4 * k));
@@ -131,6 +135,7 @@ pub fn parse(b: &[u8]) -> Result<(Header, [&[u8]; SECTIONS]), OocError> {
         )
     })?;
     let h = Header {
+        multi: flags & FLAG_MULTI != 0,
         vertex_ids: flags & FLAG_VERTEX_IDS != 0,
         tree_order: flags & FLAG_TREE_ORDER != 0,
         high_nodes: f[0],

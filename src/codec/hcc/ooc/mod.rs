@@ -69,8 +69,11 @@
 //! does; the high-level tree's boxes are combined from the low-level
 //! trees' root boxes the same way. All of it linear in the nodes.
 //!
-//! **Scope**: quantized vertices and one triangle a leaf (the paper's
-//! form); encoding anything else is an error. The id maps (input triangle
+//! **Multi-triangle leaves** (the i-HCCMesh's §7 extension) code a
+//! leaf's triangle count − 1 (its own context) before its triangles; the
+//! decoder rebuilds the leaf's block as the i-HCCMesh encoder writes it.
+//!
+//! **Scope**: quantized vertices only (f32 vertices are an error). The id maps (input triangle
 //! and vertex numbering), when the options keep them, are stored as the
 //! i-HCCMesh stores them, not coded further: the default is the paper's
 //! form, tree order, no maps.
@@ -85,7 +88,7 @@
 //! |---|---|
 //! | 0–7 | magic `CBVHHCO\0` |
 //! | 8–11 | version (1) |
-//! | 12–15 | flags: bit 0 vertex ids kept, bit 1 tree order (no triangle id map); others 0 |
+//! | 12–15 | flags: bit 0 vertex ids kept, bit 1 tree order (no triangle id map), bit 2 multi-triangle leaves; others 0 |
 //! | 16–35 | counts of the i-HCCMesh: high-level nodes, low-level trees, node words, inter-connections, stored vertices |
 //! | 36–39 | triangle count |
 //! | 40–43 | input mesh's vertex count |
@@ -97,9 +100,9 @@
 //! | 284–291 | checksum of bytes 0–283 |
 //!
 //! Sections, in order:
-//! - *dictionaries*: the 13 contexts' dictionaries back to back in one bit
+//! - *dictionaries*: the 14 contexts' dictionaries back to back in one bit
 //!   stream (templates; corners 0, 1, 2; parallelogram x, y, z; near x,
-//!   y, z; far x, y, z), each as [`StaticDict`](crate::codec::common::static_dict::StaticDict) writes it;
+//!   y, z; far x, y, z; leaf sizes), each as [`StaticDict`](crate::codec::common::static_dict::StaticDict) writes it;
 //! - *high-level shape*: one bit per high-level node (1 inner, 0 a
 //!   low-level tree) in depth-first order, left first (the order the
 //!   i-HCCMesh numbers them);
@@ -173,7 +176,7 @@ impl OocOptions {
 
 impl HccBvh {
     /// This i-HCCMesh as an o-HCCMesh file, and its bytes by part.
-    /// Quantized vertices and one triangle a leaf only.
+    /// Quantized vertices only.
     pub fn to_ooc(&self) -> Result<(Vec<u8>, OocSizes), OocError> {
         encode::encode(self)
     }
@@ -198,20 +201,17 @@ pub struct HccOocBvh {
 }
 
 impl HccOocBvh {
-    /// Encodes `bvh` (built over `mesh`, one triangle a leaf) as an
-    /// i-HCCMesh with `options` and codes it.
+    /// Encodes `bvh` (built over `mesh`) as an i-HCCMesh with `options`
+    /// and codes it.
     pub fn encode_with(
         bvh: &CanonicalBvh,
         mesh: &Mesh,
         options: &OocOptions,
     ) -> Result<Self, OocError> {
-        if bvh.max_leaf_triangles > 1 {
-            return Err(OocError::MultiLeaves);
-        }
         Self::from_hcc(HccBvh::encode_with(bvh, mesh, &options.hcc())?)
     }
 
-    /// Codes an i-HCCMesh (quantized, one triangle a leaf).
+    /// Codes an i-HCCMesh (quantized vertices).
     pub fn from_hcc(hcc: HccBvh) -> Result<Self, OocError> {
         let (file, sizes) = encode::encode(&hcc)?;
         Ok(Self {

@@ -22,12 +22,14 @@ pub const CTX_NEAR: usize = 7;
 /// Contexts of residuals against the tree's last decoded vertex (no corner
 /// of the triangle known yet), by axis.
 pub const CTX_FAR: usize = 10;
+/// Context of a multi-triangle leaf's triangle count − 1.
+pub const CTX_LEAF: usize = 13;
 /// Number of contexts.
-pub const CONTEXTS: usize = 13;
+pub const CONTEXTS: usize = 14;
 /// Names of the contexts' groups, for the figures by part.
 pub const fn part_of(ctx: usize) -> usize {
     match ctx {
-        CTX_TEMPLATE => 0,
+        CTX_TEMPLATE | CTX_LEAF => 0,
         1..=3 => 1,
         _ => 2,
     }
@@ -208,35 +210,57 @@ impl CornerCache {
     }
 
     /// The vertex of corner symbol `sym` when `next` vertices are known
-    /// (decoder): `next` itself for a new one.
+    /// (decoder): `next` itself for a new one; moves it to the front as
+    /// [`touch`](Self::touch) does, without searching (the symbol says
+    /// where it is).
     #[inline(always)]
-    pub fn vertex(&self, sym: u32, next: u32) -> Result<u32, Bad> {
-        if sym == SYM_NEW {
-            Ok(next)
+    pub fn decode(&mut self, sym: u32, next: u32) -> Result<u32, Bad> {
+        let (v, at) = if sym == SYM_NEW {
+            (next, self.grow())
         } else if sym <= CACHE as u32 {
-            match self.slots[..self.len].get(sym as usize - 1) {
-                Some(&s) => Ok(u32::from(s)),
-                None => Err("a corner names an empty cache slot"),
+            let at = sym as usize - 1;
+            if at >= self.len {
+                return Err("a corner names an empty cache slot");
             }
+            (u32::from(self.slots[at]), at)
         } else {
             let back = sym - 1 - CACHE as u32;
-            next.checked_sub(1 + back)
-                .ok_or("a corner names a vertex before the tree's first")
+            let v = next
+                .checked_sub(1 + back)
+                .ok_or("a corner names a vertex before the tree's first")?;
+            (v, self.grow())
+        };
+        self.move_front(at, v);
+        Ok(v)
+    }
+
+    /// Makes room for one more entry; returns the slot to move from (the
+    /// last one in use, dropped when the cache is full).
+    #[inline(always)]
+    fn grow(&mut self) -> usize {
+        self.len = (self.len + 1).min(CACHE);
+        self.len - 1
+    }
+
+    /// Shifts slots `0..at` back by one and puts `v` in front.
+    #[inline(always)]
+    fn move_front(&mut self, at: usize, v: u32) {
+        for i in (1..=at).rev() {
+            self.slots[i] = self.slots[i - 1];
         }
+        self.slots[0] = v as u16;
     }
 
     /// Moves `v` to the front (inserting it if absent).
-    #[inline(always)]
     pub fn touch(&mut self, v: u32) {
-        let at = self.slots[..self.len]
+        let at = match self.slots[..self.len]
             .iter()
             .position(|&s| u32::from(s) == v)
-            .unwrap_or_else(|| {
-                self.len = (self.len + 1).min(CACHE);
-                self.len - 1
-            });
-        self.slots.copy_within(0..at, 1);
-        self.slots[0] = v as u16;
+        {
+            Some(at) => at,
+            None => self.grow(),
+        };
+        self.move_front(at, v);
     }
 }
 
@@ -342,5 +366,5 @@ pub fn predict(
     }
 }
 
-/// A local vertex index fits the 9-bit fields.
-pub const _INDEX_FITS: () = assert!(MAX_TREE_VERTICES <= 1 << INDEX_BITS);
+// A local vertex index fits the 9-bit fields.
+const _: () = assert!(MAX_TREE_VERTICES <= 1 << INDEX_BITS);

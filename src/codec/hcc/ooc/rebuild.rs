@@ -8,11 +8,14 @@
 //! positions than their parent, so one reverse and one forward sweep do).
 
 use super::super::HccStats;
+use super::super::block;
 use super::super::node::{
-    INDEX_BITS, Interconnection, MASK_SHIFT, TYPE_LEAF, TYPE_SHIFT, TYPE_TEMPLATE_LEAF, pack_node,
+    INDEX_BITS, Interconnection, MASK_SHIFT, MULTI_COUNT_SHIFT, MULTI_OFFSET_BITS, TYPE_LEAF,
+    TYPE_SHIFT, TYPE_TEMPLATE_LEAF, pack_node,
 };
 use super::super::pair::{EMPTY, Extents, code_pair, outer};
 use super::model::Layout;
+use crate::codec::common::bits::BitWriter;
 
 /// Buffers reused from tree to tree.
 #[derive(Default)]
@@ -25,18 +28,28 @@ pub struct Rebuild {
 
 impl Rebuild {
     /// Appends the node words and inter-connections of the tree laid out
-    /// in `lay`, with leaf corners `corners` (by position) over vertices
-    /// `pts`, to `nodes` and `ics`; counts its pairs and templates in
-    /// `stats`; returns the tree's tight box.
+    /// in `lay` to `nodes` and `ics` (and, for multi-triangle leaves, its
+    /// triangle blocks to `blocks` and their start to `block_start`); the
+    /// leaf at position `p` holds `tris[spans[p].0..][..spans[p].1]`, over
+    /// vertices `pts`. Counts its pairs and templates in `stats`; returns
+    /// the tree's tight box.
+    #[allow(clippy::type_complexity)]
     pub fn tree(
         &mut self,
         lay: &Layout,
-        corners: &[[u32; 3]],
+        (spans, tris): (&[(u32, u32)], &[[u32; 3]]),
         pts: &[[f32; 3]],
-        nodes: &mut Vec<u32>,
-        ics: &mut Vec<u32>,
+        (nodes, ics, multi): (
+            &mut Vec<u32>,
+            &mut Vec<u32>,
+            Option<(&mut Vec<u8>, &mut Vec<u32>)>,
+        ),
         stats: &mut HccStats,
     ) -> Extents {
+        let leaf = |p: usize| {
+            let (first, count) = spans[p];
+            &tris[first as usize..(first + count) as usize]
+        };
         let n = lay.types.len();
         let types = &lay.types[..n];
         self.tight.resize(n, EMPTY);
@@ -47,7 +60,7 @@ impl Rebuild {
         for p in (0..n).rev() {
             let (mut b, mut v) = (EMPTY, [0u32; 6]);
             if types[p] == TYPE_LEAF {
-                for &c in &corners[p] {
+                for &c in leaf(p).iter().flatten() {
                     let pt = pts[c as usize];
                     for e in 0..6 {
                         if outer(e, pt[e % 3], b[e]) {
@@ -70,11 +83,36 @@ impl Rebuild {
             self.attained[p] = v;
         }
         let base = nodes.len();
-        nodes.extend(types.iter().enumerate().map(|(p, &ty)| match ty {
-            TYPE_LEAF => pack_node(corners[p], 0, TYPE_LEAF),
-            TYPE_TEMPLATE_LEAF => pack_node([0, 0, lay.ic_of[p]], 0, TYPE_TEMPLATE_LEAF),
-            _ => ty << TYPE_SHIFT,
-        }));
+        match multi {
+            None => nodes.extend(types.iter().enumerate().map(|(p, &ty)| match ty {
+                TYPE_LEAF => pack_node(leaf(p)[0], 0, TYPE_LEAF),
+                TYPE_TEMPLATE_LEAF => pack_node([0, 0, lay.ic_of[p]], 0, TYPE_TEMPLATE_LEAF),
+                _ => ty << TYPE_SHIFT,
+            })),
+            Some((blocks, block_start)) => {
+                // Blocks in node-word order, as the i-HCCMesh encoder
+                // writes them; the tree's triangle limit keeps every
+                // offset within the leaf word's field.
+                let slot_bits = block::slot_bits(tris.len() as u32);
+                let mut w = BitWriter::default();
+                for (p, &ty) in types.iter().enumerate() {
+                    nodes.push(match ty {
+                        TYPE_LEAF => {
+                            let (slot, count) = spans[p];
+                            let at = block::write(&mut w, slot, slot_bits, leaf(p));
+                            debug_assert!(at < 1 << MULTI_OFFSET_BITS);
+                            at as u32 | (count - 1) << MULTI_COUNT_SHIFT | ty << TYPE_SHIFT
+                        }
+                        TYPE_TEMPLATE_LEAF => {
+                            pack_node([0, 0, lay.ic_of[p]], 0, TYPE_TEMPLATE_LEAF)
+                        }
+                        _ => ty << TYPE_SHIFT,
+                    });
+                }
+                block_start.push(blocks.len() as u32);
+                blocks.extend_from_slice(&w.finish());
+            }
+        }
         let words = &mut nodes[base..];
         self.ic_vertex.clear();
         self.ic_vertex.resize(lay.ics.len(), 0);
