@@ -44,7 +44,7 @@ pub(super) struct PairCode {
 /// Codes the pair of children with tight boxes `tl`, `tr` attained by
 /// vertices `vl`, `vr` (per extent), under a parent that decodes to `d`;
 /// `ll`, `rl` say which children are leaves.
-#[inline]
+#[inline(always)]
 pub(super) fn code_pair(
     d: &Extents,
     (tl, vl, ll): (&Extents, &[u32; 6], bool),

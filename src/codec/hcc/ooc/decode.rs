@@ -200,6 +200,20 @@ pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
     Ok(hcc)
 }
 
+/// The next symbol of context `ctx` in tree `k`'s stream.
+#[inline(always)]
+fn read_symbol(
+    decs: &[StaticDecoder],
+    ctx: usize,
+    r: &mut BitReader<'_>,
+    k: u32,
+) -> Result<u32, OocError> {
+    match decs[ctx].get(r) {
+        Ok(v) => Ok(v),
+        Err(e) => Err(symbol_error(k, e)),
+    }
+}
+
 /// A symbol that could not be read, in tree `k`.
 #[cold]
 fn symbol_error(k: u32, e: FormatError) -> OocError {
@@ -282,16 +296,14 @@ fn decode_tree(
     out: &mut Out,
 ) -> Result<(), OocError> {
     let bad = |what| OocError::Corrupt { tree: k, what };
-    let sym = |ctx: usize, r: &mut BitReader<'_>| match decs[ctx].get(r) {
-        Ok(v) => Ok(v),
-        Err(e) => Err(symbol_error(k, e)),
-    };
     let mut r = BitReader::new(bytes);
     // Structure.
-    s.lay.root(sym(CTX_TEMPLATE, &mut r)?).map_err(bad)?;
+    s.lay
+        .root(read_symbol(decs, CTX_TEMPLATE, &mut r, k)?)
+        .map_err(bad)?;
     while let Some(at) = s.lay.pending.pop() {
-        let left = sym(CTX_TEMPLATE, &mut r)?;
-        let right = sym(CTX_TEMPLATE, &mut r)?;
+        let left = read_symbol(decs, CTX_TEMPLATE, &mut r, k)?;
+        let right = read_symbol(decs, CTX_TEMPLATE, &mut r, k)?;
         s.lay.expand(at, left, right).map_err(bad)?;
     }
     let n = s.lay.types.len();
@@ -313,7 +325,7 @@ fn decode_tree(
             continue;
         }
         let count = if h.multi {
-            sym(CTX_LEAF, &mut r)? + 1
+            read_symbol(decs, CTX_LEAF, &mut r, k)? + 1
         } else {
             1
         };
@@ -330,7 +342,7 @@ fn decode_tree(
             for (slot, cs) in c.iter_mut().enumerate() {
                 let v = s
                     .cache
-                    .decode(sym(CTX_CORNER + slot, &mut r)?, next)
+                    .decode(read_symbol(decs, CTX_CORNER + slot, &mut r, k)?, next)
                     .map_err(bad)?;
                 if v == next {
                     if next as usize >= MAX_TREE_VERTICES {
@@ -351,7 +363,7 @@ fn decode_tree(
                 let (pred, ctx) = predict(c, slot, known, &s.grid, &s.adj, last, max_q);
                 let mut g = [0u32; 3];
                 for x in 0..3 {
-                    let d = unzigzag(u64::from(sym(ctx + x, &mut r)?));
+                    let d = unzigzag(u64::from(read_symbol(decs, ctx + x, &mut r, k)?));
                     g[x] = u32::try_from(i64::from(pred[x]) + d)
                         .ok()
                         .filter(|&c| c <= max_q)
