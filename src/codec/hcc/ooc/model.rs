@@ -174,22 +174,24 @@ pub fn template_symbol(id: u8, start: usize, types: &[u32]) -> Option<u32> {
     Some(u32::from(id) | bits << 5)
 }
 
-/// The most recently used vertices of the tree, most recent first.
+/// The most recently used vertices of the tree, most recent first: 16
+/// lanes of 16 bits in two `u128` halves (lanes 0–7, 8–15), so that moving
+/// an entry to the front is a few shifts and masks, not a loop.
+#[derive(Default)]
 pub struct CornerCache {
-    slots: [u16; CACHE],
+    lanes: [u128; 2],
     len: usize,
 }
 
-impl Default for CornerCache {
-    fn default() -> Self {
-        Self {
-            slots: [0; CACHE],
-            len: 0,
-        }
-    }
-}
+const _: () = assert!(CACHE == 16);
 
 impl CornerCache {
+    /// Slot `r` (< 16).
+    #[inline(always)]
+    fn slot(&self, r: usize) -> u32 {
+        (self.lanes[r / 8] >> (16 * (r % 8))) as u16 as u32
+    }
+
     /// Empties the cache (a new tree).
     pub fn clear(&mut self) {
         self.len = 0;
@@ -200,10 +202,7 @@ impl CornerCache {
         if v == next {
             return SYM_NEW;
         }
-        match self.slots[..self.len]
-            .iter()
-            .position(|&s| u32::from(s) == v)
-        {
+        match (0..self.len).position(|r| self.slot(r) == v) {
             Some(r) => 1 + r as u32,
             None => 1 + CACHE as u32 + (next - 1 - v),
         }
@@ -222,7 +221,7 @@ impl CornerCache {
             if at >= self.len {
                 return Err("a corner names an empty cache slot");
             }
-            (u32::from(self.slots[at]), at)
+            (self.slot(at), at)
         } else {
             let back = sym - 1 - CACHE as u32;
             let v = next
@@ -242,25 +241,32 @@ impl CornerCache {
         self.len - 1
     }
 
-    /// Shifts slots `0..at` back by one and puts `v` in front.
-    #[inline(always)]
-    fn move_front(&mut self, at: usize, v: u32) {
-        for i in (1..=at).rev() {
-            self.slots[i] = self.slots[i - 1];
-        }
-        self.slots[0] = v as u16;
-    }
-
     /// Moves `v` to the front (inserting it if absent).
     pub fn touch(&mut self, v: u32) {
-        let at = match self.slots[..self.len]
-            .iter()
-            .position(|&s| u32::from(s) == v)
-        {
+        let at = match (0..self.len).position(|r| self.slot(r) == v) {
             Some(at) => at,
             None => self.grow(),
         };
         self.move_front(at, v);
+    }
+
+    /// Shifts slots `0..at` back by one and puts `v` in front; slots
+    /// after `at` keep their entries.
+    #[inline(always)]
+    fn move_front(&mut self, at: usize, v: u32) {
+        let [lo, hi] = self.lanes;
+        let shifted = [lo << 16 | u128::from(v as u16), hi << 16 | lo >> 112];
+        // Lanes 0..=at take the shifted value.
+        let lanes = 16 * (at as u32 + 1);
+        let mask = |bits: u32| match bits {
+            0 => 0,
+            128.. => u128::MAX,
+            b => (1u128 << b) - 1,
+        };
+        let m = [mask(lanes.min(128)), mask(lanes.saturating_sub(128))];
+        for h in 0..2 {
+            self.lanes[h] = shifted[h] & m[h] | self.lanes[h] & !m[h];
+        }
     }
 }
 
