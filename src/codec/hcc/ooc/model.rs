@@ -374,3 +374,76 @@ pub fn predict(
 
 // A local vertex index fits the 9-bit fields.
 const _: () = assert!(MAX_TREE_VERTICES <= 1 << INDEX_BITS);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The lane cache is a most-recently-used list: the encoder's symbols
+    /// name the ranks a plain list gives, and the decoder gets the
+    /// vertices back.
+    #[test]
+    fn corner_cache_is_a_most_recently_used_list() {
+        let (mut enc, mut dec) = (CornerCache::default(), CornerCache::default());
+        let mut list: Vec<u32> = Vec::new();
+        let mut next = 0u32;
+        let mut x = 12345u64;
+        for _ in 0..5000 {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let r = (x >> 33) as u32;
+            // New vertices, recent ones and far ones.
+            let v = match r % 4 {
+                0 if next < 511 => next,
+                1 | 2 if next > 0 => next - 1 - (r >> 8) % next.min(20),
+                _ if next > 0 => (r >> 8) % next,
+                _ => next,
+            };
+            let want = if v == next {
+                SYM_NEW
+            } else {
+                match list.iter().position(|&u| u == v) {
+                    Some(p) => 1 + p as u32,
+                    None => 1 + CACHE as u32 + (next - 1 - v),
+                }
+            };
+            let sym = enc.symbol(v, next);
+            assert_eq!(sym, want);
+            enc.touch(v);
+            assert_eq!(dec.decode(sym, next), Ok(v));
+            list.retain(|&u| u != v);
+            list.insert(0, v);
+            list.truncate(CACHE);
+            if v == next {
+                next += 1;
+            }
+        }
+        assert!(dec.decode(1 + CACHE as u32 + next, next).is_err());
+        dec.clear();
+        assert!(dec.decode(1, 0).is_err(), "an empty cache has no rank 0");
+    }
+
+    #[test]
+    fn layouts_rebuild_the_templates_they_were_given() {
+        // The complete height-4 template with its 8 deepest nodes as
+        // template leaves, each expanded into two single leaves.
+        let full = crate::codec::hcc::template::id_of_mask(0x7f).unwrap();
+        let sym = u32::from(full) | 0xff << 5;
+        let mut lay = Layout::default();
+        lay.root(sym).unwrap();
+        assert_eq!(lay.pending.len(), 8);
+        while let Some(at) = lay.pending.pop() {
+            lay.expand(at, 0, 0).unwrap();
+        }
+        assert_eq!(lay.types.len(), 15 + 16);
+        assert_eq!(lay.ics.len(), 8);
+        assert_eq!(template_symbol(full, 0, &lay.types), Some(sym));
+        assert!(
+            Layout::default()
+                .root(u32::from(full) | 0x1ff << 5)
+                .is_err()
+        );
+        assert!(Layout::default().root(26).is_err());
+    }
+}
