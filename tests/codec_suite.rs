@@ -540,6 +540,17 @@ fn hcc_tree_order(vertex_ids: bool) -> cbvh::codec::hcc::HccOptions {
     }
 }
 
+/// o-HCCMesh options: `bits` per grid coordinate, the input's triangle ids
+/// kept (so that the decoded mesh is checked triangle by triangle), with
+/// or without its vertex ids.
+fn ooc(vertex_bits: u32, vertex_ids: bool) -> cbvh::codec::hcc::ooc::OocOptions {
+    cbvh::codec::hcc::ooc::OocOptions {
+        vertex_bits,
+        vertex_ids,
+        triangle_ids: true,
+    }
+}
+
 // One line per codec.
 codec_suite!(plain, cbvh::codec::plain::PlainBvh, lossless: [()], lossy: []);
 codec_suite!(racbvh, cbvh::codec::racbvh::RacBvh, lossless: [rac(16, None)], lossy: [rac(8, Some(8)), rac(16, Some(16))]);
@@ -547,3 +558,4 @@ codec_suite!(clbvh, cbvh::codec::clbvh::ClBvh, lossless: [Default::default()], l
 codec_suite!(clbvh_compact, cbvh::codec::clbvh::ClBvhCompact, lossless: [Default::default()], lossy: []);
 codec_suite!(hcc, cbvh::codec::hcc::HccBvh, lossless: [hcc(None, true)], lossy: [hcc(None, false), hcc(Some(16), true), hcc(Some(8), false)]);
 codec_suite!(hcc_tree_order, cbvh::codec::hcc::HccBvh, lossless: [], lossy: [], renumbered: [hcc_tree_order(false), hcc_tree_order(true)]);
+codec_suite!(hcc_ooc, cbvh::codec::hcc::ooc::HccOocBvh, lossless: [], lossy: [ooc(16, false), ooc(8, true)]);

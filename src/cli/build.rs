@@ -5,6 +5,7 @@ use std::time::Instant;
 use cbvh::build::{BuildOptions, Layout, build};
 use cbvh::codec::clbvh::{ClOptions, CompactOptions};
 use cbvh::codec::hcc::HccOptions;
+use cbvh::codec::hcc::ooc::OocOptions;
 use cbvh::codec::racbvh::RacOptions;
 use cbvh::codec::{AnyCodec, AnyOptions, ByteSize, CodecKind, OpenOptions};
 
@@ -42,7 +43,8 @@ pub struct BuildArgs {
     #[arg(long, default_value_t = 16)]
     pub bits: u32,
     /// RACBVH and hcc: bits per quantized vertex coordinate; 0 keeps
-    /// vertices as f32. Unset: each codec's default (RACBVH 16, hcc f32).
+    /// vertices as f32. Unset: each codec's default (RACBVH 16, hcc f32,
+    /// hcc-ooc 16, which always quantizes: 0 gives it 16).
     #[arg(long)]
     pub vertex_bits: Option<u32>,
     /// hcc: drop the input's vertex ids (part vertex-ids): smaller, but the
@@ -129,6 +131,11 @@ pub fn run(a: BuildArgs) -> CliResult {
                     vertex_bits: bits(HccOptions::default().vertex_bits),
                     vertex_ids: !a.no_vertex_ids && !a.tree_order,
                     triangle_ids: !a.tree_order,
+                },
+                hcc_ooc: OocOptions {
+                    vertex_bits: bits(Some(OocOptions::default().vertex_bits))
+                        .unwrap_or(OocOptions::default().vertex_bits),
+                    ..Default::default()
                 },
                 clbvh: ClOptions {
                     leaf_size: clbvh_m(ClOptions::default().leaf_size),

@@ -24,6 +24,7 @@ use super::clbvh::{ClBvh, ClBvhCompact};
 use super::common::MassProps;
 use super::contract::{Codec, OpenOptions};
 use super::hcc::HccBvh;
+use super::hcc::ooc::HccOocBvh;
 use super::plain::PlainBvh;
 use super::racbvh::RacBvh;
 use crate::build::CanonicalBvh;
@@ -129,6 +130,8 @@ registry! {
         "CLBVH with compact leaves: de-duplicated vertex indices, 8-bit corner indices";
     Hcc(HccBvh, hcc) = "hcc",
         "i-HCCMesh: low-level trees of < 512 vertices, 4-byte nodes with boxes from vertex indices and reuse masks, tree templates (multi-triangle leaves with --leaf-size > 1, quantized vertices with --vertex-bits)";
+    HccOoc(HccOocBvh, hcc_ooc) = "hcc-ooc",
+        "o-HCCMesh: the i-HCCMesh dictionary-coded (16-bit grid, tree order by default; no boxes stored), decoded into i-HCCMesh when opened";
 }
 
 /// Runs `$body` with `$c` bound to the concrete codec inside an
@@ -151,6 +154,7 @@ macro_rules! with_codec {
             $crate::codec::AnyCodec::Clbvh($c) => $body,
             $crate::codec::AnyCodec::ClbvhCompact($c) => $body,
             $crate::codec::AnyCodec::Hcc($c) => $body,
+            $crate::codec::AnyCodec::HccOoc($c) => $body,
         }
     };
 }

@@ -4,6 +4,8 @@
 //! - [`bits`]: bit streams written and read least-significant bit first,
 //!   Exp-Golomb codes, zig-zag.
 //! - [`dict`]: the per-context dictionary coder (RACBVH §4.4).
+//! - [`static_dict`]: the static dictionary coder with the optimal
+//!   dictionary size (HCCMesh §5.2).
 //! - [`quant`]: conservative quantization of boxes on a grid over a box
 //!   (min rounded down, max up), at any bit count.
 //! - [`Store`] (`store.rs`): a codec's bytes, owned or a range of a
@@ -28,6 +30,7 @@ pub mod mass;
 pub mod packed;
 pub mod quant;
 mod save;
+pub mod static_dict;
 mod store;
 
 pub use error::FormatError;

@@ -9,6 +9,7 @@ use super::node::{
     MULTI_COUNT_SHIFT, MULTI_OFFSET_BITS, TYPE_INNER, TYPE_LEAF, TYPE_SHIFT, TYPE_TEMPLATE_LEAF,
     TreeHeader, pack_node,
 };
+use super::pair::{Extents, code_pair, outer};
 use super::template::{MAX_HEIGHT, MAX_TEMPLATE_NODES, TEMPLATES, id_of_mask};
 use super::vertices::{MAX_VERTEX_BITS, Quantized, Vertices};
 use super::{HccOptions, HccStats, MAX_LEAF_TRIANGLES};
@@ -47,15 +48,6 @@ pub struct HccBvh {
     pub(super) mesh_vertices: u32,
     pub(super) mass: MassProps,
     pub(super) stats: HccStats,
-}
-
-/// An extent `e` of a box as six numbers: 0–2 the minimum, 3–5 the maximum.
-type Extents = [f32; 6];
-
-/// Whether extent `e`'s value `a` is farther out than `b`.
-#[inline]
-fn outer(e: usize, a: f32, b: f32) -> bool {
-    if e < 3 { a < b } else { a > b }
 }
 
 /// Tight boxes of every canonical node and, per extent, a vertex (mesh id)
@@ -506,69 +498,28 @@ impl HccBvh {
             }
             let (l, r) = (node.a, node.b);
             let (pl, pr) = (s.pos_of[l as usize], s.pos_of[r as usize]);
-            let (tl, tr) = (&tight.boxes[l as usize], &tight.boxes[r as usize]);
             let (ll, rl) = (
                 t.types[pl as usize] == TYPE_LEAF,
                 t.types[pr as usize] == TYPE_LEAF,
             );
-            let mut mask = 0u32;
-            let (mut dl, mut dr) = (*tl, *tr);
-            match (ll, rl) {
-                (false, false) => {
-                    for e in 0..6 {
-                        let left_inherits = if tl[e] == d[e] {
-                            true
-                        } else if tr[e] == d[e] {
-                            false
-                        } else {
-                            // A parent decoded looser than tight: the child
-                            // that loses less inherits.
-                            (d[e] - tl[e]).abs() <= (d[e] - tr[e]).abs()
-                        };
-                        let (pos, v) = if left_inherits {
-                            mask |= 1 << e;
-                            dl[e] = d[e];
-                            (if e < 3 { pl } else { pr }, tight.verts[r as usize][e])
-                        } else {
-                            dr[e] = d[e];
-                            (if e < 3 { pl } else { pr }, tight.verts[l as usize][e])
-                        };
-                        t.set_field(pos, e % 3, local(v));
-                    }
-                    self.stats.inner_pairs += 1;
-                }
-                (true, true) => {}
-                (leaf_left, _) => {
-                    let (inner, pi, ti) = if leaf_left { (r, pr, tr) } else { (l, pl, tl) };
-                    let axis = |e: usize| (d[e % 3 + 3] - d[e % 3]).max(f32::MIN_POSITIVE);
-                    let mut need: Vec<usize> = (0..6).filter(|&e| ti[e] != d[e]).collect();
-                    if need.len() > 3 {
-                        // Three vertex fields: keep the three extents that
-                        // shrink the box most; the rest inherit (loose but
-                        // conservative).
-                        need.sort_by(|&a, &b| {
-                            let la = (d[a] - ti[a]).abs() / axis(a);
-                            let lb = (d[b] - ti[b]).abs() / axis(b);
-                            lb.total_cmp(&la).then(a.cmp(&b))
-                        });
-                        self.stats.loose_extents += need.len() - 3;
-                        need.truncate(3);
-                        need.sort_unstable();
-                    }
-                    let di = if leaf_left { &mut dr } else { &mut dl };
-                    mask = 0b11_1111;
-                    for (j, &e) in need.iter().enumerate() {
-                        mask &= !(1 << e);
-                        t.set_field(pi, j, local(tight.verts[inner as usize][e]));
-                    }
-                    for e in 0..6 {
-                        if mask >> e & 1 != 0 {
-                            di[e] = d[e];
-                        }
-                    }
-                    self.stats.mixed_pairs += 1;
+            let pc = code_pair(
+                &d,
+                (&tight.boxes[l as usize], &tight.verts[l as usize], ll),
+                (&tight.boxes[r as usize], &tight.verts[r as usize], rl),
+            );
+            for (side, pos) in [pl, pr].into_iter().enumerate() {
+                for j in 0..pc.used[side] {
+                    t.set_field(pos, j, local(pc.fields[side][j]));
                 }
             }
+            match (ll, rl) {
+                (false, false) => self.stats.inner_pairs += 1,
+                (true, true) => {}
+                _ => self.stats.mixed_pairs += 1,
+            }
+            self.stats.loose_extents += pc.loose;
+            let mask = pc.mask;
+            let [dl, dr] = pc.boxes;
             t.words[pl as usize] |= (mask & 7) << super::node::MASK_SHIFT;
             t.words[pr as usize] |= (mask >> 3) << super::node::MASK_SHIFT;
             stack.push((l, dl));

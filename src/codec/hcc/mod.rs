@@ -126,6 +126,8 @@ mod error;
 mod file;
 mod ids;
 pub mod node;
+pub mod ooc;
+mod pair;
 pub mod template;
 mod verify;
 mod vertices;

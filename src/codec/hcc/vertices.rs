@@ -101,16 +101,6 @@ pub fn bits_at(data: &[u8], at: u64, n: u32) -> u32 {
     (w & ((1u64 << n) - 1)) as u32
 }
 
-/// Writes the low `n` bits of `v` at bit `at` of `data` (zeroed before).
-pub fn put_bits(data: &mut [u8], at: u64, n: u32, v: u32) {
-    for k in 0..u64::from(n) {
-        if (v >> k) & 1 == 1 {
-            let p = at + k;
-            data[(p >> 3) as usize] |= 1 << (p & 7);
-        }
-    }
-}
-
 /// Bits that hold every value `0..=span` (0 for `span` 0).
 #[inline]
 pub fn width_of(span: u32) -> u32 {
@@ -182,19 +172,29 @@ impl Quantized {
             let hi = q.iter().map(|v| v[a]).max().unwrap_or(0);
             t.axes[a] = lo | width_of(hi - lo) << BASE_BITS;
         }
-        let stride = u64::from(t.stride());
-        let start = self.data.len();
-        self.data
-            .resize(start + (q.len() as u64 * stride).div_ceil(8) as usize, 0);
-        let run = &mut self.data[start..];
-        for (i, v) in q.iter().enumerate() {
-            let mut at = i as u64 * stride;
+        // Vertex i at bit i · stride of the run, x first, least-significant
+        // bit first: a bit writer appending field after field.
+        let mut w = crate::codec::common::bits::BitWriter::default();
+        for v in q {
             for (a, &c) in v.iter().enumerate() {
-                put_bits(run, at, t.width(a), c - t.base(a));
-                at += u64::from(t.width(a));
+                w.put(u64::from(c - t.base(a)), t.width(a));
             }
         }
+        self.data.extend_from_slice(&w.finish());
         self.trees.push(t);
+    }
+
+    /// The grid coordinates of vertex `local` of tree `tree`.
+    #[inline(always)]
+    pub fn grid_point(&self, tree: usize, local: u32) -> [u32; 3] {
+        let t = &self.trees[tree];
+        let mut at = u64::from(t.byte) * 8 + u64::from(local) * u64::from(t.stride());
+        std::array::from_fn(|a| {
+            let w = t.width(a);
+            let q = t.base(a) + bits_at(&self.data, at, w);
+            at += u64::from(w);
+            q
+        })
     }
 
     /// Vertex `local` of tree `tree`.

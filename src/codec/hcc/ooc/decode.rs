@@ -1,0 +1,425 @@
+//! o-HCCMesh decoding: the file's bytes into the i-HCCMesh the i-HCCMesh
+//! encoder builds from the same tree and options, byte for byte.
+
+use super::super::MAX_LEAF_TRIANGLES;
+use super::super::ids::{IdMap, VertexIds};
+use super::super::node::{
+    HIGH_LEAF, HighNode, MAX_TREE_TRIANGLES, MAX_TREE_VERTICES, TYPE_LEAF, TreeHeader,
+};
+use super::super::pair::{Extents, outer};
+use super::super::vertices::{MAX_VERTEX_BITS, Quantized, Vertices};
+use super::super::{HccBvh, HccStats};
+use super::OocError;
+use super::file::{self, Header, SEC_DICTS, SEC_HIGH, SEC_IDS, SEC_STARTS, SEC_TREES, SEC_VIDS};
+use super::model::{
+    Adjacency, CONTEXTS, CTX_CORNER, CTX_LEAF, CTX_TEMPLATE, CornerCache, Layout, MAX_CORNER_SYM,
+    MAX_TEMPLATE_SYM, predict,
+};
+use super::rebuild::Rebuild;
+use crate::codec::common::FormatError;
+use crate::codec::common::bits::{BitReader, unzigzag};
+use crate::codec::common::le::u32_at;
+use crate::codec::common::static_dict::{StaticDecoder, StaticDict};
+
+/// Everything reused from tree to tree.
+#[derive(Default)]
+struct Scratch {
+    lay: Layout,
+    cache: CornerCache,
+    adj: Adjacency,
+    /// Per position, a leaf's first triangle in `tris` and its count.
+    spans: Vec<(u32, u32)>,
+    tris: Vec<[u32; 3]>,
+    grid: Vec<[u32; 3]>,
+    pts: Vec<[f32; 3]>,
+    rebuild: Rebuild,
+}
+
+/// The i-HCCMesh being rebuilt.
+struct Out {
+    headers: Vec<TreeHeader>,
+    nodes: Vec<u32>,
+    ics: Vec<u32>,
+    q: Quantized,
+    blocks: Vec<u8>,
+    block_start: Vec<u32>,
+    stored: u32,
+    triangles: u32,
+    stats: HccStats,
+    roots: Vec<Extents>,
+}
+
+/// The largest raw symbol of each context, in bits.
+fn raw_bits_limit(ctx: usize, bits: u32) -> u32 {
+    let max = match ctx {
+        CTX_TEMPLATE => MAX_TEMPLATE_SYM,
+        1..=3 => MAX_CORNER_SYM,
+        CTX_LEAF => MAX_LEAF_TRIANGLES as u32 - 1,
+        // Zig-zagged residuals of coordinates and predictions in
+        // 0..2^bits: below 2^(bits + 1).
+        _ => (1u32 << (bits + 1)) - 1,
+    };
+    32 - max.leading_zeros()
+}
+
+/// Decodes an o-HCCMesh file into its i-HCCMesh.
+pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
+    let (h, sec) = file::parse(b)?;
+    if !(1..=MAX_VERTEX_BITS).contains(&h.bits) {
+        return Err(FormatError::header(
+            "vertex bits",
+            format!("{} is not in 1..={MAX_VERTEX_BITS}", h.bits),
+        )
+        .into());
+    }
+    let q = Quantized {
+        bits: h.bits,
+        origin: h.grid[0],
+        step: h.grid[1],
+        error: h.grid[2],
+        trees: Vec::new(),
+        data: Vec::new(),
+    };
+    q.check_grid()?;
+    let mut r = BitReader::new(sec[SEC_DICTS]);
+    let mut decs = Vec::with_capacity(CONTEXTS);
+    for ctx in 0..CONTEXTS {
+        let bits = raw_bits_limit(ctx, h.bits);
+        decs.push(StaticDict::read(&mut r, 1 << bits, bits)?.decoder());
+    }
+    if r.overran() {
+        return Err(corrupt_file("the dictionaries run past their section"));
+    }
+    let (mut high, leaf_of_tree) = high_tree(&h, sec[SEC_HIGH])?;
+    // Capacities from the header, bounded by what the file can hold.
+    let cap = |n: u32| (n as usize).min(b.len().saturating_mul(16));
+    let mut out = Out {
+        headers: Vec::with_capacity(cap(h.trees)),
+        nodes: Vec::with_capacity(cap(h.node_words)),
+        ics: Vec::with_capacity(cap(h.interconnections)),
+        q,
+        blocks: Vec::new(),
+        block_start: Vec::new(),
+        stored: 0,
+        triangles: 0,
+        stats: HccStats::default(),
+        roots: Vec::with_capacity(cap(h.trees)),
+    };
+    out.q.trees.reserve(cap(h.trees));
+    let (starts, streams) = (sec[SEC_STARTS], sec[SEC_TREES]);
+    let mut s = Scratch::default();
+    for k in 0..h.trees as usize {
+        let start = u32_at(starts, 4 * k) as usize;
+        let end = if 4 * (k + 1) < starts.len() {
+            u32_at(starts, 4 * (k + 1)) as usize
+        } else {
+            streams.len()
+        };
+        let bytes = streams.get(start..end).ok_or(OocError::Corrupt {
+            tree: k as u32,
+            what: "the tree's stream lies outside the streams section",
+        })?;
+        decode_tree(k as u32, bytes, &decs, &h, &mut s, &mut out)?;
+    }
+    let count = |what: &'static str, got: usize, want: u32| {
+        if got == want as usize {
+            Ok(())
+        } else {
+            Err(corrupt_file(what))
+        }
+    };
+    count(
+        "the trees hold another number of node words than the header says",
+        out.nodes.len(),
+        h.node_words,
+    )?;
+    count(
+        "the trees hold another number of inter-connections than the header says",
+        out.ics.len(),
+        h.interconnections,
+    )?;
+    count(
+        "the trees hold another number of vertices than the header says",
+        out.stored as usize,
+        h.stored_vertices,
+    )?;
+    count(
+        "the trees hold another number of triangles than the header says",
+        out.triangles as usize,
+        h.triangles,
+    )?;
+    // High-level boxes bottom-up (children sit behind their parent).
+    let mut boxes = vec![[0f32; 6]; high.len()];
+    for (k, &hi) in leaf_of_tree.iter().enumerate() {
+        boxes[hi as usize] = out.roots[k];
+    }
+    for i in (0..high.len()).rev() {
+        let n = high[i];
+        if !n.is_leaf() {
+            let (l, r) = (boxes[n.a as usize], boxes[n.b as usize]);
+            boxes[i] = std::array::from_fn(|e| if outer(e, r[e], l[e]) { r[e] } else { l[e] });
+        }
+        let bx = boxes[i];
+        high[i].min = [bx[0], bx[1], bx[2]];
+        high[i].max = [bx[3], bx[4], bx[5]];
+    }
+    let ids = if h.tree_order {
+        None
+    } else {
+        Some(IdMap::parse(sec[SEC_IDS], h.triangles)?)
+    };
+    let vertex_ids = if h.vertex_ids {
+        Some(VertexIds::parse(sec[SEC_VIDS], h.stored_vertices)?)
+    } else {
+        None
+    };
+    let mut stats = out.stats;
+    stats.trees = out.headers.len();
+    stats.high_nodes = high.len();
+    stats.tree_vertices = out.stored as usize;
+    stats.mesh_vertices = h.used_vertices as usize;
+    let mut hcc = HccBvh {
+        high,
+        headers: out.headers,
+        nodes: out.nodes,
+        ics: out.ics,
+        vertices: Vertices::Packed(out.q),
+        blocks: out.blocks,
+        block_start: out.block_start,
+        leaf_bits: Vec::new(),
+        leaf_rank: Vec::new(),
+        ids,
+        vertex_ids,
+        multi: h.multi,
+        triangle_count: h.triangles,
+        mesh_vertices: h.mesh_vertices,
+        mass: h.mass,
+        stats,
+    };
+    hcc.build_leaf_ranks();
+    Ok(hcc)
+}
+
+/// The next symbol of context `ctx` in tree `k`'s stream.
+#[inline(always)]
+fn read_symbol(
+    decs: &[StaticDecoder],
+    ctx: usize,
+    r: &mut BitReader<'_>,
+    k: u32,
+) -> Result<u32, OocError> {
+    match decs[ctx].get(r) {
+        Ok(v) => Ok(v),
+        Err(e) => Err(symbol_error(k, e)),
+    }
+}
+
+/// A symbol that could not be read, in tree `k`.
+#[cold]
+fn symbol_error(k: u32, e: FormatError) -> OocError {
+    match e {
+        FormatError::Corrupt { what } => OocError::Corrupt { tree: k, what },
+        e => e.into(),
+    }
+}
+
+fn corrupt_file(what: &'static str) -> OocError {
+    OocError::Corrupt {
+        tree: u32::MAX,
+        what,
+    }
+}
+
+/// The high-level tree's nodes (boxes still empty) from its shape bits,
+/// and the high-level leaf of each low-level tree.
+fn high_tree(h: &Header, bits: &[u8]) -> Result<(Vec<HighNode>, Vec<u32>), OocError> {
+    let zero = HighNode {
+        min: [0.0; 3],
+        max: [0.0; 3],
+        a: 0,
+        b: 0,
+    };
+    if (h.triangles == 0) != (h.high_nodes == 0) || (h.high_nodes == 0) != (h.trees == 0) {
+        return Err(corrupt_file(
+            "the counts of triangles, high-level nodes and trees disagree",
+        ));
+    }
+    let mut high = Vec::with_capacity((h.high_nodes as usize).min(bits.len() * 8));
+    let mut leaf_of_tree = Vec::with_capacity((h.trees as usize).min(bits.len() * 8));
+    if h.high_nodes == 0 {
+        return Ok((high, leaf_of_tree));
+    }
+    let mut r = BitReader::new(bits);
+    high.push(zero);
+    let mut stack = vec![0u32];
+    while let Some(i) = stack.pop() {
+        if r.get(1) == 1 {
+            let a = high.len() as u32;
+            if a + 2 > h.high_nodes {
+                return Err(corrupt_file(
+                    "the high-level tree has more nodes than the header says",
+                ));
+            }
+            high[i as usize].a = a;
+            high[i as usize].b = a + 1;
+            high.extend([zero, zero]);
+            stack.push(a + 1);
+            stack.push(a);
+        } else {
+            if leaf_of_tree.len() as u32 >= h.trees {
+                return Err(corrupt_file(
+                    "the high-level tree has more leaves than there are trees",
+                ));
+            }
+            high[i as usize].a = leaf_of_tree.len() as u32;
+            high[i as usize].b = HIGH_LEAF;
+            leaf_of_tree.push(i);
+        }
+    }
+    if r.overran() || high.len() != h.high_nodes as usize || leaf_of_tree.len() != h.trees as usize
+    {
+        return Err(corrupt_file(
+            "the high-level shape disagrees with the header's counts",
+        ));
+    }
+    Ok((high, leaf_of_tree))
+}
+
+/// Decodes low-level tree `k` from its stream `bytes` and appends its
+/// i-HCCMesh to `out`.
+fn decode_tree(
+    k: u32,
+    bytes: &[u8],
+    decs: &[StaticDecoder],
+    h: &Header,
+    s: &mut Scratch,
+    out: &mut Out,
+) -> Result<(), OocError> {
+    let bad = |what| OocError::Corrupt { tree: k, what };
+    let mut r = BitReader::new(bytes);
+    // Structure.
+    s.lay
+        .root(read_symbol(decs, CTX_TEMPLATE, &mut r, k)?)
+        .map_err(bad)?;
+    while let Some(at) = s.lay.pending.pop() {
+        let left = read_symbol(decs, CTX_TEMPLATE, &mut r, k)?;
+        let right = read_symbol(decs, CTX_TEMPLATE, &mut r, k)?;
+        s.lay.expand(at, left, right).map_err(bad)?;
+    }
+    let n = s.lay.types.len();
+    if out.nodes.len() + n > h.node_words as usize {
+        return Err(bad("the trees hold more node words than the header says"));
+    }
+    // Leaves: each triangle's corners, then its new vertices' residuals.
+    s.cache.clear();
+    s.adj.clear();
+    s.grid.clear();
+    s.tris.clear();
+    s.spans.clear();
+    s.spans.resize(n, (0, 0));
+    let max_q = out.q.max_q();
+    let mut last = [max_q / 2; 3];
+    let mut next = 0u32;
+    for p in 0..n {
+        if s.lay.types[p] != TYPE_LEAF {
+            continue;
+        }
+        let count = if h.multi {
+            read_symbol(decs, CTX_LEAF, &mut r, k)? + 1
+        } else {
+            1
+        };
+        if count as usize > MAX_LEAF_TRIANGLES || s.tris.len() + count as usize > MAX_TREE_TRIANGLES
+        {
+            return Err(bad(
+                "a leaf or the tree holds more triangles than the format allows",
+            ));
+        }
+        s.spans[p] = (s.tris.len() as u32, count);
+        for _ in 0..count {
+            let first_new = next;
+            let mut c = [0u32; 3];
+            for (slot, cs) in c.iter_mut().enumerate() {
+                let v = s
+                    .cache
+                    .decode(read_symbol(decs, CTX_CORNER + slot, &mut r, k)?, next)
+                    .map_err(bad)?;
+                if v == next {
+                    if next as usize >= MAX_TREE_VERTICES {
+                        return Err(bad("the tree has more vertices than 9-bit indices address"));
+                    }
+                    s.adj.new_vertex(v);
+                    next += 1;
+                }
+                *cs = v;
+            }
+            let mut known = c.map(|v| v < first_new);
+            for slot in 0..3 {
+                if known[slot] {
+                    continue;
+                }
+                let v = c[slot];
+                debug_assert_eq!(v as usize, s.grid.len());
+                let (pred, ctx) = predict(c, slot, known, &s.grid, &s.adj, last, max_q);
+                let mut g = [0u32; 3];
+                for x in 0..3 {
+                    let d = unzigzag(u64::from(read_symbol(decs, ctx + x, &mut r, k)?));
+                    g[x] = u32::try_from(i64::from(pred[x]) + d)
+                        .ok()
+                        .filter(|&c| c <= max_q)
+                        .ok_or(bad("a vertex decodes outside the grid"))?;
+                }
+                s.grid.push(g);
+                last = g;
+                for j in 0..3 {
+                    known[j] |= c[j] == v;
+                }
+            }
+            s.adj.add(c);
+            s.tris.push(c);
+        }
+    }
+    let triangles = s.tris.len() as u32;
+    if r.overran() {
+        return Err(bad("the tree's stream ends early"));
+    }
+    s.pts.clear();
+    s.pts.extend(
+        s.grid
+            .iter()
+            .map(|g| std::array::from_fn(|a| out.q.value(a, g[a]))),
+    );
+    out.headers.push(TreeHeader {
+        node_start: out.nodes.len() as u32,
+        ic_start: out.ics.len() as u32,
+        vertex_start: out.stored,
+        first_triangle: out.triangles,
+    });
+    let multi = h.multi.then_some((&mut out.blocks, &mut out.block_start));
+    let root = s.rebuild.tree(
+        &s.lay,
+        (&s.spans, &s.tris),
+        &s.pts,
+        (&mut out.nodes, &mut out.ics, multi),
+        &mut out.stats,
+    );
+    if u32::try_from(out.blocks.len()).is_err() {
+        return Err(bad("the trees' triangle blocks outgrow 4 GiB"));
+    }
+    out.roots.push(root);
+    out.q.push_tree(&s.grid);
+    out.stored = out
+        .stored
+        .checked_add(next)
+        .ok_or(bad("the trees hold more vertices than 32 bits count"))?;
+    out.triangles = out
+        .triangles
+        .checked_add(triangles)
+        .ok_or(bad("the trees hold more triangles than 32 bits count"))?;
+    if out.ics.len() > h.interconnections as usize {
+        return Err(bad(
+            "the trees hold more inter-connections than the header says",
+        ));
+    }
+    Ok(())
+}

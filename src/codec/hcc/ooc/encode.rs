@@ -1,0 +1,355 @@
+//! o-HCCMesh encoding: an i-HCCMesh (quantized vertices, one triangle a
+//! leaf) into the coded file, in two passes over the model (the first
+//! counts each context's symbols for its dictionary, the second writes).
+
+use super::super::HccBvh;
+use super::super::ids::{IdMap, VertexIds};
+use super::super::node::{Interconnection, TYPE_LEAF, node_type};
+use super::super::template::TEMPLATES;
+use super::super::vertices::Quantized;
+use super::OocError;
+use super::file::{self, Header, SECTIONS};
+use super::model::{
+    Adjacency, CONTEXTS, CTX_CORNER, CTX_LEAF, CTX_TEMPLATE, CornerCache, Layout, part_of, predict,
+    template_symbol,
+};
+use crate::codec::common::bits::{BitWriter, zigzag};
+use crate::codec::common::static_dict::{StaticDict, StaticEncoder};
+use crate::hash::FastMap;
+
+/// Bytes of an o-HCCMesh file by part.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct OocSizes {
+    /// Header and section table.
+    pub header: usize,
+    /// The contexts' dictionaries.
+    pub dictionaries: usize,
+    /// The high-level tree's shape (a bit a node; no boxes).
+    pub high_level: usize,
+    /// Each low-level tree's first byte (random access).
+    pub tree_starts: usize,
+    /// Template symbols (tree structure and inter-connections), in bits/8.
+    pub templates: f64,
+    /// Corner symbols (vertex indices), in bits/8.
+    pub corners: f64,
+    /// Vertex residuals, in bits/8.
+    pub vertices: f64,
+    /// Bits that pad each tree's stream to a byte, in bits/8.
+    pub padding: f64,
+    /// The triangle id map (when kept).
+    pub ids: usize,
+    /// The vertex id map (when kept).
+    pub vertex_ids: usize,
+}
+
+impl OocSizes {
+    /// The parts as `(name, bytes)`.
+    pub fn parts(&self) -> Vec<(&'static str, f64)> {
+        vec![
+            ("header", self.header as f64),
+            ("dictionaries", self.dictionaries as f64),
+            ("high-level", self.high_level as f64),
+            ("tree-starts", self.tree_starts as f64),
+            ("templates", self.templates),
+            ("corners", self.corners),
+            ("vertices", self.vertices),
+            ("padding", self.padding),
+            ("ids", self.ids as f64),
+            ("vertex-ids", self.vertex_ids as f64),
+        ]
+    }
+
+    /// Every part summed: the file's length.
+    pub fn total(&self) -> f64 {
+        self.parts().iter().map(|p| p.1).sum()
+    }
+}
+
+/// The model's state while coding one tree.
+#[derive(Default)]
+struct Model {
+    lay: Layout,
+    types: Vec<u32>,
+    cache: CornerCache,
+    adj: Adjacency,
+    grid: Vec<[u32; 3]>,
+    tris: Vec<[u32; 3]>,
+}
+
+/// The coding of one tree's triangles.
+struct TreeCoder {
+    max_q: u32,
+    last: [u32; 3],
+    next: u32,
+    n_verts: u32,
+}
+
+impl TreeCoder {
+    /// Codes triangle `c` (local corners) of tree `k`: its corner symbols,
+    /// then each new vertex's residuals.
+    fn triangle(
+        &mut self,
+        c: [u32; 3],
+        q: &Quantized,
+        k: usize,
+        m: &mut Model,
+        emit: &mut impl FnMut(usize, u32),
+    ) -> Result<(), &'static str> {
+        let first_new = self.next;
+        for (slot, &v) in c.iter().enumerate() {
+            if v > self.next {
+                return Err("vertices are not numbered by first use");
+            }
+            emit(CTX_CORNER + slot, m.cache.symbol(v, self.next));
+            if v == self.next {
+                if self.next >= self.n_verts {
+                    return Err("a leaf names a vertex past the tree's array");
+                }
+                m.adj.new_vertex(v);
+                self.next += 1;
+            }
+            m.cache.touch(v);
+        }
+        let mut known = c.map(|v| v < first_new);
+        for slot in 0..3 {
+            if known[slot] {
+                continue;
+            }
+            let v = c[slot];
+            let (pred, ctx) = predict(c, slot, known, &m.grid, &m.adj, self.last, self.max_q);
+            let g = q.grid_point(k, v);
+            for x in 0..3 {
+                emit(ctx + x, zigzag(i64::from(g[x]) - i64::from(pred[x])) as u32);
+            }
+            m.grid.push(g);
+            self.last = g;
+            for j in 0..3 {
+                known[j] |= c[j] == v;
+            }
+        }
+        m.adj.add(c);
+        Ok(())
+    }
+}
+
+/// Runs the model over low-level tree `k` of `hcc`, calling `emit(context,
+/// symbol)` for every symbol in stream order.
+fn model_tree(
+    hcc: &HccBvh,
+    q: &Quantized,
+    k: usize,
+    m: &mut Model,
+    emit: &mut impl FnMut(usize, u32),
+) -> Result<(), OocError> {
+    let bad = |what| OocError::NotCanonical {
+        tree: k as u32,
+        what,
+    };
+    let h = hcc.headers[k];
+    let (node_end, ic_end, vertex_end) = hcc.tree_ends(k);
+    let words = hcc
+        .nodes
+        .get(h.node_start as usize..node_end as usize)
+        .filter(|w| !w.is_empty())
+        .ok_or(bad("the tree's node words are out of range"))?;
+    let ics = hcc
+        .ics
+        .get(h.ic_start as usize..ic_end as usize)
+        .ok_or(bad("the tree's inter-connections are out of range"))?;
+    let n_verts = vertex_end
+        .checked_sub(h.vertex_start)
+        .ok_or(bad("the tree's vertices are out of range"))?;
+    m.types.clear();
+    m.types.extend(words.iter().map(|&w| node_type(w)));
+    // Structure: the templates in the order the i-HCCMesh allocated them.
+    let root = if m.types[0] == TYPE_LEAF {
+        0
+    } else {
+        (words[0] & 31) as u8
+    };
+    let overrun = "a template runs past the tree's nodes";
+    let sym = template_symbol(root, 0, &m.types).ok_or(bad(overrun))?;
+    emit(CTX_TEMPLATE, sym);
+    m.lay.root(sym).map_err(bad)?;
+    while let Some(at) = m.lay.pending.pop() {
+        let ic = ics
+            .get(m.lay.ics.len())
+            .map(|&w| Interconnection::unpack(w))
+            .ok_or(bad("fewer inter-connections than template leaves"))?;
+        let start = m.lay.types.len();
+        let left_nodes = TEMPLATES
+            .get(ic.left_template as usize)
+            .ok_or(bad("a template id is out of range"))?
+            .nodes as usize;
+        let l = template_symbol(ic.left_template, start, &m.types).ok_or(bad(overrun))?;
+        let r =
+            template_symbol(ic.right_template, start + left_nodes, &m.types).ok_or(bad(overrun))?;
+        emit(CTX_TEMPLATE, l);
+        emit(CTX_TEMPLATE, r);
+        m.lay.expand(at, l, r).map_err(bad)?;
+        if m.lay.ics.last().map(|i| i.2) != Some(ic.left_start) {
+            return Err(bad("an inter-connection's position is not the layout's"));
+        }
+    }
+    if m.lay.types != m.types || m.lay.ics.len() != ics.len() {
+        return Err(bad("the node types are not the templates'"));
+    }
+    // Leaves in node-word order: each triangle's corners, then its new
+    // vertices.
+    m.cache.clear();
+    m.adj.clear();
+    m.grid.clear();
+    let mut t = TreeCoder {
+        max_q: q.max_q(),
+        last: [q.max_q() / 2; 3],
+        next: 0,
+        n_verts,
+    };
+    for p in 0..words.len() {
+        if m.types[p] != TYPE_LEAF {
+            continue;
+        }
+        m.tris.clear();
+        hcc.leaf_triangles(k as u32, h.node_start + p as u32, |_, c| m.tris.push(c));
+        if hcc.multi {
+            let count = m.tris.len() as u32;
+            emit(
+                CTX_LEAF,
+                count
+                    .checked_sub(1)
+                    .ok_or(bad("a leaf holds no triangle"))?,
+            );
+        }
+        for i in 0..m.tris.len() {
+            let c = m.tris[i];
+            t.triangle(c, q, k, m, emit).map_err(bad)?;
+        }
+    }
+    let next = t.next;
+    if next != n_verts {
+        return Err(bad("a stored vertex is used by no leaf"));
+    }
+    Ok(())
+}
+
+/// The high-level tree's shape: a bit a node (1 inner, 0 a low-level
+/// tree), in the order the i-HCCMesh encoder allocated them.
+fn high_shape(hcc: &HccBvh) -> Result<Vec<u8>, OocError> {
+    let bad = |what| OocError::NotCanonical {
+        tree: u32::MAX,
+        what,
+    };
+    let mut w = BitWriter::default();
+    if hcc.high.is_empty() {
+        return Ok(Vec::new());
+    }
+    let (mut stack, mut len, mut trees) = (vec![0u32], 1u32, 0u32);
+    while let Some(h) = stack.pop() {
+        let n = hcc
+            .high
+            .get(h as usize)
+            .ok_or(bad("a high-level child is out of range"))?;
+        if n.is_leaf() {
+            if n.a != trees {
+                return Err(bad("low-level trees are not numbered depth-first"));
+            }
+            trees += 1;
+            w.put(0, 1);
+        } else {
+            if n.a != len || n.b != len + 1 {
+                return Err(bad("high-level nodes are not allocated depth-first"));
+            }
+            w.put(1, 1);
+            stack.push(len + 1);
+            stack.push(len);
+            len += 2;
+        }
+    }
+    if len as usize != hcc.high.len() || trees as usize != hcc.headers.len() {
+        return Err(bad(
+            "the high-level tree has nodes or trees it does not reach",
+        ));
+    }
+    Ok(w.finish())
+}
+
+/// Encodes `hcc` as an o-HCCMesh file; returns the bytes and their sizes
+/// by part.
+pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
+    let q = hcc.vertices.quantized().ok_or(OocError::NotQuantized)?;
+    let mut m = Model::default();
+    // Pass 1: each context's symbol counts.
+    let mut counts: Vec<FastMap<u32, u64>> = vec![FastMap::default(); CONTEXTS];
+    for k in 0..hcc.headers.len() {
+        model_tree(hcc, q, k, &mut m, &mut |ctx, sym| {
+            *counts[ctx].entry(sym).or_insert(0) += 1;
+        })?;
+    }
+    let dicts: Vec<StaticDict> = counts
+        .iter()
+        .map(|c| StaticDict::optimal(&c.iter().map(|(&s, &n)| (s, n)).collect::<Vec<_>>()))
+        .collect();
+    let mut w = BitWriter::default();
+    for d in &dicts {
+        d.write(&mut w);
+    }
+    let dict_bytes = w.finish();
+    // Pass 2: the trees' streams, each starting on a byte.
+    let mut encs: Vec<StaticEncoder> = dicts.iter().map(StaticDict::encoder).collect();
+    let mut streams = Vec::new();
+    let mut starts = Vec::with_capacity(hcc.headers.len() * 4);
+    let mut part_bits = [0u64; 3];
+    for k in 0..hcc.headers.len() {
+        let start = u32::try_from(streams.len()).map_err(|_| OocError::Corrupt {
+            tree: k as u32,
+            what: "the coded trees outgrow 4 GiB",
+        })?;
+        starts.extend_from_slice(&start.to_le_bytes());
+        let mut w = BitWriter::default();
+        model_tree(hcc, q, k, &mut m, &mut |ctx, sym| {
+            let before = w.bit_len();
+            encs[ctx].put(&mut w, sym);
+            part_bits[part_of(ctx)] += w.bit_len() - before;
+        })?;
+        streams.extend_from_slice(&w.finish());
+    }
+    let high = high_shape(hcc)?;
+    let ids = hcc.ids.as_ref().map_or(Vec::new(), IdMap::to_bytes);
+    let vids = hcc
+        .vertex_ids
+        .as_ref()
+        .map_or(Vec::new(), VertexIds::to_bytes);
+    let header = Header {
+        multi: hcc.multi,
+        vertex_ids: hcc.vertex_ids.is_some(),
+        tree_order: hcc.ids.is_none(),
+        high_nodes: hcc.high.len() as u32,
+        trees: hcc.headers.len() as u32,
+        node_words: hcc.nodes.len() as u32,
+        interconnections: hcc.ics.len() as u32,
+        stored_vertices: hcc.stats.tree_vertices as u32,
+        triangles: hcc.triangle_count,
+        mesh_vertices: hcc.mesh_vertices,
+        used_vertices: hcc.stats.mesh_vertices as u32,
+        bits: q.bits,
+        grid: [q.origin, q.step, q.error],
+        mass: hcc.mass,
+    };
+    let sections: [&[u8]; SECTIONS] = [&dict_bytes, &high, &starts, &streams, &ids, &vids];
+    let bytes = file::write(&header, &sections);
+    let coded: u64 = part_bits.iter().sum();
+    let sizes = OocSizes {
+        header: file::HEADER_LEN,
+        dictionaries: dict_bytes.len(),
+        high_level: high.len(),
+        tree_starts: starts.len(),
+        templates: part_bits[0] as f64 / 8.0,
+        corners: part_bits[1] as f64 / 8.0,
+        vertices: part_bits[2] as f64 / 8.0,
+        padding: (streams.len() as u64 * 8 - coded) as f64 / 8.0,
+        ids: ids.len(),
+        vertex_ids: vids.len(),
+    };
+    debug_assert_eq!(sizes.total() as usize, bytes.len());
+    Ok((bytes, sizes))
+}

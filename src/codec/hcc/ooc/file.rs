@@ -1,0 +1,198 @@
+//! The o-HCCMesh file's frame: header fields and sections, written and
+//! parsed (layout in the module docs of [`ooc`](super)).
+
+use xxhash_rust::xxh3::xxh3_64;
+
+use super::OocError;
+use crate::codec::common::le::{f32x3_at, u32_at};
+use crate::codec::common::{FormatError, MASS_BYTES, MassProps, container};
+
+/// The file version this build writes and reads.
+pub const VERSION: u32 = 1;
+/// The o-HCCMesh file's magic.
+pub const MAGIC: [u8; 8] = *b"CBVHHCO\0";
+const MASS_AT: usize = 88;
+const TABLE: usize = MASS_AT + MASS_BYTES;
+/// Number of sections.
+pub const SECTIONS: usize = 6;
+/// Bytes of the header.
+pub const HEADER_LEN: usize = TABLE + 24 * SECTIONS + 8;
+const _: () = assert!(HEADER_LEN == 292);
+/// Section names, in file order.
+pub const NAMES: [&str; SECTIONS] = [
+    "dictionaries",
+    "high-level shape",
+    "tree starts",
+    "tree streams",
+    "ids",
+    "vertex ids",
+];
+/// Section index of the dictionaries.
+pub const SEC_DICTS: usize = 0;
+/// Section index of the high-level tree's shape bits.
+pub const SEC_HIGH: usize = 1;
+/// Section index of the trees' first bytes.
+pub const SEC_STARTS: usize = 2;
+/// Section index of the trees' coded streams.
+pub const SEC_TREES: usize = 3;
+/// Section index of the triangle id map.
+pub const SEC_IDS: usize = 4;
+/// Section index of the vertex id map.
+pub const SEC_VIDS: usize = 5;
+const FLAG_VERTEX_IDS: u32 = 1;
+const FLAG_TREE_ORDER: u32 = 2;
+const FLAG_MULTI: u32 = 4;
+
+/// The header's fields.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Header {
+    /// Multi-triangle leaves.
+    pub multi: bool,
+    /// Input vertex ids kept (section `vertex ids`).
+    pub vertex_ids: bool,
+    /// Triangles in tree order (no `ids` section).
+    pub tree_order: bool,
+    /// High-level nodes.
+    pub high_nodes: u32,
+    /// Low-level trees.
+    pub trees: u32,
+    /// i-HCCMesh node words.
+    pub node_words: u32,
+    /// i-HCCMesh inter-connections.
+    pub interconnections: u32,
+    /// Vertices stored over all trees.
+    pub stored_vertices: u32,
+    /// Triangles.
+    pub triangles: u32,
+    /// The input mesh's vertices.
+    pub mesh_vertices: u32,
+    /// Distinct input vertices the triangles use.
+    pub used_vertices: u32,
+    /// Bits per grid coordinate.
+    pub bits: u32,
+    /// Grid origin, step and measured error.
+    pub grid: [[f32; 3]; 3],
+    /// Mass properties at density 1.
+    pub mass: MassProps,
+}
+
+fn header_err(field: &'static str, why: impl Into<String>) -> OocError {
+    FormatError::header(field, why).into()
+}
+
+/// Writes a whole file.
+pub fn write(h: &Header, sections: &[&[u8]; SECTIONS]) -> Vec<u8> {
+    let len: usize = sections.iter().map(|s| s.len()).sum();
+    let mut out = Vec::with_capacity(HEADER_LEN + len);
+    out.extend_from_slice(&MAGIC);
+    let flags = u32::from(h.vertex_ids) * FLAG_VERTEX_IDS
+        + u32::from(h.tree_order) * FLAG_TREE_ORDER
+        + u32::from(h.multi) * FLAG_MULTI;
+    for v in [
+        VERSION,
+        flags,
+        h.high_nodes,
+        h.trees,
+        h.node_words,
+        h.interconnections,
+        h.stored_vertices,
+        h.triangles,
+        h.mesh_vertices,
+        h.used_vertices,
+        h.bits,
+    ] {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    for c in h.grid.iter().flatten() {
+        out.extend_from_slice(&c.to_le_bytes());
+    }
+    debug_assert_eq!(out.len(), MASS_AT);
+    out.extend_from_slice(&h.mass.to_bytes());
+    container::write_sections(&mut out, HEADER_LEN, sections);
+    out
+}
+
+/// Parses the header and the section table of `b`, checking every
+/// checksum; returns the header and each section's bytes.
+pub fn parse(b: &[u8]) -> Result<(Header, [&[u8]; SECTIONS]), OocError> {
+    container::check_header(b, HEADER_LEN, &MAGIC, "o-HCCMesh")?;
+    let version = u32_at(b, 8);
+    if version != VERSION {
+        return Err(OocError::Version {
+            found: version,
+            supported: VERSION,
+        });
+    }
+    let flags = u32_at(b, 12);
+    if flags > FLAG_VERTEX_IDS | FLAG_TREE_ORDER | FLAG_MULTI {
+        return Err(header_err("flags", "reserved bits are set"));
+    }
+    let f: [u32; 9] = std::array::from_fn(|k| u32_at(b, 16 + 4 * k));
+    let mass = MassProps::from_bytes(&b[MASS_AT..TABLE]).ok_or_else(|| {
+        header_err(
+            "mass properties",
+            "a value is not finite or the mass is negative",
+        )
+    })?;
+    let h = Header {
+        multi: flags & FLAG_MULTI != 0,
+        vertex_ids: flags & FLAG_VERTEX_IDS != 0,
+        tree_order: flags & FLAG_TREE_ORDER != 0,
+        high_nodes: f[0],
+        trees: f[1],
+        node_words: f[2],
+        interconnections: f[3],
+        stored_vertices: f[4],
+        triangles: f[5],
+        mesh_vertices: f[6],
+        used_vertices: f[7],
+        bits: f[8],
+        grid: [f32x3_at(b, 52), f32x3_at(b, 64), f32x3_at(b, 76)],
+        mass,
+    };
+    let mut at = HEADER_LEN as u64;
+    let mut out: [&[u8]; SECTIONS] = [&[]; SECTIONS];
+    for (k, slot) in out.iter_mut().enumerate() {
+        let (off, len, hash) = container::section_entry(b, TABLE, k);
+        if off != at {
+            return Err(header_err(
+                NAMES[k],
+                format!("the section starts at {off}, not at {at}"),
+            ));
+        }
+        let end = off.checked_add(len).filter(|&e| e <= b.len() as u64);
+        let Some(end) = end else {
+            return Err(FormatError::Truncated {
+                section: NAMES[k],
+                need: off.saturating_add(len),
+                have: b.len() as u64,
+            }
+            .into());
+        };
+        let s = &b[off as usize..end as usize];
+        if xxh3_64(s) != hash {
+            return Err(FormatError::Checksum { section: NAMES[k] }.into());
+        }
+        *slot = s;
+        at = end;
+    }
+    if at != b.len() as u64 {
+        return Err(header_err(
+            "length",
+            format!("{} bytes follow the last section", b.len() as u64 - at),
+        ));
+    }
+    if u64::from(h.trees) * 4 != out[SEC_STARTS].len() as u64 {
+        return Err(header_err(
+            "tree starts",
+            format!("{} bytes for {} trees", out[SEC_STARTS].len(), h.trees),
+        ));
+    }
+    if (h.tree_order && !out[SEC_IDS].is_empty()) || (!h.vertex_ids && !out[SEC_VIDS].is_empty()) {
+        return Err(header_err(
+            "flags",
+            "the id sections disagree with the flags",
+        ));
+    }
+    Ok((h, out))
+}

@@ -1,0 +1,274 @@
+//! o-HCCMesh (HCCMesh §5): the out-of-core form of the i-HCCMesh. Each
+//! low-level tree's structure, vertex indices and quantized vertices are
+//! coded through static dictionaries of optimal size
+//! ([`static_dict`](crate::codec::common::static_dict), §5.2); no box is
+//! stored: decoding rebuilds every box bottom-up from the vertices and
+//! produces the i-HCCMesh that [`HccBvh::encode_with`] builds from the same
+//! tree and options, byte for byte.
+//!
+//! ```
+//! use cbvh::codec::hcc::ooc::{HccOocBvh, OocOptions};
+//! # fn demo(mesh: &cbvh::Mesh) -> Result<(), Box<dyn std::error::Error>> {
+//! let tree = cbvh::build::build_default(mesh)?;
+//! let ooc = HccOocBvh::encode_with(&tree, mesh, &OocOptions::default())?;
+//! let bytes = ooc.file_bytes(); // ~3–4 bytes a triangle
+//! let back = HccOocBvh::from_bytes(bytes)?; // o → i at open
+//! assert_eq!(back.hcc().to_bytes(), ooc.hcc().to_bytes());
+//! # Ok(()) }
+//! ```
+//!
+//! # Why a sub-module of `hcc`
+//!
+//! o-HCCMesh is not a traversable structure of its own: it is a coding of
+//! the i-HCCMesh, and decodes into one. Living under `hcc` it builds the
+//! [`HccBvh`] directly, shares the pair coding of the boxes with the
+//! i-HCCMesh encoder (module `pair`, so the rebuilt words cannot drift from
+//! the encoder's) and reads the template table, without widening what
+//! `hcc` exposes.
+//!
+//! # What is coded, and in which order
+//!
+//! Per low-level tree, one bit stream starting on a byte, in three parts
+//! interleaved as the decoder needs them:
+//!
+//! 1. **Templates** (structure and inter-connections, §4.3): the template
+//!    symbols in the order the i-HCCMesh allocates templates, which is a
+//!    depth-first order of the template tree (root template, then for the
+//!    template leaf on top of a stack its two child templates, left then
+//!    right; the stack takes a template's leaves in breadth-first order,
+//!    so the last one is expanded first). A symbol is the template id
+//!    (5 bits) and one bit per node at template depth 3 without children
+//!    inside the template: a template leaf or a leaf of the tree. Node
+//!    types, child positions, inter-connections (child template ids, left
+//!    start, index) all follow from the symbols; nothing else is stored.
+//! 2. **Vertex indices**, streaming-mesh style (§5.1, [ILS05]): the leaves
+//!    in node-word order, which is the same depth-first order of the
+//!    templates; each corner is one symbol (context by corner slot): 0 for
+//!    a vertex never seen in this tree (it takes the next local index,
+//!    which is how the i-HCCMesh numbers a tree's vertices: by first use),
+//!    `1 + r` for the vertex at rank `r` of a cache of the 16 most recently
+//!    used ones, else `17 + d` for the vertex `d + 1` below the next index.
+//! 3. **Vertices**: each new vertex right after its triangle's corners, as
+//!    grid coordinates on the i-HCCMesh's mesh-wide quantization grid
+//!    (16 bits by default, §5.1), predicted and sent as zig-zagged
+//!    residuals, one context per axis and kind of prediction: the
+//!    parallelogram `a + b − c` [AG04] when the other two corners are known
+//!    and an earlier triangle of the tree shares their edge (`c` its third
+//!    corner; found through each vertex's last 16 triangles); their
+//!    midpoint or the one known corner otherwise; the tree's last decoded
+//!    vertex when no corner is known.
+//!
+//! Every context has its own static dictionary, one for the whole file
+//! (so that a tree decodes alone, for on-demand decoding), sized by §5.2's
+//! rule.
+//!
+//! **Boxes** are not stored (§5.1): the decoder computes each node's tight
+//! box bottom-up from the decoded vertices (ties: first corner, left
+//! child, as the i-HCCMesh encoder) and then codes each sibling pair's
+//! reuse mask and vertex fields top-down exactly as the i-HCCMesh encoder
+//! does; the high-level tree's boxes are combined from the low-level
+//! trees' root boxes the same way. All of it linear in the nodes.
+//!
+//! **Multi-triangle leaves** (the i-HCCMesh's §7 extension) code a
+//! leaf's triangle count − 1 (its own context) before its triangles; the
+//! decoder rebuilds the leaf's block as the i-HCCMesh encoder writes it.
+//!
+//! **Scope**: quantized vertices only (f32 vertices are an error). The id maps (input triangle
+//! and vertex numbering), when the options keep them, are stored as the
+//! i-HCCMesh stores them, not coded further: the default is the paper's
+//! form, tree order, no maps.
+//!
+//! # Layout
+//!
+//! All integers little-endian; the frame is the shared one of
+//! [`container`](crate::codec::common::container). A 292-byte header, then
+//! six sections back to back, ending the file.
+//!
+//! | bytes | field |
+//! |---|---|
+//! | 0–7 | magic `CBVHHCO\0` |
+//! | 8–11 | version (1) |
+//! | 12–15 | flags: bit 0 vertex ids kept, bit 1 tree order (no triangle id map), bit 2 multi-triangle leaves; others 0 |
+//! | 16–35 | counts of the i-HCCMesh: high-level nodes, low-level trees, node words, inter-connections, stored vertices |
+//! | 36–39 | triangle count |
+//! | 40–43 | input mesh's vertex count |
+//! | 44–47 | distinct input vertices the triangles use |
+//! | 48–51 | bits per grid coordinate (1–24) |
+//! | 52–87 | grid origin, step and measured error, 3 × f32 each |
+//! | 88–139 | mass properties at density 1 |
+//! | 140–283 | section table (offset, length, checksum) of the six sections |
+//! | 284–291 | checksum of bytes 0–283 |
+//!
+//! Sections, in order:
+//! - *dictionaries*: the 14 contexts' dictionaries back to back in one bit
+//!   stream (templates; corners 0, 1, 2; parallelogram x, y, z; near x,
+//!   y, z; far x, y, z; leaf sizes), each as [`StaticDict`](crate::codec::common::static_dict::StaticDict) writes it;
+//! - *high-level shape*: one bit per high-level node (1 inner, 0 a
+//!   low-level tree) in depth-first order, left first (the order the
+//!   i-HCCMesh numbers them);
+//! - *tree starts*: per low-level tree, the byte where its stream starts
+//!   in the next section (`u32`);
+//! - *tree streams*: the trees' streams, each starting on a byte;
+//! - *ids*, *vertex ids*: the i-HCCMesh's sections of the same names,
+//!   empty when not kept.
+//!
+//! # Validation
+//! [`HccOocBvh::from_bytes`] checks the frame and every checksum, then
+//! decodes with checked reads: every symbol, count and index is checked
+//! against what the structure allows (a tree's nodes, inter-connections
+//! and vertices, the grid, the header's totals), so hostile bytes give an
+//! [`OocError`], never a panic or a hang. The decoded i-HCCMesh is then
+//! verified by [`HccBvh::verify`] like any i-HCCMesh file.
+
+mod contract;
+mod decode;
+mod encode;
+mod error;
+mod file;
+mod model;
+mod rebuild;
+
+pub use encode::OocSizes;
+pub use error::OocError;
+pub use file::MAGIC;
+
+use std::path::Path;
+
+use super::{HccBvh, HccOptions};
+use crate::build::CanonicalBvh;
+use crate::codec::ByteSize;
+use crate::codec::common::atomic_write;
+use crate::mesh::Mesh;
+
+/// Encoding options of the o-HCCMesh: the i-HCCMesh options it codes
+/// (always quantized).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct OocOptions {
+    /// Bits per grid coordinate (1 to 24; 16 as the paper).
+    pub vertex_bits: u32,
+    /// Keep the input's vertex ids (stored uncoded; default off).
+    pub vertex_ids: bool,
+    /// Keep the input's triangle ids (stored uncoded, about 2.5 bytes a
+    /// triangle; default off: tree order, the paper's form).
+    pub triangle_ids: bool,
+}
+
+impl Default for OocOptions {
+    fn default() -> Self {
+        Self {
+            vertex_bits: 16,
+            vertex_ids: false,
+            triangle_ids: false,
+        }
+    }
+}
+
+impl OocOptions {
+    /// The i-HCCMesh options this o-HCCMesh codes.
+    pub fn hcc(&self) -> HccOptions {
+        HccOptions {
+            vertex_bits: Some(self.vertex_bits),
+            vertex_ids: self.vertex_ids,
+            triangle_ids: self.triangle_ids,
+        }
+    }
+}
+
+impl HccBvh {
+    /// This i-HCCMesh as an o-HCCMesh file, and its bytes by part.
+    /// Quantized vertices only.
+    pub fn to_ooc(&self) -> Result<(Vec<u8>, OocSizes), OocError> {
+        encode::encode(self)
+    }
+
+    /// The i-HCCMesh an o-HCCMesh file codes (checked as
+    /// [`HccOocBvh::from_bytes`] does; run [`HccBvh::verify`] before
+    /// querying bytes you did not write).
+    pub fn from_ooc(bytes: &[u8]) -> Result<HccBvh, OocError> {
+        decode::decode(bytes)
+    }
+}
+
+/// The `hcc-ooc` codec: an o-HCCMesh file, decoded into its i-HCCMesh when
+/// opened (the paper's mode for models whose i-HCCMesh fits in memory) and
+/// traversed as that. It keeps the file's bytes (what it saves) beside the
+/// decoded i-HCCMesh.
+#[derive(Clone, Debug)]
+pub struct HccOocBvh {
+    hcc: HccBvh,
+    file: Vec<u8>,
+    sizes: Option<OocSizes>,
+}
+
+impl HccOocBvh {
+    /// Encodes `bvh` (built over `mesh`) as an i-HCCMesh with `options`
+    /// and codes it.
+    pub fn encode_with(
+        bvh: &CanonicalBvh,
+        mesh: &Mesh,
+        options: &OocOptions,
+    ) -> Result<Self, OocError> {
+        Self::from_hcc(HccBvh::encode_with(bvh, mesh, &options.hcc())?)
+    }
+
+    /// Codes an i-HCCMesh (quantized vertices).
+    pub fn from_hcc(hcc: HccBvh) -> Result<Self, OocError> {
+        let (file, sizes) = encode::encode(&hcc)?;
+        Ok(Self {
+            hcc,
+            file,
+            sizes: Some(sizes),
+        })
+    }
+
+    /// Decodes an o-HCCMesh file (see the module docs' validation).
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, OocError> {
+        Ok(Self {
+            hcc: decode::decode(bytes)?,
+            file: bytes.to_vec(),
+            sizes: None,
+        })
+    }
+
+    /// Reads and decodes the file at `path`.
+    pub fn open(path: &Path) -> Result<Self, OocError> {
+        let bytes = std::fs::read(path).map_err(|e| OocError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        Self::from_bytes(&bytes)
+    }
+
+    /// Writes the o-HCCMesh file to `path` atomically.
+    pub fn save(&self, path: &Path) -> Result<(), OocError> {
+        atomic_write(path, &self.file).map_err(|e| OocError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })
+    }
+
+    /// The decoded i-HCCMesh.
+    pub fn hcc(&self) -> &HccBvh {
+        &self.hcc
+    }
+
+    /// The o-HCCMesh file's bytes.
+    pub fn file_bytes(&self) -> &[u8] {
+        &self.file
+    }
+
+    /// The file's bytes by part (known when this value was encoded, not
+    /// when it was read from a file).
+    pub fn sizes(&self) -> Option<&OocSizes> {
+        self.sizes.as_ref()
+    }
+}
+
+impl ByteSize for HccOocBvh {
+    /// The decoded i-HCCMesh's parts and the file kept beside it.
+    fn bytes_by_part(&self) -> Vec<(&'static str, usize)> {
+        let mut parts = self.hcc.bytes_by_part();
+        parts.push(("o-hccmesh-file", self.file.len()));
+        parts
+    }
+}
