@@ -16,6 +16,15 @@ fn run(bin: &str, args: &[&str]) -> (bool, String) {
     )
 }
 
+/// The JSON report a sim wrote to `json` after it succeeded (`ok`, else
+/// the test fails with its `stderr`); the file is removed.
+fn report(ok: bool, stderr: &str, json: &std::path::Path) -> serde_json::Value {
+    assert!(ok, "{stderr}");
+    let v = serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+    std::fs::remove_file(json).ok();
+    v
+}
+
 #[test]
 fn lucy_on_turbine_runs_with_threads_and_cluster_size_and_writes_json() {
     let json = temp("lucy.json");
@@ -38,10 +47,7 @@ fn lucy_on_turbine_runs_with_threads_and_cluster_size_and_writes_json() {
             json.to_str().unwrap(),
         ],
     );
-    assert!(ok, "{stderr}");
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    std::fs::remove_file(&json).ok();
+    let v = report(ok, &stderr, &json);
     assert_eq!(v["scene"]["threads"], 1);
     assert_eq!(v["scene"]["racbvh_cluster_nodes"], 256);
     let runs = v["runs"].as_array().unwrap();
@@ -125,10 +131,7 @@ fn contact_modes_follow_the_flag_and_the_shape_names() {
             json.to_str().unwrap(),
         ],
     );
-    assert!(ok, "{stderr}");
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    std::fs::remove_file(&json).ok();
+    let v = report(ok, &stderr, &json);
     let modes: Vec<(&str, &str)> = v["runs"]
         .as_array()
         .unwrap()
@@ -166,10 +169,7 @@ fn contact_modes_follow_the_flag_and_the_shape_names() {
             json.to_str().unwrap(),
         ],
     );
-    assert!(ok, "{stderr}");
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    std::fs::remove_file(&json).ok();
+    let v = report(ok, &stderr, &json);
     let names: Vec<&str> = v["runs"]
         .as_array()
         .unwrap()
@@ -263,10 +263,7 @@ fn sims_check_every_flag_before_the_first_run() {
         ])
         .collect();
     let (ok, stderr) = run(bin, &args);
-    assert!(ok, "{stderr}");
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    std::fs::remove_file(&json).ok();
+    let v = report(ok, &stderr, &json);
     // plain in both contact modes.
     assert_eq!(v["runs"].as_array().unwrap().len(), 2);
     let robot_tris = v["scene"]["dropped_triangles"].as_u64().unwrap();
@@ -284,10 +281,7 @@ fn sims_check_every_flag_before_the_first_run() {
         ])
         .collect();
     let (ok, stderr) = run(bin, &args);
-    assert!(ok, "{stderr}");
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    std::fs::remove_file(&json).ok();
+    let v = report(ok, &stderr, &json);
     assert_eq!(
         v["scene"]["dropped_triangles"].as_u64().unwrap(),
         16 * robot_tris
