@@ -140,3 +140,21 @@ impl Mesh {
         Ok(())
     }
 }
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::Mesh;
+
+    /// A closed tetrahedron, outward-wound: the mesh module's test fixture.
+    pub(crate) fn tetrahedron() -> Mesh {
+        Mesh::new(
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+        )
+    }
+}

@@ -106,17 +106,7 @@ pub fn boundary_edges(mesh: &Mesh) -> usize {
 mod tests {
     use super::*;
 
-    fn tetra() -> Mesh {
-        Mesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
-        )
-    }
+    use crate::mesh::tests::tetrahedron as tetra;
 
     #[test]
     fn closed_tetrahedron_has_no_boundary() {

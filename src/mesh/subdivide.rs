@@ -63,18 +63,7 @@ impl Mesh {
 mod tests {
     use super::*;
     use crate::mesh::boundary_edges;
-
-    fn tetrahedron() -> Mesh {
-        Mesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
-        )
-    }
+    use crate::mesh::tests::tetrahedron;
 
     fn area_vector(m: &Mesh, t: usize) -> [f64; 3] {
         let [p, q, r] = m.triangle_vertices(t).map(|v| v.map(f64::from));
