@@ -68,14 +68,7 @@ fn tight(bvh: &CanonicalBvh, triangles: &[[u32; 3]], points: &[[f32; 3]]) -> Tig
     while let Some((i, done)) = stack.pop() {
         let node = &bvh.nodes[i as usize];
         if node.is_leaf() {
-            let mut b = [
-                f32::INFINITY,
-                f32::INFINITY,
-                f32::INFINITY,
-                f32::NEG_INFINITY,
-                f32::NEG_INFINITY,
-                f32::NEG_INFINITY,
-            ];
+            let mut b = super::pair::EMPTY;
             let mut v = [0u32; 6];
             for &t in &bvh.leaf_triangles[node.leaf_range()] {
                 for c in triangles[t as usize] {
