@@ -80,6 +80,7 @@ fn main() {
         vertex_bits: a.vertex_bits,
         vertex_ids: a.ids,
         triangle_ids: a.ids,
+        ..Default::default()
     };
     let t = Instant::now();
     let hcc = HccBvh::encode_with(&bvh, &mesh, &o.hcc()).expect("i-HCCMesh");

@@ -9,7 +9,8 @@ use cbvh::Mesh;
 use cbvh::build::{BuildOptions, CanonicalBvh, Layout, build};
 use cbvh::codec::hcc::HccBvh;
 use cbvh::codec::hcc::ooc::{HccOocBvh, OocError, OocOptions};
-use cbvh::codec::{AnyCodec, AnyOptions, CodecKind, OpenOptions};
+use cbvh::codec::{AnyCodec, AnyOptions, Codec, CodecKind, OpenOptions};
+use cbvh::cursor::NodeCursor;
 use cbvh::scene::{Kind, generate};
 use common::*;
 use xxhash_rust::xxh3::xxh3_64;
@@ -69,7 +70,7 @@ fn check_same(mesh: &Mesh, layout: Layout, leaf: usize, o: &OocOptions) {
     let codec = HccOocBvh::encode_with(&bvh, mesh, o).expect("encode");
     assert_eq!(codec.file_bytes(), &bytes[..]);
     let opened = HccOocBvh::from_bytes(&bytes).expect("from_bytes");
-    assert!(opened.hcc().to_bytes() == direct.to_bytes());
+    assert!(opened.hcc().expect("pre-loaded").to_bytes() == direct.to_bytes());
 }
 
 #[test]
@@ -191,7 +192,7 @@ impl Lcg {
 }
 
 const TABLE: usize = 140;
-const HEADER_LEN: usize = 292;
+const HEADER_LEN: usize = 340;
 
 fn u64_at(b: &[u8], at: usize) -> u64 {
     u64::from_le_bytes(b[at..at + 8].try_into().unwrap())
@@ -200,7 +201,7 @@ fn u64_at(b: &[u8], at: usize) -> u64 {
 /// Rewrites every section checksum and the header's so that damage
 /// inside the sections reaches the decoder (a forged file).
 fn reframe(b: &mut [u8]) {
-    for k in 0..6 {
+    for k in 0..8 {
         let at = TABLE + 24 * k;
         let (off, len) = (u64_at(b, at) as usize, u64_at(b, at + 8) as usize);
         let h = xxh3_64(&b[off..off + len]);
@@ -287,4 +288,190 @@ fn the_registry_builds_saves_and_opens_hcc_ooc() {
     assert_eq!(opened.decoded_mesh(), codec.decoded_mesh());
     let per_tri = codec.to_bytes().len() as f64 / mesh.triangles.len() as f64;
     assert!(per_tri < 8.0, "{per_tri} bytes a triangle");
+}
+
+/// Every node of a depth-first walk (its box's bits, whether a leaf, its
+/// triangles' ids and corners' bits), on an explicit stack.
+/// A walked node: its box's bits, whether a leaf, its triangles.
+type Walked = (Vec<u32>, bool, Vec<(u32, Vec<u32>)>);
+
+fn walk<C: NodeCursor>(c: &C) -> Vec<Walked> {
+    let mut out = Vec::new();
+    let (root, b) = c.root();
+    let mut stack = vec![(root, b)];
+    while let Some((n, b)) = stack.pop() {
+        let bits = b
+            .min
+            .to_array()
+            .into_iter()
+            .chain(b.max.to_array())
+            .map(f32::to_bits)
+            .collect();
+        let leaf = c.is_leaf(&n);
+        let mut tris = Vec::new();
+        if leaf {
+            c.for_each_triangle(&n, |id, t| {
+                tris.push((
+                    id,
+                    t.iter()
+                        .flat_map(|p| p.to_array())
+                        .map(f32::to_bits)
+                        .collect(),
+                ));
+            });
+        } else {
+            c.for_each_child(&n, |k, kb| stack.push((k, kb)));
+        }
+        out.push((bits, leaf, tris));
+    }
+    out
+}
+
+/// Out of core answers as pre-loaded: the same walk, triangles, vertex
+/// indices and decoded mesh, from bytes and from a memory-mapped file,
+/// with a cache too small to hold the model (so trees are evicted and
+/// decoded again) and with one that holds nothing.
+#[test]
+fn out_of_core_answers_as_pre_loaded() {
+    let mesh = mesh_of(Kind::Statue, 20_000);
+    for (leaf, o) in [
+        (1, OocOptions::default()),
+        (
+            1,
+            OocOptions {
+                triangle_ids: true,
+                vertex_ids: true,
+                ..OocOptions::default()
+            },
+        ),
+        (8, OocOptions::default()),
+    ] {
+        let bvh = tree(&mesh, Layout::DepthFirst, leaf);
+        let whole = HccOocBvh::encode_with(&bvh, &mesh, &o).unwrap();
+        assert!(!whole.is_paged() && whole.cache_stats().is_none());
+        let bytes = whole.file_bytes().to_vec();
+        let decoded = whole.decoded_bytes();
+        let expect = walk(&whole);
+        let path = std::env::temp_dir().join(format!(
+            "cbvh-hcc-ooc-paged-{}-{leaf}.hccz",
+            std::process::id()
+        ));
+        whole.save(&path).unwrap();
+        for budget in [decoded / 10, 1] {
+            for mapped in [false, true] {
+                let paged = if mapped {
+                    HccOocBvh::open_with_budget(&path, budget).unwrap()
+                } else {
+                    HccOocBvh::from_bytes_with_budget(&bytes, budget).unwrap()
+                };
+                assert!(paged.is_paged(), "budget {budget} of {decoded}");
+                assert!(paged.hcc().is_none());
+                // Twice: the second walk meets cached and evicted trees.
+                for _ in 0..2 {
+                    assert!(
+                        walk(&paged) == expect,
+                        "{o:?}, leaves of {leaf}, budget {budget}"
+                    );
+                }
+                for id in (0..mesh.triangles.len() as u32).step_by(97) {
+                    assert_eq!(paged.triangle(id), whole.triangle(id));
+                    assert_eq!(paged.triangle_vertices(id), whole.triangle_vertices(id));
+                }
+                assert_eq!(paged.decoded_mesh(), whole.decoded_mesh());
+                assert_eq!(paged.mass(), whole.mass());
+                assert_eq!(paged.to_bytes(), bytes);
+                paged.verify().expect("verify");
+                let s = paged.cache_stats().unwrap();
+                assert_eq!(s.budget_bytes, budget);
+                assert!(s.cached_bytes <= budget, "{s:?}");
+                let trees = whole.hcc().unwrap().tree_count() as u64;
+                assert!(
+                    s.decodes > trees,
+                    "the budget evicted nothing: {s:?} for {trees} trees"
+                );
+                // A tenth of the model: most of it stays out of memory.
+                if budget > 1 {
+                    assert!(s.hits > 0, "{s:?}");
+                    assert!(s.peak_live_bytes < decoded / 2, "{s:?} of {decoded}");
+                }
+            }
+        }
+        std::fs::remove_file(&path).ok();
+    }
+}
+
+/// The registry runs `hcc-ooc` out of core: through `OpenOptions`'
+/// budget, and through `with_cache_budget_of` (the sims' `hcc-ooc-10pct`).
+#[test]
+fn the_registry_opens_hcc_ooc_out_of_core() {
+    let mesh = mesh_of(Kind::Statue, 10_000);
+    let bvh = tree(&mesh, Layout::DepthFirst, 1);
+    let codec = AnyCodec::encode(CodecKind::HccOoc, &bvh, &mesh, &AnyOptions::default()).unwrap();
+    let path = std::env::temp_dir().join(format!("cbvh-hcc-ooc-reg-{}.hccz", std::process::id()));
+    codec.save(&path).unwrap();
+    let small = OpenOptions {
+        cache_budget_bytes: 4096,
+        ..OpenOptions::default()
+    };
+    let opened = AnyCodec::open(&path, &small).unwrap();
+    std::fs::remove_file(&path).ok();
+    assert!(
+        opened
+            .header_fields()
+            .iter()
+            .any(|(k, v)| *k == "mode" && v.starts_with("out of core"))
+    );
+    assert_eq!(opened.decoded_mesh(), codec.decoded_mesh());
+    let tenth = codec
+        .with_cache_budget_of(&|d| d / 10)
+        .expect("a cached codec")
+        .unwrap();
+    assert!(
+        tenth
+            .header_fields()
+            .iter()
+            .any(|(k, v)| *k == "mode" && v.starts_with("out of core"))
+    );
+    assert_eq!(tenth.decoded_mesh(), codec.decoded_mesh());
+    assert!(
+        AnyOptions::default()
+            .with_cache_budget(usize::MAX)
+            .hcc_ooc
+            .cache_budget_bytes
+            == usize::MAX
+    );
+}
+
+/// Out of core, a forged tree stream (checksums rewritten) is found by
+/// `verify` and by nothing earlier than the tree's decoding; an unforged
+/// flip in the streams fails `verify`'s checksum.
+#[test]
+fn out_of_core_verify_finds_damaged_trees() {
+    let mesh = mesh_of(Kind::Statue, 5_000);
+    let bvh = tree(&mesh, Layout::DepthFirst, 1);
+    let (bytes, _) = HccBvh::encode_with(&bvh, &mesh, &OocOptions::default().hcc())
+        .unwrap()
+        .to_ooc()
+        .unwrap();
+    // The streams section, from the section table.
+    let streams = u64_at(&bytes, TABLE + 24 * 3) as usize;
+    let len = u64_at(&bytes, TABLE + 24 * 3 + 8) as usize;
+    let mut flipped = bytes.clone();
+    flipped[streams + len / 2] ^= 0x10;
+    let paged = HccOocBvh::from_bytes_with_budget(&flipped, 1).expect("opening skips the streams");
+    assert!(matches!(Codec::verify(&paged), Err(OocError::Format(_))));
+    let mut forged = 0;
+    let mut rng = Lcg(3);
+    for _ in 0..40 {
+        let mut b = bytes.clone();
+        let at = streams + rng.next() as usize % len;
+        b[at] ^= 1 << (rng.next() % 8);
+        reframe(&mut b);
+        let whole = HccBvh::from_ooc(&b).and_then(|h| Ok(h.verify()?));
+        let paged = HccOocBvh::from_bytes_with_budget(&b, 1).and_then(|p| Codec::verify(&p));
+        // Both modes judge the file alike.
+        assert_eq!(whole.is_err(), paged.is_err(), "byte {at}");
+        forged += usize::from(paged.is_err());
+    }
+    assert!(forged > 20, "only {forged} of 40 forged streams were found");
 }

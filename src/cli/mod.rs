@@ -43,6 +43,12 @@ pub struct MeshSource {
     /// Codec files: skip `verify` when opening (only for files you wrote).
     #[arg(long)]
     pub no_verify: bool,
+    /// Codec files of codecs that decode into a cache (racbvh's clusters,
+    /// hcc-ooc's low-level trees): the cache's budget in MiB. An hcc-ooc
+    /// file whose i-HCCMesh fits is decoded whole; one that does not runs
+    /// out of core, memory-mapped.
+    #[arg(long, value_name = "MIB", default_value_t = 1024)]
+    pub cache_mib: usize,
     /// Generate the mesh instead: statue, turbine, plant, robot or isosurface.
     #[arg(long = "gen", value_name = "KIND")]
     pub gen_kind: Option<Kind>,
@@ -63,7 +69,7 @@ impl MeshSource {
         {
             let opts = OpenOptions {
                 verify: !self.no_verify,
-                cache_budget_bytes: 1 << 30,
+                cache_budget_bytes: self.cache_mib.saturating_mul(1 << 20),
             };
             let codec = AnyCodec::open(path, &opts)?;
             return Ok(Loaded::Codec(Box::new(codec), path.display().to_string()));

@@ -12,6 +12,8 @@
 //!   memory-mapped file.
 //! - [`packed`]: frame-of-reference arrays of `u32` with O(1) access, and
 //!   [`bits_for`](packed::bits_for).
+//! - [`page_cache`]: decoded pages (clusters, low-level trees) in a sharded
+//!   LRU under a byte budget, with per-thread pins.
 //! - [`le`]: little-endian readers at a byte offset.
 //! - [`container`]: the frame of every codec file (magic, section table,
 //!   header checksum), written and checked.
@@ -28,6 +30,7 @@ mod error;
 pub mod le;
 pub mod mass;
 pub mod packed;
+pub mod page_cache;
 pub mod quant;
 mod save;
 pub mod static_dict;

@@ -50,6 +50,65 @@ impl HccNode {
         self.block
     }
 
+    /// The low-level tree the node is in (low-level nodes).
+    #[inline(always)]
+    pub(super) fn tree(&self) -> u32 {
+        self.tree
+    }
+
+    /// The same node, said to be in low-level tree `tree` (a one-tree
+    /// i-HCCMesh's node as a node of the whole model, and back).
+    #[inline(always)]
+    pub(super) fn in_tree(mut self, tree: u32) -> Self {
+        self.tree = tree;
+        self
+    }
+
+    /// The high-level node `i` with box `bounds`.
+    #[inline(always)]
+    pub(super) fn high(i: u32, bounds: Aabb) -> Self {
+        Self {
+            bounds,
+            tree: 0,
+            pos: i,
+            block: 0,
+            template: 0,
+            kind: KIND_HIGH,
+        }
+    }
+
+    /// The root of an empty model.
+    pub(super) fn empty() -> Self {
+        Self {
+            bounds: Aabb::EMPTY,
+            tree: 0,
+            pos: 0,
+            block: 0,
+            template: 0,
+            kind: KIND_EMPTY,
+        }
+    }
+
+    /// Whether this is a high-level node (a high-level leaf is the root of
+    /// its low-level tree, not a high-level node).
+    #[inline(always)]
+    pub(super) fn is_high(&self) -> bool {
+        self.kind == KIND_HIGH
+    }
+
+    /// Whether this is a leaf of a low-level tree, or an empty model's
+    /// root.
+    #[inline(always)]
+    pub(super) fn is_leaf(&self) -> bool {
+        self.kind == TYPE_LEAF as u8 || self.kind == KIND_EMPTY
+    }
+
+    /// Whether this is an empty model's root.
+    #[inline(always)]
+    pub(super) fn is_empty(&self) -> bool {
+        self.kind == KIND_EMPTY
+    }
+
     /// The template id of the template the node sits in (low-level nodes;
     /// `None` for high-level nodes).
     pub fn template(&self) -> Option<u8> {
@@ -90,14 +149,7 @@ impl HccBvh {
         if h.is_leaf() {
             self.low_root(h.a, bounds)
         } else {
-            HccNode {
-                bounds,
-                tree: 0,
-                pos: i,
-                block: 0,
-                template: 0,
-                kind: KIND_HIGH,
-            }
+            HccNode::high(i, bounds)
         }
     }
 
@@ -378,7 +430,7 @@ impl HccBvh {
     // Always inlined, as `for_each_child` was with its closure: a call
     // would return the pair through memory.
     #[inline(always)]
-    fn children_of(&self, node: &HccNode) -> [(HccNode, Aabb); 2] {
+    pub(super) fn children_of(&self, node: &HccNode) -> [(HccNode, Aabb); 2] {
         if node.kind == KIND_HIGH {
             let h = &self.high[node.pos as usize];
             return [h.a, h.b].map(|c| {
@@ -430,15 +482,7 @@ impl NodeCursor for HccBvh {
 
     fn root(&self) -> (HccNode, Aabb) {
         if self.headers.is_empty() {
-            let n = HccNode {
-                bounds: Aabb::EMPTY,
-                tree: 0,
-                pos: 0,
-                block: 0,
-                template: 0,
-                kind: KIND_EMPTY,
-            };
-            return (n, Aabb::EMPTY);
+            return (HccNode::empty(), Aabb::EMPTY);
         }
         let n = self.high_child(0);
         (n, n.bounds)
@@ -446,7 +490,7 @@ impl NodeCursor for HccBvh {
 
     #[inline(always)]
     fn is_leaf(&self, node: &HccNode) -> bool {
-        node.kind == TYPE_LEAF as u8 || node.kind == KIND_EMPTY
+        node.is_leaf()
     }
 
     #[inline]

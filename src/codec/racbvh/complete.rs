@@ -31,7 +31,7 @@ impl RacBvh {
             Ok((c, (x - (c << cb)) as usize))
         };
         let (c, l) = split(g)?;
-        let fast = cache::with_pinned(self.id, c, |cl| {
+        let fast = cache::with_pinned(self.id, c, |cl: &Cluster| {
             let w = cl.nodes[l].words();
             (w[0] & INCOMPLETE == 0).then_some(w)
         });

@@ -2,6 +2,7 @@
 
 use super::RacBvh;
 use super::cache;
+use super::decode::Cluster;
 use super::node::INCOMPLETE;
 use crate::build::LEAF_FLAG;
 use crate::cursor::{Children, NodeCursor};
@@ -44,7 +45,7 @@ impl RacBvh {
         // (one thread-local look-up for the two).
         let cb = self.header.cluster_bits;
         let c = node.a >> cb;
-        let fast = cache::with_pinned(self.id, c, |cl| {
+        let fast = cache::with_pinned(self.id, c, |cl: &Cluster| {
             let mut out = [[0u32; 8]; 2];
             for (slot, child) in out.iter_mut().zip([node.a, node.b]) {
                 if child >> cb != c {

@@ -4,7 +4,6 @@
 
 use std::sync::{Arc, Mutex};
 
-use super::cache::{self, Live};
 use super::node::{CoreNode, INCOMPLETE, apply, qbox_of};
 use super::{
     CTX_CHILD, CTX_COUNT, CTX_PCLUSTER, CTX_STRUCT, CTX_TRI, CTX_TRI_FAR, Header, NCTX, RacBvh,
@@ -14,6 +13,7 @@ use crate::build::LEAF_FLAG;
 use crate::codec::common::FormatError;
 use crate::codec::common::bits::{BitReader, unzigzag};
 use crate::codec::common::dict::{DictDecoder, SymbolDecoder};
+use crate::codec::common::page_cache::{Live, LiveToken};
 use crate::codec::common::quant::QBox;
 
 /// In-core bytes per node of a decoded cluster (node + local-root ordinal).
@@ -41,21 +41,7 @@ pub struct Cluster {
     /// the subtree of the global root).
     pub(super) root_of: Box<[u16]>,
     pub(super) lock: Mutex<()>,
-    live: Arc<Live>,
-    bytes: usize,
-}
-
-impl Cluster {
-    /// In-core bytes.
-    pub fn bytes(&self) -> usize {
-        self.bytes
-    }
-}
-
-impl Drop for Cluster {
-    fn drop(&mut self) {
-        self.live.sub(self.bytes);
-    }
+    pub(super) live: LiveToken,
 }
 
 /// Decodes cluster `c` of `h` from `bytes` (the cluster's own bytes).
@@ -288,7 +274,6 @@ fn decode_cluster(
         return Err(bad("the cluster's bits run past its end"));
     }
     let bytes = n_us * 32 + n_us * 2 + tris.len() * 4 + roots.len() * 12 + 128;
-    live.add(bytes);
     Ok(Cluster {
         first,
         nodes: words.into_iter().map(CoreNode::new).collect(),
@@ -296,8 +281,7 @@ fn decode_cluster(
         roots: roots.into_boxed_slice(),
         root_of: root_of.into_boxed_slice(),
         lock: Mutex::new(()),
-        live: live.clone(),
-        bytes,
+        live: live.token(bytes),
     })
 }
 
@@ -336,7 +320,7 @@ impl RacBvh {
             c << self.header.cluster_bits,
             m.nodes,
             bytes,
-            &self.cache.live,
+            self.cache.live(),
         )
         .map_err(|e| match e {
             // The bit and dictionary coders do not know where they are.
@@ -349,11 +333,6 @@ impl RacBvh {
 
     /// Cluster `c`, from the cache or decompressed into it.
     pub(super) fn cluster(&self, c: u32) -> Result<Arc<Cluster>, RacError> {
-        if let Some(cl) = self.cache.get(c) {
-            return Ok(cl);
-        }
-        cache::unpin();
-        let cl = Arc::new(self.decode(c)?);
-        Ok(self.cache.insert(c, cl))
+        self.cache.get_or_decode(c, || self.decode(c))
     }
 }

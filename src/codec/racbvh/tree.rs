@@ -83,7 +83,7 @@ impl RacBvh {
         budget: usize,
     ) -> Self {
         let max_cluster = (1usize << header.cluster_bits) * decode::CLUSTER_BYTES_PER_NODE;
-        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
         Self {
             header,
             data,
@@ -93,7 +93,7 @@ impl RacBvh {
             mass,
             mesh_ok: std::sync::OnceLock::new(),
             cache: cache::ClusterCache::new(budget, max_cluster),
-            id: NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            id: crate::codec::common::page_cache::next_owner(),
         }
     }
 

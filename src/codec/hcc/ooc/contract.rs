@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use super::super::{HccBvh, HccNode};
-use super::{HccOocBvh, OocError, OocOptions, file};
+use super::{HccOocBvh, Mode, OocError, OocOptions, file};
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
 use crate::codec::{ByteSize, Codec, CodecKind, OpenOptions};
@@ -17,35 +17,56 @@ impl NodeCursor for HccOocBvh {
 
     #[inline(always)]
     fn root(&self) -> (HccNode, Aabb) {
-        self.hcc.root()
+        match &self.mode {
+            Mode::Whole { hcc, .. } => hcc.root(),
+            Mode::Paged(p) => p.root(),
+        }
     }
 
     #[inline(always)]
     fn is_leaf(&self, node: &HccNode) -> bool {
-        self.hcc.is_leaf(node)
+        node.is_leaf()
     }
 
     #[inline]
-    fn for_each_child(&self, node: &HccNode, f: impl FnMut(HccNode, Aabb)) {
-        self.hcc.for_each_child(node, f)
+    fn for_each_child(&self, node: &HccNode, mut f: impl FnMut(HccNode, Aabb)) {
+        let kids = match &self.mode {
+            Mode::Whole { hcc, .. } => hcc.children_of(node),
+            Mode::Paged(p) => p.children_of(node),
+        };
+        for (c, b) in kids {
+            f(c, b);
+        }
     }
 
     #[inline(always)]
     fn children(&self, node: &HccNode, out: &mut Children<HccNode>) {
-        self.hcc.children(node, out)
+        match &self.mode {
+            Mode::Whole { hcc, .. } => out.set(&hcc.children_of(node)),
+            Mode::Paged(p) => out.set(&p.children_of(node)),
+        }
     }
 
     #[inline]
-    fn for_each_triangle(&self, node: &HccNode, f: impl FnMut(u32, &Triangle)) {
-        self.hcc.for_each_triangle(node, f)
+    fn for_each_triangle(&self, node: &HccNode, mut f: impl FnMut(u32, &Triangle)) {
+        match &self.mode {
+            Mode::Whole { hcc, .. } => hcc.for_each_triangle(node, f),
+            Mode::Paged(p) => p.for_each_triangle(node, &mut f),
+        }
     }
 
     fn triangle(&self, id: u32) -> Triangle {
-        self.hcc.triangle(id)
+        match &self.mode {
+            Mode::Whole { hcc, .. } => hcc.triangle(id),
+            Mode::Paged(p) => p.triangle(id),
+        }
     }
 
     fn triangle_count(&self) -> usize {
-        self.hcc.triangle_count()
+        match &self.mode {
+            Mode::Whole { hcc, .. } => hcc.triangle_count(),
+            Mode::Paged(p) => p.triangle_count(),
+        }
     }
 }
 
@@ -61,19 +82,34 @@ impl Codec for HccOocBvh {
     }
 
     fn triangle_vertices(&self, id: u32) -> [u32; 3] {
-        self.hcc.triangle_vertex_indices(id)
+        match &self.mode {
+            Mode::Whole { hcc, .. } => hcc.triangle_vertex_indices(id),
+            Mode::Paged(p) => p.triangle_vertices(id),
+        }
     }
 
     fn decoded_mesh(&self) -> Mesh {
-        self.hcc.decoded_mesh()
+        match &self.mode {
+            Mode::Whole { hcc, .. } => hcc.decoded_mesh(),
+            Mode::Paged(p) => p.decoded_mesh(),
+        }
     }
 
     fn mass(&self) -> MassProps {
-        self.hcc.mass()
+        match &self.mode {
+            Mode::Whole { hcc, .. } => hcc.mass(),
+            Mode::Paged(p) => p.mass(),
+        }
     }
 
+    /// Pre-loaded: the i-HCCMesh's verification. Out of core: every tree
+    /// decoded (outside the cache) and checked against the stored
+    /// high-level tree.
     fn verify(&self) -> Result<(), OocError> {
-        Ok(self.hcc.verify()?)
+        match &self.mode {
+            Mode::Whole { hcc, .. } => Ok(hcc.verify()?),
+            Mode::Paged(p) => p.verify(),
+        }
     }
 
     fn save(&self, path: &Path) -> Result<(), OocError> {
@@ -81,37 +117,57 @@ impl Codec for HccOocBvh {
     }
 
     fn to_bytes(&self) -> Vec<u8> {
-        self.file.clone()
+        self.file_bytes().to_vec()
     }
 
-    /// Decodes the bytes into the i-HCCMesh (the options do not apply).
-    fn from_bytes(bytes: &[u8], _: &OpenOptions) -> Result<Self, OocError> {
-        HccOocBvh::from_bytes(bytes)
+    /// Decoded whole if the i-HCCMesh fits `options.cache_budget_bytes`,
+    /// else out of core with a cache of that many bytes.
+    fn from_bytes(bytes: &[u8], options: &OpenOptions) -> Result<Self, OocError> {
+        HccOocBvh::from_bytes_with_budget(bytes, options.cache_budget_bytes)
     }
 
-    /// Reads the whole file and decodes it (the options do not apply).
-    fn open(path: &Path, _: &OpenOptions) -> Result<Self, OocError> {
-        HccOocBvh::open(path)
+    /// Read and decoded whole if the i-HCCMesh fits
+    /// `options.cache_budget_bytes`, else memory-mapped and decoded on
+    /// demand into a cache of that many bytes.
+    fn open(path: &Path, options: &OpenOptions) -> Result<Self, OocError> {
+        HccOocBvh::open_with_budget(path, options.cache_budget_bytes)
     }
 
     fn header_fields(&self) -> Vec<(&'static str, String)> {
+        let file = self.file_bytes().len();
+        let n = self.triangle_count().max(1) as f64;
         let mut out = vec![(
             "o-HCCMesh file",
-            format!(
-                "{} bytes, {:.2} a triangle",
-                self.file.len(),
-                self.file.len() as f64 / self.hcc.triangle_count().max(1) as f64
-            ),
+            format!("{file} bytes, {:.2} a triangle", file as f64 / n),
         )];
-        out.extend(<HccBvh as Codec>::header_fields(&self.hcc));
+        match &self.mode {
+            Mode::Whole { hcc, .. } => {
+                out.push(("mode", "pre-loaded (decoded whole when opened)".into()));
+                out.extend(<HccBvh as Codec>::header_fields(hcc));
+            }
+            Mode::Paged(p) => {
+                let c = p.cache_stats();
+                out.push((
+                    "mode",
+                    format!(
+                        "out of core: trees decoded on demand into a cache of {} bytes \
+                         ({:.1} % of the {} bytes the whole i-HCCMesh takes)",
+                        c.budget_bytes,
+                        100.0 * c.budget_bytes as f64 / p.decoded_estimate().max(1) as f64,
+                        p.decoded_estimate()
+                    ),
+                ));
+                out.extend(p.header_fields());
+            }
+        }
         out
     }
 
     fn build_fields(&self) -> Vec<(&'static str, serde_json::Value)> {
-        let n = self.hcc.triangle_count().max(1) as f64;
+        let n = self.triangle_count().max(1) as f64;
         let mut out = vec![(
             "file_bytes_per_triangle",
-            (self.file.len() as f64 / n).into(),
+            (self.file_bytes().len() as f64 / n).into(),
         )];
         if let Some(s) = &self.sizes {
             let parts: serde_json::Map<String, serde_json::Value> = s
@@ -126,12 +182,40 @@ impl Codec for HccOocBvh {
             .into_iter()
             .map(|(p, b)| (p.to_string(), (b as f64 / n).into()))
             .collect();
-        out.extend(
-            <HccBvh as Codec>::build_fields(&self.hcc)
-                .into_iter()
-                .filter(|(k, _)| *k != "bytes_per_triangle_by_part"),
-        );
+        match &self.mode {
+            Mode::Whole { hcc, .. } => out.extend(
+                <HccBvh as Codec>::build_fields(hcc)
+                    .into_iter()
+                    .filter(|(k, _)| *k != "bytes_per_triangle_by_part"),
+            ),
+            Mode::Paged(p) => {
+                out.push(("out_of_core", true.into()));
+                out.push((
+                    "decoded_bytes_per_triangle",
+                    (p.decoded_estimate() as f64 / n).into(),
+                ));
+                out.push((
+                    "cache_budget_bytes",
+                    (p.cache_stats().budget_bytes as u64).into(),
+                ));
+            }
+        }
         out.push(("bytes_per_triangle_by_part", memory.into()));
         out
+    }
+
+    fn cache_budget(options: &mut OocOptions) -> Option<&mut usize> {
+        Some(&mut options.cache_budget_bytes)
+    }
+
+    /// Re-opens the same bytes with a cache of `budget(bytes of the whole
+    /// i-HCCMesh)` (the header's estimate out of core), out of core when
+    /// that is less than the whole.
+    fn with_cache_budget_of(
+        &self,
+        budget: &dyn Fn(usize) -> usize,
+    ) -> Option<Result<Self, OocError>> {
+        let b = budget(self.decoded_bytes());
+        Some(HccOocBvh::from_bytes_with_budget(self.file_bytes(), b))
     }
 }

@@ -10,7 +10,10 @@ use super::super::pair::{Extents, outer};
 use super::super::vertices::{MAX_VERTEX_BITS, Quantized, Vertices};
 use super::super::{HccBvh, HccStats};
 use super::OocError;
-use super::file::{self, Header, SEC_DICTS, SEC_HIGH, SEC_IDS, SEC_STARTS, SEC_TREES, SEC_VIDS};
+use super::file::{
+    self, Header, SEC_BOXES, SEC_DICTS, SEC_FIRSTS, SEC_HIGH, SEC_IDS, SEC_STARTS, SEC_TREES,
+    SEC_VIDS, SECTIONS,
+};
 use super::model::{
     Adjacency, CONTEXTS, CTX_CORNER, CTX_LEAF, CTX_TEMPLATE, CornerCache, Layout, MAX_CORNER_SYM,
     MAX_TEMPLATE_SYM, predict,
@@ -62,64 +65,180 @@ fn raw_bits_limit(ctx: usize, bits: u32) -> u32 {
     32 - max.leading_zeros()
 }
 
+/// What decoding any one tree needs: the header, the contexts' decoders
+/// and the grid (without trees).
+#[derive(Clone, Debug)]
+pub(super) struct Coder {
+    pub(super) h: Header,
+    decs: Vec<StaticDecoder>,
+    grid: Quantized,
+}
+
+impl Coder {
+    /// Checks the header's grid and reads the dictionaries.
+    pub(super) fn new(h: &Header, dicts: &[u8]) -> Result<Self, OocError> {
+        if !(1..=MAX_VERTEX_BITS).contains(&h.bits) {
+            return Err(FormatError::header(
+                "vertex bits",
+                format!("{} is not in 1..={MAX_VERTEX_BITS}", h.bits),
+            )
+            .into());
+        }
+        let grid = Quantized {
+            bits: h.bits,
+            origin: h.grid[0],
+            step: h.grid[1],
+            error: h.grid[2],
+            trees: Vec::new(),
+            data: Vec::new(),
+        };
+        grid.check_grid()?;
+        let mut r = BitReader::new(dicts);
+        let mut decs = Vec::with_capacity(CONTEXTS);
+        for ctx in 0..CONTEXTS {
+            let bits = raw_bits_limit(ctx, h.bits);
+            decs.push(StaticDict::read(&mut r, 1 << bits, bits)?.decoder());
+        }
+        if r.overran() {
+            return Err(corrupt_file("the dictionaries run past their section"));
+        }
+        Ok(Self {
+            h: h.clone(),
+            decs,
+            grid,
+        })
+    }
+
+    /// An empty i-HCCMesh being rebuilt, with room for `trees` trees.
+    fn out(&self, trees: usize) -> Out {
+        let mut q = self.grid.clone();
+        q.trees.reserve(trees);
+        Out {
+            headers: Vec::with_capacity(trees),
+            nodes: Vec::new(),
+            ics: Vec::new(),
+            q,
+            blocks: Vec::new(),
+            block_start: Vec::new(),
+            stored: 0,
+            triangles: 0,
+            stats: HccStats::default(),
+            roots: Vec::with_capacity(trees),
+        }
+    }
+
+    /// Decodes tree `k` (its stream `bytes`) alone, as a one-tree
+    /// i-HCCMesh whose triangles are numbered from 0 (their ranks less the
+    /// tree's first rank) and whose vertices are the tree's own; returns
+    /// it with its root box.
+    pub(super) fn tree(&self, k: u32, bytes: &[u8]) -> Result<(HccBvh, Extents), OocError> {
+        thread_local!(static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::default());
+        let mut out = self.out(1);
+        SCRATCH.with(|s| match s.try_borrow_mut() {
+            Ok(mut s) => decode_tree(k, bytes, &self.decs, &self.h, &mut s, &mut out),
+            Err(_) => decode_tree(
+                k,
+                bytes,
+                &self.decs,
+                &self.h,
+                &mut Scratch::default(),
+                &mut out,
+            ),
+        })?;
+        let root = out.roots[0];
+        let high = vec![HighNode {
+            min: [root[0], root[1], root[2]],
+            max: [root[3], root[4], root[5]],
+            a: 0,
+            b: HIGH_LEAF,
+        }];
+        let mut stats = out.stats;
+        stats.trees = 1;
+        stats.high_nodes = 1;
+        stats.tree_vertices = out.stored as usize;
+        let mut hcc = HccBvh {
+            high,
+            headers: out.headers,
+            nodes: out.nodes,
+            ics: out.ics,
+            vertices: Vertices::Packed(out.q),
+            blocks: out.blocks,
+            block_start: out.block_start,
+            leaf_bits: Vec::new(),
+            leaf_rank: Vec::new(),
+            ids: None,
+            vertex_ids: None,
+            multi: self.h.multi,
+            triangle_count: out.triangles,
+            mesh_vertices: out.stored,
+            mass: self.h.mass,
+            stats,
+        };
+        hcc.build_leaf_ranks();
+        Ok((hcc, root))
+    }
+}
+
+/// Tree `k`'s stream: its bytes in `streams` between its start and the
+/// next tree's (or the section's end).
+pub(super) fn tree_stream<'a>(
+    starts: &[u8],
+    streams: &'a [u8],
+    k: u32,
+) -> Result<&'a [u8], OocError> {
+    let k = k as usize;
+    let start = u32_at(starts, 4 * k) as usize;
+    let end = if 4 * (k + 1) < starts.len() {
+        u32_at(starts, 4 * (k + 1)) as usize
+    } else {
+        streams.len()
+    };
+    streams.get(start..end).ok_or(OocError::Corrupt {
+        tree: k as u32,
+        what: "the tree's stream lies outside the streams section",
+    })
+}
+
+/// The high-level boxes and the trees' first triangles and vertices as
+/// the file stores them.
+pub(super) fn stored_firsts(h: &Header, sec: &[&[u8]; SECTIONS]) -> (Vec<[f32; 6]>, Vec<[u32; 2]>) {
+    let boxes = (0..h.high_nodes as usize)
+        .map(|i| {
+            std::array::from_fn(|e| {
+                f32::from_le_bytes(
+                    sec[SEC_BOXES][24 * i + 4 * e..][..4]
+                        .try_into()
+                        .unwrap_or_default(),
+                )
+            })
+        })
+        .collect();
+    let firsts = (0..h.trees as usize)
+        .map(|k| {
+            [
+                u32_at(sec[SEC_FIRSTS], 8 * k),
+                u32_at(sec[SEC_FIRSTS], 8 * k + 4),
+            ]
+        })
+        .collect();
+    (boxes, firsts)
+}
+
 /// Decodes an o-HCCMesh file into its i-HCCMesh.
 pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
     let (h, sec) = file::parse(b)?;
-    if !(1..=MAX_VERTEX_BITS).contains(&h.bits) {
-        return Err(FormatError::header(
-            "vertex bits",
-            format!("{} is not in 1..={MAX_VERTEX_BITS}", h.bits),
-        )
-        .into());
-    }
-    let q = Quantized {
-        bits: h.bits,
-        origin: h.grid[0],
-        step: h.grid[1],
-        error: h.grid[2],
-        trees: Vec::new(),
-        data: Vec::new(),
-    };
-    q.check_grid()?;
-    let mut r = BitReader::new(sec[SEC_DICTS]);
-    let mut decs = Vec::with_capacity(CONTEXTS);
-    for ctx in 0..CONTEXTS {
-        let bits = raw_bits_limit(ctx, h.bits);
-        decs.push(StaticDict::read(&mut r, 1 << bits, bits)?.decoder());
-    }
-    if r.overran() {
-        return Err(corrupt_file("the dictionaries run past their section"));
-    }
+    let coder = Coder::new(&h, sec[SEC_DICTS])?;
     let (mut high, leaf_of_tree) = high_tree(&h, sec[SEC_HIGH])?;
     // Capacities from the header, bounded by what the file can hold.
     let cap = |n: u32| (n as usize).min(b.len().saturating_mul(16));
-    let mut out = Out {
-        headers: Vec::with_capacity(cap(h.trees)),
-        nodes: Vec::with_capacity(cap(h.node_words)),
-        ics: Vec::with_capacity(cap(h.interconnections)),
-        q,
-        blocks: Vec::new(),
-        block_start: Vec::new(),
-        stored: 0,
-        triangles: 0,
-        stats: HccStats::default(),
-        roots: Vec::with_capacity(cap(h.trees)),
-    };
-    out.q.trees.reserve(cap(h.trees));
+    let mut out = coder.out(cap(h.trees));
+    out.nodes.reserve(cap(h.node_words));
+    out.ics.reserve(cap(h.interconnections));
     let (starts, streams) = (sec[SEC_STARTS], sec[SEC_TREES]);
     let mut s = Scratch::default();
-    for k in 0..h.trees as usize {
-        let start = u32_at(starts, 4 * k) as usize;
-        let end = if 4 * (k + 1) < starts.len() {
-            u32_at(starts, 4 * (k + 1)) as usize
-        } else {
-            streams.len()
-        };
-        let bytes = streams.get(start..end).ok_or(OocError::Corrupt {
-            tree: k as u32,
-            what: "the tree's stream lies outside the streams section",
-        })?;
-        decode_tree(k as u32, bytes, &decs, &h, &mut s, &mut out)?;
+    for k in 0..h.trees {
+        let bytes = tree_stream(starts, streams, k)?;
+        decode_tree(k, bytes, &coder.decs, &h, &mut s, &mut out)?;
     }
     let count = |what: &'static str, got: usize, want: u32| {
         if got == want as usize {
@@ -162,6 +281,28 @@ pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
         let bx = boxes[i];
         high[i].min = [bx[0], bx[1], bx[2]];
         high[i].max = [bx[3], bx[4], bx[5]];
+    }
+    let (stored_boxes, firsts) = stored_firsts(&h, &sec);
+    if high.iter().zip(&stored_boxes).any(|(n, b)| {
+        n.min
+            .into_iter()
+            .chain(n.max)
+            .zip(b)
+            .any(|(x, y)| x.to_bits() != y.to_bits())
+    }) {
+        return Err(corrupt_file(
+            "the stored high-level boxes disagree with the boxes the trees rebuild",
+        ));
+    }
+    if out
+        .headers
+        .iter()
+        .zip(&firsts)
+        .any(|(t, f)| [t.first_triangle, t.vertex_start] != *f)
+    {
+        return Err(corrupt_file(
+            "the stored first triangles or vertices of the trees disagree with the trees",
+        ));
     }
     let ids = if h.tree_order {
         None
@@ -232,7 +373,7 @@ fn corrupt_file(what: &'static str) -> OocError {
 
 /// The high-level tree's nodes (boxes still empty) from its shape bits,
 /// and the high-level leaf of each low-level tree.
-fn high_tree(h: &Header, bits: &[u8]) -> Result<(Vec<HighNode>, Vec<u32>), OocError> {
+pub(super) fn high_tree(h: &Header, bits: &[u8]) -> Result<(Vec<HighNode>, Vec<u32>), OocError> {
     let zero = HighNode {
         min: [0.0; 3],
         max: [0.0; 3],

@@ -24,9 +24,11 @@ pub struct OocSizes {
     pub header: usize,
     /// The contexts' dictionaries.
     pub dictionaries: usize,
-    /// The high-level tree's shape (a bit a node; no boxes).
+    /// The high-level tree: its shape (a bit a node) and its boxes
+    /// (uncompressed, as the paper keeps it: 24 bytes a node).
     pub high_level: usize,
-    /// Each low-level tree's first byte (random access).
+    /// Per low-level tree its first byte, first triangle and first stored
+    /// vertex (random access: 12 bytes a tree).
     pub tree_starts: usize,
     /// Template symbols (tree structure and inter-connections), in bits/8.
     pub templates: f64,
@@ -314,6 +316,18 @@ pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
         streams.extend_from_slice(&w.finish());
     }
     let high = high_shape(hcc)?;
+    let boxes: Vec<u8> = hcc
+        .high
+        .iter()
+        .flat_map(|n| n.min.into_iter().chain(n.max))
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    let firsts: Vec<u8> = hcc
+        .headers
+        .iter()
+        .flat_map(|t| [t.first_triangle, t.vertex_start])
+        .flat_map(u32::to_le_bytes)
+        .collect();
     let ids = hcc.ids.as_ref().map_or(Vec::new(), IdMap::to_bytes);
     let vids = hcc
         .vertex_ids
@@ -335,14 +349,23 @@ pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
         grid: [q.origin, q.step, q.error],
         mass: hcc.mass,
     };
-    let sections: [&[u8]; SECTIONS] = [&dict_bytes, &high, &starts, &streams, &ids, &vids];
+    let sections: [&[u8]; SECTIONS] = [
+        &dict_bytes,
+        &high,
+        &starts,
+        &streams,
+        &ids,
+        &vids,
+        &boxes,
+        &firsts,
+    ];
     let bytes = file::write(&header, &sections);
     let coded: u64 = part_bits.iter().sum();
     let sizes = OocSizes {
         header: file::HEADER_LEN,
         dictionaries: dict_bytes.len(),
-        high_level: high.len(),
-        tree_starts: starts.len(),
+        high_level: high.len() + boxes.len(),
+        tree_starts: starts.len() + firsts.len(),
         templates: part_bits[0] as f64 / 8.0,
         corners: part_bits[1] as f64 / 8.0,
         vertices: part_bits[2] as f64 / 8.0,

@@ -8,16 +8,16 @@ use crate::codec::common::le::{f32x3_at, u32_at};
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps, container};
 
 /// The file version this build writes and reads.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 /// The o-HCCMesh file's magic.
 pub const MAGIC: [u8; 8] = *b"CBVHHCO\0";
 const MASS_AT: usize = 88;
-const TABLE: usize = MASS_AT + MASS_BYTES;
+pub const TABLE: usize = MASS_AT + MASS_BYTES;
 /// Number of sections.
-pub const SECTIONS: usize = 6;
+pub const SECTIONS: usize = 8;
 /// Bytes of the header.
 pub const HEADER_LEN: usize = TABLE + 24 * SECTIONS + 8;
-const _: () = assert!(HEADER_LEN == 292);
+const _: () = assert!(HEADER_LEN == 340);
 /// Section names, in file order.
 pub const NAMES: [&str; SECTIONS] = [
     "dictionaries",
@@ -26,6 +26,8 @@ pub const NAMES: [&str; SECTIONS] = [
     "tree streams",
     "ids",
     "vertex ids",
+    "high-level boxes",
+    "tree firsts",
 ];
 /// Section index of the dictionaries.
 pub const SEC_DICTS: usize = 0;
@@ -39,6 +41,10 @@ pub const SEC_TREES: usize = 3;
 pub const SEC_IDS: usize = 4;
 /// Section index of the vertex id map.
 pub const SEC_VIDS: usize = 5;
+/// Section index of the high-level tree's boxes.
+pub const SEC_BOXES: usize = 6;
+/// Section index of each tree's first triangle and first stored vertex.
+pub const SEC_FIRSTS: usize = 7;
 const FLAG_VERTEX_IDS: u32 = 1;
 const FLAG_TREE_ORDER: u32 = 2;
 const FLAG_MULTI: u32 = 4;
@@ -115,6 +121,13 @@ pub fn write(h: &Header, sections: &[&[u8]; SECTIONS]) -> Vec<u8> {
 /// Parses the header and the section table of `b`, checking every
 /// checksum; returns the header and each section's bytes.
 pub fn parse(b: &[u8]) -> Result<(Header, [&[u8]; SECTIONS]), OocError> {
+    parse_with(b, true)
+}
+
+/// [`parse`], checking the tree streams' checksum only if `streams` is
+/// set (on-demand decoding reads a tree's bytes only when it needs them;
+/// the checksum of the whole section would read the whole file).
+pub fn parse_with(b: &[u8], streams: bool) -> Result<(Header, [&[u8]; SECTIONS]), OocError> {
     container::check_header(b, HEADER_LEN, &MAGIC, "o-HCCMesh")?;
     let version = u32_at(b, 8);
     if version != VERSION {
@@ -170,7 +183,7 @@ pub fn parse(b: &[u8]) -> Result<(Header, [&[u8]; SECTIONS]), OocError> {
             .into());
         };
         let s = &b[off as usize..end as usize];
-        if xxh3_64(s) != hash {
+        if (streams || k != SEC_TREES) && xxh3_64(s) != hash {
             return Err(FormatError::Checksum { section: NAMES[k] }.into());
         }
         *slot = s;
@@ -186,6 +199,22 @@ pub fn parse(b: &[u8]) -> Result<(Header, [&[u8]; SECTIONS]), OocError> {
         return Err(header_err(
             "tree starts",
             format!("{} bytes for {} trees", out[SEC_STARTS].len(), h.trees),
+        ));
+    }
+    if u64::from(h.high_nodes) * 24 != out[SEC_BOXES].len() as u64 {
+        return Err(header_err(
+            "high-level boxes",
+            format!(
+                "{} bytes for {} high-level nodes",
+                out[SEC_BOXES].len(),
+                h.high_nodes
+            ),
+        ));
+    }
+    if u64::from(h.trees) * 8 != out[SEC_FIRSTS].len() as u64 {
+        return Err(header_err(
+            "tree firsts",
+            format!("{} bytes for {} trees", out[SEC_FIRSTS].len(), h.trees),
         ));
     }
     if (h.tree_order && !out[SEC_IDS].is_empty()) || (!h.vertex_ids && !out[SEC_VIDS].is_empty()) {

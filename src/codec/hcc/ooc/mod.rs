@@ -13,9 +13,24 @@
 //! let ooc = HccOocBvh::encode_with(&tree, mesh, &OocOptions::default())?;
 //! let bytes = ooc.file_bytes(); // ~3–4 bytes a triangle
 //! let back = HccOocBvh::from_bytes(bytes)?; // o → i at open
-//! assert_eq!(back.hcc().to_bytes(), ooc.hcc().to_bytes());
+//! assert_eq!(back.hcc().map(|h| h.to_bytes()), ooc.hcc().map(|h| h.to_bytes()));
+//! // Out of core: trees decoded on demand into a 64 KB cache.
+//! let paged = HccOocBvh::from_bytes_with_budget(bytes, 64 << 10)?;
+//! # let _ = paged;
 //! # Ok(()) }
 //! ```
+//!
+//! # Two modes (§3.1)
+//!
+//! [`HccOocBvh`] decodes the whole file when it is opened if the
+//! i-HCCMesh it decodes to fits the cache budget (the default budget is
+//! unlimited); otherwise it keeps the file (memory-mapped when opened from
+//! a path) and decodes each low-level tree into a one-tree i-HCCMesh in a
+//! [`PageCache`](crate::codec::common::page_cache::PageCache) the first
+//! time a traversal enters it (module `paged`). The high-level tree and
+//! its boxes are stored uncoded for that reason, as the paper keeps them
+//! (“we do not compress the high-level BVH since it is frequently used
+//! and is relatively small”): about 0.05 bytes a triangle.
 //!
 //! # Why a sub-module of `hcc`
 //!
@@ -81,13 +96,13 @@
 //! # Layout
 //!
 //! All integers little-endian; the frame is the shared one of
-//! [`container`](crate::codec::common::container). A 292-byte header, then
-//! six sections back to back, ending the file.
+//! [`container`](crate::codec::common::container). A 340-byte header, then
+//! eight sections back to back, ending the file.
 //!
 //! | bytes | field |
 //! |---|---|
 //! | 0–7 | magic `CBVHHCO\0` |
-//! | 8–11 | version (1) |
+//! | 8–11 | version (2: version 1 had no high-level boxes nor tree firsts) |
 //! | 12–15 | flags: bit 0 vertex ids kept, bit 1 tree order (no triangle id map), bit 2 multi-triangle leaves; others 0 |
 //! | 16–35 | counts of the i-HCCMesh: high-level nodes, low-level trees, node words, inter-connections, stored vertices |
 //! | 36–39 | triangle count |
@@ -96,8 +111,8 @@
 //! | 48–51 | bits per grid coordinate (1–24) |
 //! | 52–87 | grid origin, step and measured error, 3 × f32 each |
 //! | 88–139 | mass properties at density 1 |
-//! | 140–283 | section table (offset, length, checksum) of the six sections |
-//! | 284–291 | checksum of bytes 0–283 |
+//! | 140–331 | section table (offset, length, checksum) of the eight sections |
+//! | 332–339 | checksum of bytes 0–331 |
 //!
 //! Sections, in order:
 //! - *dictionaries*: the 14 contexts' dictionaries back to back in one bit
@@ -110,7 +125,15 @@
 //!   in the next section (`u32`);
 //! - *tree streams*: the trees' streams, each starting on a byte;
 //! - *ids*, *vertex ids*: the i-HCCMesh's sections of the same names,
-//!   empty when not kept.
+//!   empty when not kept;
+//! - *high-level boxes*: per high-level node, in the shape's order, its
+//!   box as six `f32` (minimum x, y, z, maximum x, y, z): what the
+//!   out-of-core mode traverses before any tree is decoded. The whole
+//!   decode rebuilds them from the trees and checks they are equal;
+//! - *tree firsts*: per low-level tree, the storage rank of its first
+//!   triangle and the index of its first stored vertex (`u32` each), so
+//!   that a tree decoded alone numbers its triangles and vertices as the
+//!   whole model does.
 //!
 //! # Validation
 //! [`HccOocBvh::from_bytes`] checks the frame and every checksum, then
@@ -118,7 +141,13 @@
 //! against what the structure allows (a tree's nodes, inter-connections
 //! and vertices, the grid, the header's totals), so hostile bytes give an
 //! [`OocError`], never a panic or a hang. The decoded i-HCCMesh is then
-//! verified by [`HccBvh::verify`] like any i-HCCMesh file.
+//! verified by [`HccBvh::verify`] like any i-HCCMesh file. Out of core,
+//! opening checks the frame and every checksum but the tree streams' (the
+//! whole file would be read), the high-level tree and the firsts; a tree
+//! is checked when it is decoded, and a tree that does not decode panics
+//! in the query that reaches it. `verify` (run by
+//! [`AnyCodec::open`](crate::codec::AnyCodec::open) by default) decodes
+//! every tree once and proves the file.
 
 mod contract;
 mod decode;
@@ -126,6 +155,7 @@ mod encode;
 mod error;
 mod file;
 mod model;
+mod paged;
 mod rebuild;
 
 pub use encode::OocSizes;
@@ -133,15 +163,18 @@ pub use error::OocError;
 pub use file::MAGIC;
 
 use std::path::Path;
+use std::sync::Arc;
 
 use super::{HccBvh, HccOptions};
 use crate::build::CanonicalBvh;
 use crate::codec::ByteSize;
-use crate::codec::common::atomic_write;
+use crate::codec::common::page_cache::CacheStats;
+use crate::codec::common::{Store, atomic_write};
 use crate::mesh::Mesh;
+use paged::Paged;
 
 /// Encoding options of the o-HCCMesh: the i-HCCMesh options it codes
-/// (always quantized).
+/// (always quantized), and the cache budget it is traversed with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct OocOptions {
     /// Bits per grid coordinate (1 to 24; 16 as the paper).
@@ -151,6 +184,11 @@ pub struct OocOptions {
     /// Keep the input's triangle ids (stored uncoded, about 2.5 bytes a
     /// triangle; default off: tree order, the paper's form).
     pub triangle_ids: bool,
+    /// Bytes of decoded low-level trees to keep (see [`HccOocBvh`]'s
+    /// modes): when the whole i-HCCMesh fits, it is decoded at once
+    /// (the default, `usize::MAX`); otherwise trees are decoded on demand
+    /// into a cache of this many bytes.
+    pub cache_budget_bytes: usize,
 }
 
 impl Default for OocOptions {
@@ -159,6 +197,7 @@ impl Default for OocOptions {
             vertex_bits: 16,
             vertex_ids: false,
             triangle_ids: false,
+            cache_budget_bytes: usize::MAX,
         }
     }
 }
@@ -189,72 +228,166 @@ impl HccBvh {
     }
 }
 
-/// The `hcc-ooc` codec: an o-HCCMesh file, decoded into its i-HCCMesh when
-/// opened (the paper's mode for models whose i-HCCMesh fits in memory) and
-/// traversed as that. It keeps the file's bytes (what it saves) beside the
-/// decoded i-HCCMesh.
-#[derive(Clone, Debug)]
+/// How an [`HccOocBvh`] holds its model.
+#[derive(Debug)]
+enum Mode {
+    /// Decoded whole when opened; the file's bytes (what it saves) kept
+    /// beside the i-HCCMesh.
+    Whole { hcc: HccBvh, file: Vec<u8> },
+    /// Low-level trees decoded on demand into a cache.
+    Paged(Paged),
+}
+
+/// The `hcc-ooc` codec: an o-HCCMesh file and the i-HCCMesh it decodes
+/// to, in one of the paper's two modes (§3.1):
+///
+/// - **pre-loaded**: when the whole i-HCCMesh fits the cache budget (by
+///   default it always does), every low-level tree is decoded when the
+///   file is opened and the model is traversed as that i-HCCMesh;
+/// - **out of core**: otherwise the file (memory-mapped by
+///   [`HccOocBvh::open_with_budget`]) stays coded, and each low-level tree
+///   is decoded into an LRU cache of the budget's bytes the first time a
+///   traversal enters it, evicted when the cache needs the room. Only the
+///   high-level tree with its boxes (stored uncoded, as the paper keeps
+///   it), the trees' first triangles and vertices and the id maps stay in
+///   memory besides the cache. See [`HccOocBvh::cache_stats`].
+///
+/// Both modes answer every query identically.
+#[derive(Debug)]
 pub struct HccOocBvh {
-    hcc: HccBvh,
-    file: Vec<u8>,
+    mode: Mode,
     sizes: Option<OocSizes>,
 }
 
 impl HccOocBvh {
     /// Encodes `bvh` (built over `mesh`) as an i-HCCMesh with `options`
-    /// and codes it.
+    /// and codes it; out of core when the i-HCCMesh does not fit
+    /// `options.cache_budget_bytes`.
     pub fn encode_with(
         bvh: &CanonicalBvh,
         mesh: &Mesh,
         options: &OocOptions,
     ) -> Result<Self, OocError> {
-        Self::from_hcc(HccBvh::encode_with(bvh, mesh, &options.hcc())?)
-    }
-
-    /// Codes an i-HCCMesh (quantized vertices).
-    pub fn from_hcc(hcc: HccBvh) -> Result<Self, OocError> {
+        let hcc = HccBvh::encode_with(bvh, mesh, &options.hcc())?;
         let (file, sizes) = encode::encode(&hcc)?;
+        let mode = if hcc.bytes_total() <= options.cache_budget_bytes {
+            Mode::Whole { hcc, file }
+        } else {
+            drop(hcc);
+            Mode::Paged(Paged::new(Store::Owned(file), options.cache_budget_bytes)?)
+        };
         Ok(Self {
-            hcc,
-            file,
+            mode,
             sizes: Some(sizes),
         })
     }
 
-    /// Decodes an o-HCCMesh file (see the module docs' validation).
-    pub fn from_bytes(bytes: &[u8]) -> Result<Self, OocError> {
+    /// Codes an i-HCCMesh (quantized vertices); pre-loaded.
+    pub fn from_hcc(hcc: HccBvh) -> Result<Self, OocError> {
+        let (file, sizes) = encode::encode(&hcc)?;
         Ok(Self {
-            hcc: decode::decode(bytes)?,
-            file: bytes.to_vec(),
-            sizes: None,
+            mode: Mode::Whole { hcc, file },
+            sizes: Some(sizes),
         })
     }
 
-    /// Reads and decodes the file at `path`.
+    /// Decodes an o-HCCMesh file whole (pre-loaded; see the module docs'
+    /// validation).
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, OocError> {
+        Self::from_bytes_with_budget(bytes, usize::MAX)
+    }
+
+    /// Opens an o-HCCMesh file held in memory: pre-loaded if its
+    /// i-HCCMesh fits `budget` bytes, else out of core with a cache of
+    /// `budget` bytes.
+    pub fn from_bytes_with_budget(bytes: &[u8], budget: usize) -> Result<Self, OocError> {
+        Self::with_budget(Store::Owned(bytes.to_vec()), budget)
+    }
+
+    /// Reads the file at `path` and decodes it whole.
     pub fn open(path: &Path) -> Result<Self, OocError> {
-        let bytes = std::fs::read(path).map_err(|e| OocError::Io {
+        Self::open_with_budget(path, usize::MAX)
+    }
+
+    /// Opens the file at `path`: decoded whole if its i-HCCMesh fits
+    /// `budget` bytes; else memory-mapped, its trees decoded on demand
+    /// into a cache of `budget` bytes. The file must not be modified in
+    /// place or truncated while it is open; cbvh's own saves replace a
+    /// file atomically, which is safe.
+    pub fn open_with_budget(path: &Path, budget: usize) -> Result<Self, OocError> {
+        let io = |e: std::io::Error| OocError::Io {
             path: path.display().to_string(),
             message: e.to_string(),
-        })?;
-        Self::from_bytes(&bytes)
+        };
+        let file = std::fs::File::open(path).map_err(io)?;
+        // SAFETY: memmap2 requires the mapped file not to change while
+        // mapped; `open_with_budget` documents that requirement. Every read
+        // of the map goes through bounds-checked slices and checked
+        // decoding, so bad contents give errors, not undefined behaviour.
+        let map = Arc::new(unsafe { memmap2::Mmap::map(&file) }.map_err(io)?);
+        let len = map.len();
+        Self::with_budget(Store::Mapped(map, 0..len), budget)
+    }
+
+    /// Pre-loaded or paged, by the header's estimate of the i-HCCMesh's
+    /// size against `budget`.
+    fn with_budget(file: Store, budget: usize) -> Result<Self, OocError> {
+        let (h, _) = file::parse_with(&file, false)?;
+        let mode = if paged::decoded_estimate(&h) <= budget {
+            Mode::Whole {
+                hcc: decode::decode(&file)?,
+                file: file.to_vec(),
+            }
+        } else {
+            Mode::Paged(Paged::new(file, budget)?)
+        };
+        Ok(Self { mode, sizes: None })
     }
 
     /// Writes the o-HCCMesh file to `path` atomically.
     pub fn save(&self, path: &Path) -> Result<(), OocError> {
-        atomic_write(path, &self.file).map_err(|e| OocError::Io {
+        atomic_write(path, self.file_bytes()).map_err(|e| OocError::Io {
             path: path.display().to_string(),
             message: e.to_string(),
         })
     }
 
-    /// The decoded i-HCCMesh.
-    pub fn hcc(&self) -> &HccBvh {
-        &self.hcc
+    /// The decoded i-HCCMesh (`None` out of core, where it is never whole).
+    pub fn hcc(&self) -> Option<&HccBvh> {
+        match &self.mode {
+            Mode::Whole { hcc, .. } => Some(hcc),
+            Mode::Paged(_) => None,
+        }
+    }
+
+    /// Whether the model is out of core (trees decoded on demand).
+    pub fn is_paged(&self) -> bool {
+        matches!(self.mode, Mode::Paged(_))
+    }
+
+    /// The cache's counters out of core (`None` pre-loaded).
+    pub fn cache_stats(&self) -> Option<CacheStats> {
+        match &self.mode {
+            Mode::Whole { .. } => None,
+            Mode::Paged(p) => Some(p.cache_stats()),
+        }
+    }
+
+    /// The bytes of the i-HCCMesh the file decodes to: exact pre-loaded,
+    /// estimated from the header's counts out of core.
+    pub fn decoded_bytes(&self) -> usize {
+        match &self.mode {
+            Mode::Whole { hcc, .. } => hcc.bytes_total(),
+            Mode::Paged(p) => p.decoded_estimate(),
+        }
     }
 
     /// The o-HCCMesh file's bytes.
     pub fn file_bytes(&self) -> &[u8] {
-        &self.file
+        match &self.mode {
+            Mode::Whole { file, .. } => file,
+            Mode::Paged(p) => p.file(),
+        }
     }
 
     /// The file's bytes by part (known when this value was encoded, not
@@ -265,10 +398,17 @@ impl HccOocBvh {
 }
 
 impl ByteSize for HccOocBvh {
-    /// The decoded i-HCCMesh's parts and the file kept beside it.
+    /// Pre-loaded: the decoded i-HCCMesh's parts and the file kept beside
+    /// it. Out of core: what stays in memory besides the cache (the
+    /// high-level tree, the trees' firsts, the id maps) and the file.
     fn bytes_by_part(&self) -> Vec<(&'static str, usize)> {
-        let mut parts = self.hcc.bytes_by_part();
-        parts.push(("o-hccmesh-file", self.file.len()));
-        parts
+        match &self.mode {
+            Mode::Whole { hcc, file } => {
+                let mut parts = hcc.bytes_by_part();
+                parts.push(("o-hccmesh-file", file.len()));
+                parts
+            }
+            Mode::Paged(p) => p.parts(),
+        }
     }
 }
