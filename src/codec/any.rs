@@ -460,6 +460,11 @@ impl AnyCodec {
         crate::with_codec!(self, |c| Codec::mass(c))
     }
 
+    /// The decode cache's counters (see [`Codec::cache_stats`]).
+    pub fn cache_stats(&self) -> Option<super::CacheStats> {
+        crate::with_codec!(self, |c| Codec::cache_stats(c))
+    }
+
     /// Proves everything a query relies on (see [`Codec::verify`]).
     pub fn verify(&self) -> Result<(), CodecError> {
         crate::with_codec!(self, |c| Codec::verify(c).map_err(error_of(c)))

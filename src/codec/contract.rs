@@ -6,6 +6,7 @@ use std::path::Path;
 use super::ByteSize;
 use super::any::CodecKind;
 use super::common::MassProps;
+use super::common::page_cache::CacheStats;
 use crate::build::CanonicalBvh;
 use crate::cursor::NodeCursor;
 use crate::mesh::Mesh;
@@ -104,6 +105,13 @@ pub trait Codec: NodeCursor + ByteSize + Send + Sync + Sized + 'static {
     /// a codec without a cache.
     fn cache_budget(options: &mut Self::Options) -> Option<&mut usize> {
         let _ = options;
+        None
+    }
+
+    /// For a codec with a cache: its counters (budget, bytes held,
+    /// decodes, hits). `None` (the default) for a codec without one, or
+    /// one that decoded everything up front (hcc-ooc pre-loaded).
+    fn cache_stats(&self) -> Option<CacheStats> {
         None
     }
 

@@ -70,6 +70,7 @@ pub mod plain;
 pub mod racbvh;
 
 pub use any::{AnyCodec, AnyOptions, CodecError, CodecFileError, CodecKind, UnknownCodec};
+pub use common::page_cache::CacheStats;
 pub use contract::{Codec, OpenOptions};
 
 /// Memory of a stored structure, by component.

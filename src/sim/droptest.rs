@@ -17,7 +17,7 @@ use rapier3d::prelude::{
 
 use super::timed::Timed;
 use crate::build::BuildOptions;
-use crate::codec::{AnyOptions, CodecKind};
+use crate::codec::{AnyOptions, CacheStats, CodecKind};
 use crate::mesh::Mesh;
 use crate::parry::cbvh_cbvh::interference;
 use crate::parry::trimesh::{parry_trimesh, trimesh_bytes_by_part, trimesh_interference};
@@ -295,6 +295,9 @@ pub struct RunReport {
     /// rise is energy the contacts put in: pushing out of deep
     /// penetration, jitter, creeping up. About 0 for a faithful run.
     pub energy_gain: f32,
+    /// The decode caches of the dropped and the base shape at the end of
+    /// the run (codecs that decode on demand: racbvh, hcc-ooc out of core).
+    pub caches: Option<[CacheStats; 2]>,
     /// Whether parry's fallback `Bvh` was built for a cbvh shape.
     pub fallback_bvh_built: bool,
     /// Narrow-phase milliseconds of every step.
@@ -578,6 +581,9 @@ pub fn run(
         final_speed: body.linvel().length(),
         final_state: final_state(scene, body.center_of_mass(), body.linvel().length()),
         energy_gain: energy_rise(&energy, &points_per_step) / drop_scale.max(f32::MIN_POSITIVE),
+        caches: cbvh.as_ref().and_then(|(a, b)| {
+            Some([a.codec().cache_stats()?, b.codec().cache_stats()?])
+        }),
         fallback_bvh_built: cbvh
             .is_some_and(|(a, b)| a.fallback_bvh_built() || b.fallback_bvh_built()),
         narrow_phase_ms_per_step: narrow,

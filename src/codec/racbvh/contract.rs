@@ -85,6 +85,10 @@ impl Codec for RacBvh {
         ]
     }
 
+    fn cache_stats(&self) -> Option<crate::codec::CacheStats> {
+        Some(RacBvh::cache_stats(self))
+    }
+
     fn cache_budget(options: &mut RacOptions) -> Option<&mut usize> {
         Some(&mut options.cache_budget_bytes)
     }

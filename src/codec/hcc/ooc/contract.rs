@@ -204,6 +204,10 @@ impl Codec for HccOocBvh {
         out
     }
 
+    fn cache_stats(&self) -> Option<crate::codec::CacheStats> {
+        HccOocBvh::cache_stats(self)
+    }
+
     fn cache_budget(options: &mut OocOptions) -> Option<&mut usize> {
         Some(&mut options.cache_budget_bytes)
     }
