@@ -21,7 +21,7 @@ use super::model::{
 use super::rebuild::Rebuild;
 use crate::codec::common::FormatError;
 use crate::codec::common::bits::{BitReader, unzigzag};
-use crate::codec::common::le::u32_at;
+use crate::codec::common::le::{f32_at, u32_at};
 use crate::codec::common::static_dict::{StaticDecoder, StaticDict};
 
 /// Everything reused from tree to tree.
@@ -203,15 +203,7 @@ pub(super) fn tree_stream<'a>(
 /// the file stores them.
 pub(super) fn stored_firsts(h: &Header, sec: &[&[u8]; SECTIONS]) -> (Vec<[f32; 6]>, Vec<[u32; 2]>) {
     let boxes = (0..h.high_nodes as usize)
-        .map(|i| {
-            std::array::from_fn(|e| {
-                f32::from_le_bytes(
-                    sec[SEC_BOXES][24 * i + 4 * e..][..4]
-                        .try_into()
-                        .unwrap_or_default(),
-                )
-            })
-        })
+        .map(|i| std::array::from_fn(|e| f32_at(sec[SEC_BOXES], 24 * i + 4 * e)))
         .collect();
     let firsts = (0..h.trees as usize)
         .map(|k| {
