@@ -22,7 +22,7 @@ pub trait Page: Send + Sync + Sized + 'static {
     /// This page type's thread-local pin table; implement it as
     /// `thread_local!` inside the function, returning the key:
     ///
-    /// ```ignore
+    /// ```text
     /// fn pins() -> &'static LocalKey<RefCell<Pins<Self>>> {
     ///     thread_local!(static P: RefCell<Pins<MyPage>> = const { RefCell::new(no_pins()) });
     ///     &P
