@@ -19,9 +19,9 @@ use std::time::Instant;
 use cbvh::Mesh;
 use cbvh::build::{BuildOptions, Layout, build};
 use cbvh::codec::ByteSize;
-use cbvh::codec::plain::PlainBvh;
 use cbvh::codec::hcc::HccBvh;
 use cbvh::codec::hcc::ooc::OocOptions;
+use cbvh::codec::plain::PlainBvh;
 use cbvh::scene::{Kind, generate};
 use clap::Parser;
 
@@ -160,7 +160,10 @@ fn main() {
     for (k, b) in &i_parts {
         println!("  {k:<14} {:>8.3} B/tri", per(*b as f64));
     }
-    println!("vertices duplicated across low-level trees: {:.1} %", 100.0 * duplicated);
+    println!(
+        "vertices duplicated across low-level trees: {:.1} %",
+        100.0 * duplicated
+    );
     println!(
         "plain (32-byte nodes, f32 mesh): {:.3} B/tri; compression {:.1} : 1 (i), {:.1} : 1 (o)",
         per(plain as f64),

@@ -581,9 +581,9 @@ pub fn run(
         final_speed: body.linvel().length(),
         final_state: final_state(scene, body.center_of_mass(), body.linvel().length()),
         energy_gain: energy_rise(&energy, &points_per_step) / drop_scale.max(f32::MIN_POSITIVE),
-        caches: cbvh.as_ref().and_then(|(a, b)| {
-            Some([a.codec().cache_stats()?, b.codec().cache_stats()?])
-        }),
+        caches: cbvh
+            .as_ref()
+            .and_then(|(a, b)| Some([a.codec().cache_stats()?, b.codec().cache_stats()?])),
         fallback_bvh_built: cbvh
             .is_some_and(|(a, b)| a.fallback_bvh_built() || b.fallback_bvh_built()),
         narrow_phase_ms_per_step: narrow,

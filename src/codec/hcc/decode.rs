@@ -16,6 +16,9 @@ use crate::geom::{Aabb, Triangle};
 
 const KIND_HIGH: u8 = 3;
 const KIND_EMPTY: u8 = 4;
+/// The root of a low-level tree not yet opened (out of core: its box is
+/// the high-level leaf's; its word is read when the tree is entered).
+const KIND_UNOPENED: u8 = 5;
 
 /// A node handle: the node's decoded box (the parent box its children are
 /// decoded against), where it is, and which template it sits in.
@@ -75,6 +78,28 @@ impl HccNode {
             template: 0,
             kind: KIND_HIGH,
         }
+    }
+
+    /// The root of low-level tree `tree`, box `bounds`, before the tree is
+    /// read (see [`HccNode::is_unopened`]).
+    #[inline(always)]
+    pub(super) fn unopened(tree: u32, bounds: Aabb) -> Self {
+        Self {
+            bounds,
+            tree,
+            pos: 0,
+            block: 0,
+            template: 0,
+            kind: KIND_UNOPENED,
+        }
+    }
+
+    /// Whether this is a low-level tree's root not yet read: only the
+    /// out-of-core mode makes them, so that a traversal decodes a tree
+    /// when it enters the tree's box, not when it meets the box.
+    #[inline(always)]
+    pub(super) fn is_unopened(&self) -> bool {
+        self.kind == KIND_UNOPENED
     }
 
     /// The root of an empty model.

@@ -25,7 +25,10 @@ impl NodeCursor for HccOocBvh {
 
     #[inline(always)]
     fn is_leaf(&self, node: &HccNode) -> bool {
-        node.is_leaf()
+        match &self.mode {
+            Mode::Paged(p) if node.is_unopened() => p.open(node).is_leaf(),
+            _ => node.is_leaf(),
+        }
     }
 
     #[inline]

@@ -8,6 +8,11 @@
 //! and first stored vertex, the contexts' decoders, and the id maps when
 //! the file has them.
 //!
+//! A high-level leaf's child handle is an *unopened* root (its box is the
+//! stored high-level box): the tree is decoded when a traversal enters the
+//! box (asks whether it is a leaf, for its children or its triangles), not
+//! when it meets it, so a ray that misses a tree's box never decodes it.
+//!
 //! A node handle is an [`HccNode`] whose tree field names the low-level
 //! tree of the whole model; the page's own i-HCCMesh numbers that tree 0,
 //! so a handle is re-labelled on the way in and out. A page's triangles are
@@ -218,9 +223,20 @@ impl Paged {
         let h = &self.high[i as usize];
         let bounds = Aabb::from_arrays(h.min, h.max);
         if h.is_leaf() {
-            self.with_page(h.a, |p| p.hcc.low_root(0, bounds).in_tree(h.a))
+            HccNode::unopened(h.a, bounds)
         } else {
             HccNode::high(i, bounds)
+        }
+    }
+
+    /// `node`, its tree's root word read if it is an unopened root.
+    #[inline]
+    pub(super) fn open(&self, node: &HccNode) -> HccNode {
+        if node.is_unopened() {
+            let (t, bounds) = (node.tree(), node.bounds());
+            self.with_page(t, |p| p.hcc.low_root(0, bounds).in_tree(t))
+        } else {
+            *node
         }
     }
 
@@ -234,6 +250,7 @@ impl Paged {
                 (n, n.bounds())
             });
         }
+        let node = self.open(node);
         let t = node.tree();
         let local = node.in_tree(0);
         self.with_page(t, |p| {
@@ -256,6 +273,7 @@ impl Paged {
         if node.is_empty() {
             return;
         }
+        let node = self.open(node);
         let t = node.tree();
         let first = self.firsts[t as usize][0];
         let local = node.in_tree(0);
