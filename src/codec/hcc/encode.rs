@@ -523,11 +523,17 @@ impl HccBvh {
     /// Rebuilds the leaf rank/select bits from the node words.
     pub(super) fn build_leaf_ranks(&mut self) {
         self.leaf_bits = vec![0; self.nodes.len().div_ceil(64)];
-        for (p, &w) in self.nodes.iter().enumerate() {
-            if w >> TYPE_SHIFT == TYPE_LEAF {
-                self.leaf_bits[p / 64] |= 1 << (p % 64);
+        for (bits, words) in self.leaf_bits.iter_mut().zip(self.nodes.chunks(64)) {
+            for (i, &w) in words.iter().enumerate() {
+                *bits |= u64::from(w >> TYPE_SHIFT == TYPE_LEAF) << i;
             }
         }
+        self.rank_leaf_bits();
+    }
+
+    /// Rebuilds the leaf ranks from the leaf bits (which a decoder that
+    /// knows where the leaves are may set without reading the words).
+    pub(super) fn rank_leaf_bits(&mut self) {
         let mut before = 0;
         self.leaf_rank = self
             .leaf_bits

@@ -50,50 +50,51 @@ pub(super) fn code_pair(
     (tl, vl, ll): (&Extents, &[u32; 6], bool),
     (tr, vr, rl): (&Extents, &[u32; 6], bool),
 ) -> PairCode {
-    let mut out = PairCode {
-        mask: 0,
-        fields: [[0; 3]; 2],
-        used: [0; 2],
-        boxes: [*tl, *tr],
-        loose: 0,
-    };
+    // Each case builds its results in locals indexed by constants only, so
+    // that the code stays in registers once inlined (a `PairCode` written
+    // field by field through dynamic indices would go through memory).
     match (ll, rl) {
         (false, false) => {
+            let (mut mask, mut fields, mut boxes) = (0, [[0; 3]; 2], [*tl, *tr]);
+            // Without branches on the extents (whichever child attains an
+            // extent is a coin toss): `|` and `&` rather than `||` and `&&`.
             for e in 0..6 {
-                let left_inherits = if tl[e] == d[e] {
-                    true
-                } else if tr[e] == d[e] {
-                    false
-                } else {
-                    // A parent decoded looser than tight: the child that
-                    // loses less inherits.
-                    (d[e] - tl[e]).abs() <= (d[e] - tr[e]).abs()
-                };
-                let v = if left_inherits {
-                    out.mask |= 1 << e;
-                    out.boxes[0][e] = d[e];
-                    vr[e]
-                } else {
-                    out.boxes[1][e] = d[e];
-                    vl[e]
-                };
+                let left_inherits = (tl[e] == d[e])
+                    | ((tr[e] != d[e])
+                        // A parent decoded looser than tight: the child
+                        // that loses less inherits.
+                        & ((d[e] - tl[e]).abs() <= (d[e] - tr[e]).abs()));
+                mask |= u32::from(left_inherits) << e;
+                boxes[0][e] = if left_inherits { d[e] } else { tl[e] };
+                boxes[1][e] = if left_inherits { tr[e] } else { d[e] };
                 // Minima in the left word, maxima in the right one.
-                out.fields[e / 3][e % 3] = v;
+                fields[e / 3][e % 3] = if left_inherits { vr[e] } else { vl[e] };
             }
-            out.used = [3, 3];
+            PairCode {
+                mask,
+                fields,
+                used: [3, 3],
+                boxes,
+                loose: 0,
+            }
         }
-        (true, true) => {}
+        (true, true) => PairCode {
+            mask: 0,
+            fields: [[0; 3]; 2],
+            used: [0; 2],
+            boxes: [*tl, *tr],
+            loose: 0,
+        },
         (leaf_left, _) => {
-            let (side, ti, vi) = if leaf_left { (1, tr, vr) } else { (0, tl, vl) };
+            let (ti, vi) = if leaf_left { (tr, vr) } else { (tl, vl) };
             let axis = |e: usize| (d[e % 3 + 3] - d[e % 3]).max(f32::MIN_POSITIVE);
             let mut need = [0usize; 6];
             let mut n = 0;
             for e in 0..6 {
-                if ti[e] != d[e] {
-                    need[n] = e;
-                    n += 1;
-                }
+                need[n] = e;
+                n += usize::from(ti[e] != d[e]);
             }
+            let mut loose = 0;
             if n > 3 {
                 // Three vertex fields: keep the three extents that shrink
                 // the box most; the rest inherit (loose but conservative).
@@ -102,22 +103,29 @@ pub(super) fn code_pair(
                     let lb = (d[b] - ti[b]).abs() / axis(b);
                     lb.total_cmp(&la).then(a.cmp(&b))
                 });
-                out.loose = n - 3;
+                loose = n - 3;
                 n = 3;
                 need[..n].sort_unstable();
             }
-            out.mask = 0b11_1111;
+            let (mut mask, mut f) = (0b11_1111u32, [0u32; 3]);
             for (j, &e) in need[..n].iter().enumerate() {
-                out.mask &= !(1 << e);
-                out.fields[side][j] = vi[e];
+                mask &= !(1 << e);
+                f[j] = vi[e];
             }
-            out.used[side] = n;
-            for (e, b) in out.boxes[side].iter_mut().enumerate() {
-                if out.mask >> e & 1 != 0 {
-                    *b = d[e];
-                }
+            let inner: Extents =
+                std::array::from_fn(|e| if mask >> e & 1 != 0 { d[e] } else { ti[e] });
+            let (fields, used, boxes) = if leaf_left {
+                ([[0; 3], f], [0, n], [*tl, inner])
+            } else {
+                ([f, [0; 3]], [n, 0], [inner, *tr])
+            };
+            PairCode {
+                mask,
+                fields,
+                used,
+                boxes,
+                loose,
             }
         }
     }
-    out
 }

@@ -78,7 +78,9 @@ const fn shape(mask: u16) -> Option<(u8, u8)> {
     Some((n as u8, height))
 }
 
-const fn build_table() -> [Template; TEMPLATE_COUNT] {
+/// The template table, computed at compile time (also for other compile-time
+/// tables derived from it).
+pub(super) const fn build_table() -> [Template; TEMPLATE_COUNT] {
     let mut out = [Template {
         mask: 0,
         nodes: 0,

@@ -167,20 +167,42 @@ impl Quantized {
             byte: self.data.len() as u32,
             ..Default::default()
         };
-        for a in 0..3 {
-            let lo = q.iter().map(|v| v[a]).min().unwrap_or(0);
-            let hi = q.iter().map(|v| v[a]).max().unwrap_or(0);
-            t.axes[a] = lo | width_of(hi - lo) << BASE_BITS;
-        }
-        // Vertex i at bit i · stride of the run, x first, least-significant
-        // bit first: a bit writer appending field after field.
-        let mut w = crate::codec::common::bits::BitWriter::default();
+        let (mut lo, mut hi) = ([u32::MAX; 3], [0u32; 3]);
         for v in q {
-            for (a, &c) in v.iter().enumerate() {
-                w.put(u64::from(c - t.base(a)), t.width(a));
+            for a in 0..3 {
+                lo[a] = lo[a].min(v[a]);
+                hi[a] = hi[a].max(v[a]);
             }
         }
-        self.data.extend_from_slice(&w.finish());
+        if q.is_empty() {
+            lo = [0; 3];
+        }
+        for a in 0..3 {
+            t.axes[a] = lo[a] | width_of(hi[a] - lo[a]) << BASE_BITS;
+        }
+        // Vertex i at bit i · stride of the run, x first, least-significant
+        // bit first: fields appended one after the other (as a bit writer
+        // would), flushed 32 bits at a time, the last byte zero-padded.
+        let base = [0, 1, 2].map(|a| t.base(a));
+        let width = [0, 1, 2].map(|a| t.width(a));
+        let (mut acc, mut n) = (0u64, 0u32);
+        self.data
+            .reserve((q.len() * width.iter().sum::<u32>() as usize).div_ceil(8));
+        for v in q {
+            for a in 0..3 {
+                // A field has at most 24 bits and fewer than 32 wait, so
+                // `acc` never holds more than 55.
+                acc |= u64::from(v[a] - base[a]) << n;
+                n += width[a];
+                if n >= 32 {
+                    self.data.extend_from_slice(&(acc as u32).to_le_bytes());
+                    acc >>= 32;
+                    n -= 32;
+                }
+            }
+        }
+        self.data
+            .extend_from_slice(&acc.to_le_bytes()[..n.div_ceil(8) as usize]);
         self.trees.push(t);
     }
 

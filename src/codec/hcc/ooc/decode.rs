@@ -3,9 +3,7 @@
 
 use super::super::MAX_LEAF_TRIANGLES;
 use super::super::ids::{IdMap, VertexIds};
-use super::super::node::{
-    HIGH_LEAF, HighNode, MAX_TREE_TRIANGLES, MAX_TREE_VERTICES, TYPE_LEAF, TreeHeader,
-};
+use super::super::node::{HIGH_LEAF, HighNode, MAX_TREE_TRIANGLES, MAX_TREE_VERTICES, TreeHeader};
 use super::super::pair::{Extents, outer};
 use super::super::vertices::{MAX_VERTEX_BITS, Quantized, Vertices};
 use super::super::{HccBvh, HccStats};
@@ -30,7 +28,9 @@ struct Scratch {
     lay: Layout,
     cache: CornerCache,
     adj: Adjacency,
-    /// Per position, a leaf's first triangle in `tris` and its count.
+    /// Per leaf (in `lay.leaves`), its first triangle in `tris` and its
+    /// count; empty without multi-triangle leaves (leaf `i` holds triangle
+    /// `i`).
     spans: Vec<(u32, u32)>,
     tris: Vec<[u32; 3]>,
     grid: Vec<[u32; 3]>,
@@ -50,6 +50,9 @@ struct Out {
     triangles: u32,
     stats: HccStats,
     roots: Vec<Extents>,
+    /// The i-HCCMesh's leaf bits (bit `p` set when node word `p` is a
+    /// leaf), set from the layouts rather than read back from the words.
+    leaf_bits: Vec<u64>,
 }
 
 /// The largest raw symbol of each context, in bits.
@@ -124,6 +127,7 @@ impl Coder {
             triangles: 0,
             stats: HccStats::default(),
             roots: Vec::with_capacity(trees),
+            leaf_bits: Vec::new(),
         }
     }
 
@@ -164,7 +168,7 @@ impl Coder {
             vertices: Vertices::Packed(out.q),
             blocks: out.blocks,
             block_start: out.block_start,
-            leaf_bits: Vec::new(),
+            leaf_bits: out.leaf_bits,
             leaf_rank: Vec::new(),
             ids: None,
             vertex_ids: None,
@@ -174,7 +178,7 @@ impl Coder {
             mass: self.h.mass,
             stats,
         };
-        hcc.build_leaf_ranks();
+        hcc.rank_leaf_bits();
         Ok((hcc, root))
     }
 }
@@ -226,6 +230,11 @@ pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
     let mut out = coder.out(cap(h.trees));
     out.nodes.reserve(cap(h.node_words));
     out.ics.reserve(cap(h.interconnections));
+    // At most the grid's bits per coordinate, and a byte of padding a tree.
+    let vertex_bytes = (h.stored_vertices as u64 * 3 * u64::from(h.bits)).div_ceil(8);
+    out.q
+        .data
+        .reserve(cap(u32::try_from(vertex_bytes).unwrap_or(u32::MAX)) + cap(h.trees));
     let (starts, streams) = (sec[SEC_STARTS], sec[SEC_TREES]);
     let mut s = Scratch::default();
     for k in 0..h.trees {
@@ -319,7 +328,7 @@ pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
         vertices: Vertices::Packed(out.q),
         blocks: out.blocks,
         block_start: out.block_start,
-        leaf_bits: Vec::new(),
+        leaf_bits: out.leaf_bits,
         leaf_rank: Vec::new(),
         ids,
         vertex_ids,
@@ -329,7 +338,7 @@ pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
         mass: h.mass,
         stats,
     };
-    hcc.build_leaf_ranks();
+    hcc.rank_leaf_bits();
     Ok(hcc)
 }
 
@@ -439,6 +448,7 @@ fn decode_tree(
         let right = read_symbol(decs, CTX_TEMPLATE, &mut r, k)?;
         s.lay.expand(at, left, right).map_err(bad)?;
     }
+    s.lay.list_kinds();
     let n = s.lay.types.len();
     if out.nodes.len() + n > h.node_words as usize {
         return Err(bad("the trees hold more node words than the header says"));
@@ -447,16 +457,13 @@ fn decode_tree(
     s.cache.clear();
     s.adj.clear();
     s.grid.clear();
+    s.pts.clear();
     s.tris.clear();
     s.spans.clear();
-    s.spans.resize(n, (0, 0));
     let max_q = out.q.max_q();
     let mut last = [max_q / 2; 3];
     let mut next = 0u32;
-    for p in 0..n {
-        if s.lay.types[p] != TYPE_LEAF {
-            continue;
-        }
+    for _ in 0..s.lay.leaves.len() {
         let count = if h.multi {
             read_symbol(decs, CTX_LEAF, &mut r, k)? + 1
         } else {
@@ -468,23 +475,28 @@ fn decode_tree(
                 "a leaf or the tree holds more triangles than the format allows",
             ));
         }
-        s.spans[p] = (s.tris.len() as u32, count);
+        if h.multi {
+            s.spans.push((s.tris.len() as u32, count));
+        }
         for _ in 0..count {
             let first_new = next;
             let mut c = [0u32; 3];
             for (slot, cs) in c.iter_mut().enumerate() {
-                let v = s
-                    .cache
-                    .decode(read_symbol(decs, CTX_CORNER + slot, &mut r, k)?, next)
-                    .map_err(bad)?;
-                if v == next {
-                    if next as usize >= MAX_TREE_VERTICES {
-                        return Err(bad("the tree has more vertices than 9-bit indices address"));
-                    }
-                    s.adj.new_vertex(v);
-                    next += 1;
-                }
+                let sym = read_symbol(decs, CTX_CORNER + slot, &mut r, k)?;
+                let v = s.cache.decode(sym, next).map_err(bad)?;
+                // Cleared whether or not `next` is used here: no branch
+                // on the symbol's kind (see `Adjacency`'s heads).
+                s.adj.new_vertex(next);
+                next += u32::from(v == next);
                 *cs = v;
+            }
+            if next as usize > MAX_TREE_VERTICES {
+                return Err(bad("the tree has more vertices than 9-bit indices address"));
+            }
+            if next == first_new {
+                s.adj.add(c);
+                s.tris.push(c);
+                continue;
             }
             let mut known = c.map(|v| v < first_new);
             for slot in 0..3 {
@@ -497,12 +509,14 @@ fn decode_tree(
                 let mut g = [0u32; 3];
                 for x in 0..3 {
                     let d = unzigzag(u64::from(read_symbol(decs, ctx + x, &mut r, k)?));
-                    g[x] = u32::try_from(i64::from(pred[x]) + d)
-                        .ok()
-                        .filter(|&c| c <= max_q)
-                        .ok_or(bad("a vertex decodes outside the grid"))?;
+                    let q = i64::from(pred[x]) + d;
+                    if !(0..=i64::from(max_q)).contains(&q) {
+                        return Err(bad("a vertex decodes outside the grid"));
+                    }
+                    g[x] = q as u32;
                 }
                 s.grid.push(g);
+                s.pts.push(std::array::from_fn(|a| out.q.value(a, g[a])));
                 last = g;
                 for j in 0..3 {
                     known[j] |= c[j] == v;
@@ -516,12 +530,6 @@ fn decode_tree(
     if r.overran() {
         return Err(bad("the tree's stream ends early"));
     }
-    s.pts.clear();
-    s.pts.extend(
-        s.grid
-            .iter()
-            .map(|g| std::array::from_fn(|a| out.q.value(a, g[a]))),
-    );
     out.headers.push(TreeHeader {
         node_start: out.nodes.len() as u32,
         ic_start: out.ics.len() as u32,
@@ -540,6 +548,12 @@ fn decode_tree(
         return Err(bad("the trees' triangle blocks outgrow 4 GiB"));
     }
     out.roots.push(root);
+    let base = out.nodes.len() - n;
+    out.leaf_bits.resize(out.nodes.len().div_ceil(64), 0);
+    for &p in &s.lay.leaves {
+        let p = base + p as usize;
+        out.leaf_bits[p / 64] |= 1 << (p % 64);
+    }
     out.q.push_tree(&s.grid);
     out.stored = out
         .stored

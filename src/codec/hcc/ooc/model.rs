@@ -8,7 +8,9 @@ use super::super::node::{
     INDEX_BITS, MAX_TREE_INTERCONNECTIONS, MAX_TREE_NODES, MAX_TREE_VERTICES, TYPE_INNER,
     TYPE_LEAF, TYPE_TEMPLATE_LEAF,
 };
-use super::super::template::{MAX_HEIGHT, MAX_TEMPLATE_NODES, TEMPLATE_COUNT, TEMPLATES};
+use super::super::template::{
+    MAX_HEIGHT, MAX_TEMPLATE_NODES, TEMPLATE_COUNT, TEMPLATES, build_table,
+};
 
 /// Context of the template symbols.
 pub const CTX_TEMPLATE: usize = 0;
@@ -72,6 +74,66 @@ pub struct Layout {
     pub ics: Vec<(u8, u8, u32)>,
     /// Template id of the root template.
     pub root_template: u8,
+    /// Positions of the leaves (type [`TYPE_LEAF`]), in increasing order
+    /// (set by [`list_kinds`](Self::list_kinds)).
+    pub leaves: Vec<u32>,
+    /// Positions of the other nodes (inner nodes and template leaves, which
+    /// have children), in increasing order (set by
+    /// [`list_kinds`](Self::list_kinds)).
+    pub inner: Vec<u32>,
+}
+
+/// A template's nodes as [`Layout::alloc`] lays them out, by local index:
+/// their types with every childless node at the template's deepest level
+/// a leaf (the symbol makes some of them template leaves), their children
+/// (local indices; `[0, 0]` for childless nodes), and the local indices of
+/// the deepest childless nodes, in order.
+#[derive(Clone, Copy)]
+struct Shape {
+    nodes: u8,
+    types: [u32; MAX_TEMPLATE_NODES],
+    kids: [[u8; 2]; MAX_TEMPLATE_NODES],
+    /// How many nodes `deep` lists.
+    deepest: u8,
+    deep: [u8; 8],
+}
+
+/// Every template's [`Shape`], by template id.
+static SHAPES: [Shape; TEMPLATE_COUNT] = shapes();
+
+const fn shapes() -> [Shape; TEMPLATE_COUNT] {
+    let table = build_table();
+    let mut out = [Shape {
+        nodes: 0,
+        types: [TYPE_LEAF; MAX_TEMPLATE_NODES],
+        kids: [[0; 2]; MAX_TEMPLATE_NODES],
+        deepest: 0,
+        deep: [0; 8],
+    }; TEMPLATE_COUNT];
+    let mut id = 0;
+    while id < TEMPLATE_COUNT {
+        let mask = table[id].mask as u32;
+        let nodes = table[id].nodes as usize;
+        let mut depth = [0u8; MAX_TEMPLATE_NODES];
+        let mut i = 0;
+        while i < nodes {
+            if mask >> i & 1 != 0 {
+                // As `Template::children`.
+                let c = 2 * (mask & ((1u32 << i) - 1)).count_ones() as usize + 1;
+                depth[c] = depth[i] + 1;
+                depth[c + 1] = depth[i] + 1;
+                out[id].types[i] = TYPE_INNER;
+                out[id].kids[i] = [c as u8, c as u8 + 1];
+            } else if depth[i] as usize == MAX_HEIGHT - 1 {
+                out[id].deep[out[id].deepest as usize] = i as u8;
+                out[id].deepest += 1;
+            }
+            i += 1;
+        }
+        out[id].nodes = nodes as u8;
+        id += 1;
+    }
+    out
 }
 
 impl Layout {
@@ -82,52 +144,71 @@ impl Layout {
         self.ic_of.clear();
         self.pending.clear();
         self.ics.clear();
+        self.leaves.clear();
+        self.inner.clear();
     }
 
     /// Lays out the template of symbol `sym` at the end; returns its id and
     /// first position.
+    #[inline]
     pub fn alloc(&mut self, sym: u32) -> Result<(u8, u32), Bad> {
         let id = (sym & 31) as usize;
         if id >= TEMPLATE_COUNT || sym > MAX_TEMPLATE_SYM {
             return Err("a template symbol is out of range");
         }
-        let t = TEMPLATES[id];
+        let shape = &SHAPES[id];
         let start = self.types.len() as u32;
-        if self.types.len() + t.nodes as usize > MAX_TREE_NODES {
+        let nodes = shape.nodes as usize;
+        if self.types.len() + nodes > MAX_TREE_NODES {
             return Err("a low-level tree has more nodes than positions address");
         }
         let mut tl_bits = sym >> 5;
-        let mut depth = [0u8; MAX_TEMPLATE_NODES];
-        for i in 0..t.nodes as u32 {
-            if t.has_children(i) {
-                let c = t.children(i);
-                depth[c as usize] = depth[i as usize] + 1;
-                depth[c as usize + 1] = depth[i as usize] + 1;
-                self.types.push(TYPE_INNER);
-                self.kids.push([start + c, start + c + 1]);
-                self.ic_of.push(u32::MAX);
-            } else {
-                let deepest = depth[i as usize] as usize == MAX_HEIGHT - 1;
-                let ty = if deepest && tl_bits & 1 == 1 {
-                    TYPE_TEMPLATE_LEAF
-                } else {
-                    TYPE_LEAF
-                };
-                if deepest {
-                    tl_bits >>= 1;
-                }
-                if ty == TYPE_TEMPLATE_LEAF {
-                    self.pending.push(start + i);
-                }
-                self.types.push(ty);
-                self.kids.push([0; 2]);
-                self.ic_of.push(u32::MAX);
-            }
-        }
-        if tl_bits != 0 {
+        if tl_bits >> shape.deepest != 0 {
             return Err("a template symbol marks nodes the template does not have");
         }
+        // The template's nodes with every deepest childless node a leaf,
+        // then the template leaves the symbol marks, in node order. Copies
+        // of the whole (fixed-size) tables cut back to the template's
+        // nodes: no copy of a variable length, which would be a call.
+        let end = start as usize + nodes;
+        self.types.extend_from_slice(&shape.types);
+        self.types.truncate(end);
+        self.kids
+            .extend_from_slice(&shape.kids.map(|k| k.map(|c| start + u32::from(c))));
+        self.kids.truncate(end);
+        self.ic_of
+            .extend_from_slice(&[u32::MAX; MAX_TEMPLATE_NODES]);
+        self.ic_of.truncate(end);
+        while tl_bits != 0 {
+            let p = start + u32::from(shape.deep[tl_bits.trailing_zeros() as usize % 8]);
+            tl_bits &= tl_bits - 1;
+            self.types[p as usize] = TYPE_TEMPLATE_LEAF;
+            self.pending.push(p);
+        }
         Ok((id as u8, start))
+    }
+
+    /// Lists the positions of leaves and of the other nodes
+    /// ([`leaves`](Self::leaves), [`inner`](Self::inner)) once every
+    /// template is laid out.
+    pub fn list_kinds(&mut self) {
+        let n = self.types.len();
+        self.leaves.clear();
+        self.inner.clear();
+        self.leaves.resize(n, 0);
+        self.inner.resize(n, 0);
+        // Each position is written to both lists and kept in one: no
+        // branch on the node type.
+        let (mut l, mut i) = (0, 0);
+        for (p, &ty) in self.types.iter().enumerate() {
+            let leaf = usize::from(ty == TYPE_LEAF);
+            self.leaves[l] = p as u32;
+            self.inner[i] = p as u32;
+            l += leaf;
+            i += 1 - leaf;
+        }
+        self.leaves.truncate(l);
+        self.inner.truncate(i);
     }
 
     /// Starts a tree with the root template's symbol.
@@ -175,11 +256,12 @@ pub fn template_symbol(id: u8, start: usize, types: &[u32]) -> Option<u32> {
 }
 
 /// The most recently used vertices of the tree, most recent first: 16
-/// lanes of 16 bits in two `u128` halves (lanes 0–7, 8–15), so that moving
-/// an entry to the front is a few shifts and masks, not a loop.
+/// lanes of 16 bits in four `u64` words (lanes 0–3, 4–7, 8–11, 12–15), so
+/// that reading an entry is one shift and moving an entry to the front is
+/// a few shifts and masks, not a loop.
 #[derive(Default)]
 pub struct CornerCache {
-    lanes: [u128; 2],
+    lanes: [u64; 4],
     len: usize,
 }
 
@@ -189,7 +271,7 @@ impl CornerCache {
     /// Slot `r` (< 16).
     #[inline(always)]
     fn slot(&self, r: usize) -> u32 {
-        (self.lanes[r / 8] >> (16 * (r % 8))) as u16 as u32
+        (self.lanes[(r / 4) % 4] >> (16 * (r % 4))) as u16 as u32
     }
 
     /// Empties the cache (a new tree).
@@ -211,24 +293,34 @@ impl CornerCache {
     /// The vertex of corner symbol `sym` when `next` vertices are known
     /// (decoder): `next` itself for a new one; moves it to the front as
     /// [`touch`](Self::touch) does, without searching (the symbol says
-    /// where it is).
+    /// where it is). Selects rather than branches on the kind of symbol,
+    /// which the stream does not make predictable.
     #[inline(always)]
     pub fn decode(&mut self, sym: u32, next: u32) -> Result<u32, Bad> {
-        let (v, at) = if sym == SYM_NEW {
-            (next, self.grow())
-        } else if sym <= CACHE as u32 {
-            let at = sym as usize - 1;
-            if at >= self.len {
-                return Err("a corner names an empty cache slot");
-            }
-            (self.slot(at), at)
+        let rank = sym.wrapping_sub(1);
+        let cached = rank < CACHE as u32;
+        if cached && rank as usize >= self.len {
+            return Err("a corner names an empty cache slot");
+        }
+        if sym > next + CACHE as u32 {
+            return Err("a corner names a vertex before the tree's first");
+        }
+        // A vertex outside the cache: `next` for a new one, else
+        // `next − 1 − (sym − 1 − CACHE)`.
+        let outside = if sym == SYM_NEW {
+            next
         } else {
-            let back = sym - 1 - CACHE as u32;
-            let v = next
-                .checked_sub(1 + back)
-                .ok_or("a corner names a vertex before the tree's first")?;
-            (v, self.grow())
+            (next + CACHE as u32).wrapping_sub(sym)
         };
+        // Both read, then one kept by a mask: a plain `if` here compiles
+        // to a branch, which the symbols make a coin toss.
+        let keep = u32::from(cached).wrapping_neg();
+        let v = self.slot(rank as usize % CACHE) & keep | outside & !keep;
+        // A vertex outside the cache takes the last slot in use (dropped
+        // when the cache is full) or a new one.
+        let keep = usize::from(cached).wrapping_neg();
+        let at = rank as usize & keep | self.len.min(CACHE - 1) & !keep;
+        self.len += usize::from(!cached & (self.len < CACHE));
         self.move_front(at, v);
         Ok(v)
     }
@@ -254,45 +346,64 @@ impl CornerCache {
     /// after `at` keep their entries.
     #[inline(always)]
     fn move_front(&mut self, at: usize, v: u32) {
-        let [lo, hi] = self.lanes;
-        let shifted = [lo << 16 | u128::from(v as u16), hi << 16 | lo >> 112];
+        let l = self.lanes;
+        let shifted = [
+            l[0] << 16 | u64::from(v as u16),
+            l[1] << 16 | l[0] >> 48,
+            l[2] << 16 | l[1] >> 48,
+            l[3] << 16 | l[2] >> 48,
+        ];
         // Lanes 0..=at take the shifted value.
-        let lanes = 16 * (at as u32 + 1);
-        let mask = |bits: u32| match bits {
-            0 => 0,
-            128.. => u128::MAX,
-            b => (1u128 << b) - 1,
-        };
-        let m = [mask(lanes.min(128)), mask(lanes.saturating_sub(128))];
-        for h in 0..2 {
-            self.lanes[h] = shifted[h] & m[h] | self.lanes[h] & !m[h];
+        let m = FRONT_MASKS[at % CACHE];
+        for h in 0..4 {
+            self.lanes[h] = shifted[h] & m[h] | l[h] & !m[h];
         }
     }
 }
 
+/// Per slot `at`, the bits of lanes `0..=at` in [`CornerCache`]'s words.
+static FRONT_MASKS: [[u64; 4]; CACHE] = {
+    let mut m = [[0u64; 4]; CACHE];
+    let mut at = 0;
+    while at < CACHE {
+        let mut lane = 0;
+        while lane <= at {
+            m[at][lane / 4] |= 0xffff << (16 * (lane % 4));
+            lane += 1;
+        }
+        at += 1;
+    }
+    m
+};
+
 /// Triangles by vertex, most recent first, to find the triangle across an
-/// edge: `head[v]` is `v`'s last corner (triangle · 3 + slot), `prev` links
-/// each corner to the vertex's previous one.
+/// edge: `head[v]` is `v`'s last corner, and each corner holds the
+/// vertex's previous corner and the triangle's two other vertices, in
+/// order (the next corner's, then the one after).
 #[derive(Default)]
 pub struct Adjacency {
     head: Vec<u32>,
-    prev: Vec<u32>,
-    tris: Vec<[u32; 3]>,
+    corners: Vec<[u32; 3]>,
 }
 
 const NONE: u32 = u32::MAX;
 
+/// Entries of [`Adjacency`]'s heads: every local vertex index, and two
+/// more, so that a decoder may clear the head of the next index before it
+/// knows whether that index is used (at most two past the last vertex
+/// within a triangle).
+const HEADS: usize = MAX_TREE_VERTICES + 3;
+
 impl Adjacency {
     /// Empties it for a new tree.
     pub fn clear(&mut self) {
-        if self.head.len() < MAX_TREE_VERTICES {
-            self.head.resize(MAX_TREE_VERTICES, NONE);
+        if self.head.len() < HEADS {
+            self.head.resize(HEADS, NONE);
         }
-        self.prev.clear();
-        self.tris.clear();
+        self.corners.clear();
     }
 
-    /// Vertex `v` is new: no triangles yet.
+    /// Vertex `v` is new: no triangles yet (`v` ≤ `MAX_TREE_VERTICES` + 2).
     #[inline(always)]
     pub fn new_vertex(&mut self, v: u32) {
         self.head[v as usize] = NONE;
@@ -301,12 +412,14 @@ impl Adjacency {
     /// Adds triangle `c` (every corner known).
     #[inline(always)]
     pub fn add(&mut self, c: [u32; 3]) {
-        let t = self.tris.len() as u32;
-        for (k, &v) in c.iter().enumerate() {
-            self.prev.push(self.head[v as usize]);
-            self.head[v as usize] = 3 * t + k as u32;
+        let t = self.corners.len() as u32;
+        let mut corners = [[0; 3]; 3];
+        for k in 0..3 {
+            let v = c[k] as usize;
+            corners[k] = [self.head[v], c[(k + 1) % 3], c[(k + 2) % 3]];
+            self.head[v] = t + k as u32;
         }
-        self.tris.push(c);
+        self.corners.extend_from_slice(&corners);
     }
 
     /// The third corner of the most recent triangle with edge `a`–`b`
@@ -315,19 +428,15 @@ impl Adjacency {
     pub fn opposite(&self, a: u32, b: u32) -> Option<u32> {
         let mut at = self.head[a as usize];
         for _ in 0..EDGE_SEARCH {
-            if at == NONE {
-                return None;
-            }
-            let t = self.tris[(at / 3) as usize];
-            let k = (at % 3) as usize;
-            let (n1, n2) = (t[(k + 1) % 3], t[(k + 2) % 3]);
+            // `NONE` is past every corner.
+            let &[prev, n1, n2] = self.corners.get(at as usize)?;
             if n1 == b {
                 return Some(n2);
             }
             if n2 == b {
                 return Some(n1);
             }
-            at = self.prev[at as usize];
+            at = prev;
         }
         None
     }
