@@ -156,30 +156,68 @@ impl Coder {
             a: 0,
             b: HIGH_LEAF,
         }];
-        let mut stats = out.stats;
-        stats.trees = 1;
-        stats.high_nodes = 1;
-        stats.tree_vertices = out.stored as usize;
+        // A tree alone: its own vertices are the mesh's, none of them
+        // counted as input vertices.
+        let vertices = out.stored;
+        let hcc = out.into_hcc(high, (None, None), &self.h, (vertices, 0));
+        Ok((hcc, root))
+    }
+}
+
+/// The id maps the file keeps (see the flags).
+pub(super) fn id_maps(
+    h: &Header,
+    sec: &[&[u8]; SECTIONS],
+) -> Result<(Option<IdMap>, Option<VertexIds>), OocError> {
+    let ids = if h.tree_order {
+        None
+    } else {
+        Some(IdMap::parse(sec[SEC_IDS], h.triangles)?)
+    };
+    let vertex_ids = if h.vertex_ids {
+        Some(VertexIds::parse(sec[SEC_VIDS], h.stored_vertices)?)
+    } else {
+        None
+    };
+    Ok((ids, vertex_ids))
+}
+
+impl Out {
+    /// The i-HCCMesh of these trees under the high-level tree `high`, with
+    /// the id maps `maps`, the input mesh's vertex count and the input
+    /// vertices the triangles use (`vertices`).
+    fn into_hcc(
+        self,
+        high: Vec<HighNode>,
+        (ids, vertex_ids): (Option<IdMap>, Option<VertexIds>),
+        h: &Header,
+        vertices: (u32, u32),
+    ) -> HccBvh {
+        let mut stats = self.stats;
+        stats.trees = self.headers.len();
+        stats.high_nodes = high.len();
+        stats.tree_vertices = self.stored as usize;
+        stats.mesh_vertices = vertices.1 as usize;
         let mut hcc = HccBvh {
             high,
-            headers: out.headers,
-            nodes: out.nodes,
-            ics: out.ics,
-            vertices: Vertices::Packed(out.q),
-            blocks: out.blocks,
-            block_start: out.block_start,
-            leaf_bits: out.leaf_bits,
+            headers: self.headers,
+            nodes: self.nodes,
+            ics: self.ics,
+            vertices: Vertices::Packed(self.q),
+            blocks: self.blocks,
+            block_start: self.block_start,
+            leaf_bits: self.leaf_bits,
             leaf_rank: Vec::new(),
-            ids: None,
-            vertex_ids: None,
-            multi: self.h.multi,
-            triangle_count: out.triangles,
-            mesh_vertices: out.stored,
-            mass: self.h.mass,
+            ids,
+            vertex_ids,
+            multi: h.multi,
+            triangle_count: self.triangles,
+            mesh_vertices: vertices.0,
+            mass: h.mass,
             stats,
         };
         hcc.rank_leaf_bits();
-        Ok((hcc, root))
+        hcc
     }
 }
 
@@ -305,41 +343,8 @@ pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
             "the stored first triangles or vertices of the trees disagree with the trees",
         ));
     }
-    let ids = if h.tree_order {
-        None
-    } else {
-        Some(IdMap::parse(sec[SEC_IDS], h.triangles)?)
-    };
-    let vertex_ids = if h.vertex_ids {
-        Some(VertexIds::parse(sec[SEC_VIDS], h.stored_vertices)?)
-    } else {
-        None
-    };
-    let mut stats = out.stats;
-    stats.trees = out.headers.len();
-    stats.high_nodes = high.len();
-    stats.tree_vertices = out.stored as usize;
-    stats.mesh_vertices = h.used_vertices as usize;
-    let mut hcc = HccBvh {
-        high,
-        headers: out.headers,
-        nodes: out.nodes,
-        ics: out.ics,
-        vertices: Vertices::Packed(out.q),
-        blocks: out.blocks,
-        block_start: out.block_start,
-        leaf_bits: out.leaf_bits,
-        leaf_rank: Vec::new(),
-        ids,
-        vertex_ids,
-        multi: h.multi,
-        triangle_count: h.triangles,
-        mesh_vertices: h.mesh_vertices,
-        mass: h.mass,
-        stats,
-    };
-    hcc.rank_leaf_bits();
-    Ok(hcc)
+    let maps = id_maps(&h, &sec)?;
+    Ok(out.into_hcc(high, maps, &h, (h.mesh_vertices, h.used_vertices)))
 }
 
 /// The next symbol of context `ctx` in tree `k`'s stream.

@@ -33,8 +33,8 @@ use super::super::node::HighNode;
 use super::super::pair::outer;
 use super::super::{HccBvh, HccNode};
 use super::OocError;
-use super::decode::{Coder, high_tree, stored_firsts, tree_stream};
-use super::file::{self, SEC_DICTS, SEC_HIGH, SEC_IDS, SEC_STARTS, SEC_TREES, SEC_VIDS, SECTIONS};
+use super::decode::{Coder, high_tree, id_maps, stored_firsts, tree_stream};
+use super::file::{self, SEC_DICTS, SEC_HIGH, SEC_STARTS, SEC_TREES, SECTIONS};
 use crate::codec::ByteSize;
 use crate::codec::common::page_cache::{
     self, CacheStats, LiveToken, Page, PageCache, Pins, no_pins,
@@ -137,16 +137,7 @@ impl Paged {
                 "the trees' first triangles or vertices do not ascend to the header's totals",
             ));
         }
-        let ids = if h.tree_order {
-            None
-        } else {
-            Some(IdMap::parse(sec[SEC_IDS], h.triangles)?)
-        };
-        let vertex_ids = if h.vertex_ids {
-            Some(VertexIds::parse(sec[SEC_VIDS], h.stored_vertices)?)
-        } else {
-            None
-        };
+        let (ids, vertex_ids) = id_maps(&h, &sec)?;
         let range = |s: &[u8]| {
             let at = s.as_ptr() as usize - b.as_ptr() as usize;
             at..at + s.len()
