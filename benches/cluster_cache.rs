@@ -1,6 +1,7 @@
 //! The shared decompressed-cluster cache under parallel random access:
-//! `lru::LruCache` shards behind mutexes (as `src/codec/racbvh/cache.rs`
-//! does it) against `quick_cache::sync::Cache`, both under a byte budget,
+//! `lru::LruCache` shards behind mutexes (the codec's own
+//! `codec::common::page_cache::PageCache`, which RACBVH and o-HCCMesh use)
+//! against `quick_cache::sync::Cache`, both under a byte budget,
 //! driven by the same trace of cluster look-ups from real ray traversals.
 //!
 //! The trace: closest-hit rays (random rays from a sphere around the model
@@ -54,7 +55,9 @@ use glam::Vec3A;
 /// The rays of `examples/racbvh_stats.rs`.
 #[path = "../examples/support/rays.rs"]
 mod ray_sets;
-use lru::LruCache;
+use cbvh::codec::common::page_cache::{Page, PageCache, Pins, no_pins};
+use std::cell::RefCell;
+use std::thread::LocalKey;
 
 /// In-core bytes per node of a decoded cluster (the codec's
 /// `CLUSTER_BYTES_PER_NODE`: the 32-byte node and its local root's ordinal).
@@ -65,7 +68,7 @@ const CLUSTER_BYTES_PER_NODE: usize = 34;
 const PINS: usize = 16;
 
 /// A cached cluster value.
-type Value = Arc<Vec<u8>>;
+type Value = Arc<Blob>;
 
 fn env_usize(name: &str, default: usize) -> usize {
     std::env::var(name)
@@ -145,84 +148,33 @@ trait ClusterCache: Sync {
     fn insert(&self, c: u32, v: Value) -> Value;
 }
 
-struct Shard {
-    lru: LruCache<u32, Value>,
-    bytes: usize,
-    hits: u64,
-}
+/// A decoded cluster's stand-in: its in-core bytes.
+struct Blob(Vec<u8>);
 
-/// `src/codec/racbvh/cache.rs`'s cache: up to 16 `Mutex<LruCache>` shards
-/// (one per 16 clusters of budget), each with an equal share of the
-/// budget, evicting its least recently used unheld clusters.
-struct Sharded {
-    shards: Vec<Mutex<Shard>>,
-    shard_budget: usize,
-    decodes: AtomicU64,
-}
-
-impl Sharded {
-    fn new(budget: usize, max_cluster: usize) -> Self {
-        let shards = (budget / (16 * max_cluster.max(1))).clamp(1, 16);
-        Self {
-            shards: (0..shards)
-                .map(|_| {
-                    Mutex::new(Shard {
-                        lru: LruCache::unbounded(),
-                        bytes: 0,
-                        hits: 0,
-                    })
-                })
-                .collect(),
-            shard_budget: budget / shards,
-            decodes: AtomicU64::new(0),
-        }
+impl Page for Blob {
+    fn bytes(&self) -> usize {
+        self.0.len()
     }
 
-    fn shard(&self, c: u32) -> std::sync::MutexGuard<'_, Shard> {
-        let m = &self.shards[c as usize % self.shards.len()];
-        m.lock().unwrap_or_else(|e| e.into_inner())
+    fn pins() -> &'static LocalKey<RefCell<Pins<Self>>> {
+        thread_local!(static PINNED: RefCell<Pins<Blob>> = const { RefCell::new(no_pins()) });
+        &PINNED
     }
 }
+
+/// The codec's own cache (`codec::common::page_cache`, as RACBVH uses
+/// it): up to 16 `Mutex<LruCache>` shards (one per 16 clusters of
+/// budget), each with an equal share of the budget, evicting its least
+/// recently used unheld clusters.
+type Sharded = PageCache<Blob>;
 
 impl ClusterCache for Sharded {
     fn get(&self, c: u32) -> Option<Value> {
-        let mut s = self.shard(c);
-        let hit = s.lru.get(&c).cloned();
-        s.hits += u64::from(hit.is_some());
-        hit
+        PageCache::get(self, c)
     }
 
-    fn insert(&self, c: u32, cl: Value) -> Value {
-        self.decodes.fetch_add(1, Ordering::Relaxed);
-        let mut s = self.shard(c);
-        if let Some(other) = s.lru.get(&c) {
-            return other.clone();
-        }
-        let n = cl.len();
-        if n > self.shard_budget {
-            return cl;
-        }
-        let mut evicted = Vec::new();
-        while s.bytes + n > self.shard_budget {
-            let victim = s
-                .lru
-                .iter()
-                .rev()
-                .find(|(_, v)| Arc::strong_count(v) == 1)
-                .map(|(k, _)| *k);
-            match victim.and_then(|k| s.lru.pop(&k)) {
-                Some(old) => {
-                    s.bytes -= old.len();
-                    evicted.push(old);
-                }
-                None => return cl,
-            }
-        }
-        s.bytes += n;
-        s.lru.put(c, cl.clone());
-        drop(s);
-        drop(evicted);
-        cl
+    fn insert(&self, c: u32, v: Value) -> Value {
+        PageCache::insert(self, c, v)
     }
 }
 
@@ -232,7 +184,7 @@ struct Bytes;
 
 impl quick_cache::Weighter<u32, Value> for Bytes {
     fn weight(&self, _: &u32, v: &Value) -> u64 {
-        v.len() as u64
+        v.0.len() as u64
     }
 }
 
@@ -273,11 +225,11 @@ fn replay(cache: &impl ClusterCache, rac: &RacBvh, trace: &[u32]) -> u64 {
             Some(v) => v,
             None => {
                 let nodes = rac.decode_cluster_uncached(c).expect("decode");
-                let v: Value = Arc::new(vec![1u8; nodes * CLUSTER_BYTES_PER_NODE]);
+                let v: Value = Arc::new(Blob(vec![1u8; nodes * CLUSTER_BYTES_PER_NODE]));
                 cache.insert(c, v)
             }
         };
-        sum += u64::from(v[v.len() - 1]);
+        sum += u64::from(v.0[v.0.len() - 1]);
     }
     sum
 }
@@ -352,22 +304,10 @@ fn bench(c: &mut Criterion) {
 
             let sharded = Sharded::new(budget, max_cluster);
             run(&sharded, &rac, &traces);
-            let (d0, h0) = (
-                sharded.decodes.load(Ordering::Relaxed),
-                sharded
-                    .shards
-                    .iter()
-                    .map(|s| s.lock().unwrap().hits)
-                    .sum::<u64>(),
-            );
+            let warm = sharded.stats();
             run(&sharded, &rac, &traces);
-            let d1 = sharded.decodes.load(Ordering::Relaxed) - d0;
-            let h1 = sharded
-                .shards
-                .iter()
-                .map(|s| s.lock().unwrap().hits)
-                .sum::<u64>()
-                - h0;
+            let done = sharded.stats();
+            let (d1, h1) = (done.decodes - warm.decodes, done.hits - warm.hits);
             let quick = Quick::new(budget, clusters);
             run(&quick, &rac, &traces);
             let q0 = quick.decodes.load(Ordering::Relaxed);
@@ -379,7 +319,7 @@ fn bench(c: &mut Criterion) {
                  quick_cache {q1} ({:.3}%)",
                 budget / 1024,
                 100.0 * d1 as f64 / lookups as f64,
-                sharded.shards.len(),
+                done.shards,
                 100.0 * q1 as f64 / lookups as f64,
             );
 
