@@ -245,6 +245,67 @@ fn cli_and_sims_use_codec_files_with_no_mesh_anywhere() {
     std::fs::remove_file(&bad).ok();
 }
 
+/// `cbvh render` of an o-HCCMesh file reports its decode cache: with a
+/// budget far below the model the trees are decoded as rays reach them
+/// (decodes and hits counted, the budget as given); with the default
+/// budget the whole file is decoded up front and there is no cache.
+#[test]
+fn cli_render_reports_the_decode_cache_of_an_out_of_core_file() {
+    let file = temp("cli-render-cache.hccz");
+    let f = file.to_str().unwrap();
+    let (ok, _, err) = cbvh(&[
+        "build", "--gen", "statue", "--tris", "20000", "--codec", "hcc-ooc", "-o", f,
+    ]);
+    assert!(ok, "{err}");
+    let png = temp("cli-render-cache.png");
+    let render = |budget: &[&str]| {
+        let mut args = vec![
+            "render",
+            f,
+            "-o",
+            png.to_str().unwrap(),
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--json",
+        ];
+        args.extend_from_slice(budget);
+        let (ok, out, err) = cbvh(&args);
+        assert!(ok, "{err}");
+        serde_json::from_str::<serde_json::Value>(&out).unwrap()
+    };
+    let small = render(&["--cache-mib", "0"]);
+    let cache = &small["cache"];
+    assert_eq!(cache["budget_bytes"], 0, "{small}");
+    assert!(cache["decodes"].as_u64().unwrap() > 0, "{small}");
+    assert!(
+        cache["hits"].as_u64().unwrap() + cache["decodes"].as_u64().unwrap()
+            >= small["primary_rays"].as_u64().unwrap() / 64,
+        "{small}"
+    );
+    let whole = render(&[]);
+    assert!(whole["cache"].is_null(), "{whole}");
+    assert_eq!(whole["rays"], small["rays"]);
+    let (ok, out, err) = cbvh(&[
+        "render",
+        f,
+        "-o",
+        png.to_str().unwrap(),
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--cache-mib",
+        "0",
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("decode cache      0.0 MiB budget"), "{out}");
+    for p in [&file, &png] {
+        std::fs::remove_file(p).ok();
+    }
+}
+
 /// Bit flips in the mesh sections used to give silently wrong answers to a
 /// caller who did not call `verify`: the first triangle a query reads now
 /// checks the mesh sections once, so such a caller gets the original

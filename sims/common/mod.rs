@@ -546,22 +546,7 @@ fn print_table(runs: &[RunReport], size: f32) {
     }
     for r in runs {
         if let Some(c) = &r.caches {
-            let mb = |b: usize| b as f64 / (1 << 20) as f64;
-            let part = |name: &str, c: &cbvh::codec::CacheStats| {
-                let looks = c.hits + c.decodes;
-                let budget = if c.budget_bytes == usize::MAX {
-                    "unlimited".to_string()
-                } else {
-                    format!("{:.1} MiB", mb(c.budget_bytes))
-                };
-                // Look-ups a thread's pins answer are not counted.
-                format!(
-                    "{name} {budget} budget, {} decodes, {:.1} % of shared look-ups hit, peak {:.1} MiB decoded",
-                    c.decodes,
-                    100.0 * c.hits as f64 / looks.max(1) as f64,
-                    mb(c.peak_live_bytes)
-                )
-            };
+            let part = |name: &str, c: &cbvh::codec::CacheStats| format!("{name} {}", c.summary());
             println!(
                 "{}: caches: {}; {}",
                 r.shape,

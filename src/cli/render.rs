@@ -287,6 +287,7 @@ fn report(
             "primitive_tests_per_ray": prims,
             "bytes_per_triangle": target.bytes_per_triangle(),
             "output": a.output.display().to_string(),
+            "cache": target.cache_stats(),
         });
         if let (Some((t, frames, path)), Some(o)) = (turntable, v.as_object_mut()) {
             o.insert(
@@ -332,6 +333,9 @@ fn report(
         );
         println!("traversal steps   {} per ray", fmt(steps));
         println!("primitive tests   {} per ray", fmt(prims));
+        if let Some(c) = target.cache_stats() {
+            println!("decode cache      {}", c.summary());
+        }
         if let Some((t, frames, path)) = turntable {
             println!(
                 "turntable         {frames} frames → {} ({:.3} s, {:.2} M rays/s)",

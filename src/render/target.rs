@@ -6,7 +6,7 @@
 //! parry's `TriMesh` implements the trait in `crate::parry::raycast_target`
 //! (only `src/parry/` may import parry3d).
 
-use crate::codec::{AnyCodec, Codec};
+use crate::codec::{AnyCodec, CacheStats, Codec};
 use crate::cursor::TraversalStats;
 use crate::geom::{Aabb, Ray, Triangle};
 use crate::query::packet::closest_hits_within;
@@ -68,6 +68,12 @@ pub trait RayTarget: Sync {
 
     /// A short name for reports (`plain`, `parry`, …).
     fn name(&self) -> &str;
+
+    /// The counters of the structure's decode cache, if it has one
+    /// ([`Codec::cache_stats`]).
+    fn cache_stats(&self) -> Option<CacheStats> {
+        None
+    }
 }
 
 /// A codec as a [`RayTarget`]: rays go through [`closest_hit`] and
@@ -163,5 +169,9 @@ impl<C: Codec> RayTarget for CursorTarget<C> {
 
     fn name(&self) -> &str {
         self.name
+    }
+
+    fn cache_stats(&self) -> Option<CacheStats> {
+        self.cursor.cache_stats()
     }
 }

@@ -91,6 +91,27 @@ pub struct CacheStats {
     pub shards: usize,
 }
 
+impl CacheStats {
+    /// One line for reports: the budget, the decodes, the share of shared
+    /// look-ups that hit (look-ups a thread's pins answer are not counted)
+    /// and the peak of decoded bytes.
+    pub fn summary(&self) -> String {
+        let mib = |b: usize| b as f64 / (1 << 20) as f64;
+        let budget = if self.budget_bytes == usize::MAX {
+            "unlimited".to_string()
+        } else {
+            format!("{:.1} MiB", mib(self.budget_bytes))
+        };
+        let looks = self.hits + self.decodes;
+        format!(
+            "{budget} budget, {} decodes, {:.1} % of shared look-ups hit, peak {:.1} MiB decoded",
+            self.decodes,
+            100.0 * self.hits as f64 / looks.max(1) as f64,
+            mib(self.peak_live_bytes)
+        )
+    }
+}
+
 struct Shard<T> {
     lru: LruCache<u32, Arc<T>>,
     bytes: usize,
