@@ -100,7 +100,7 @@ impl Coder {
         let mut decs = Vec::with_capacity(CONTEXTS);
         for ctx in 0..CONTEXTS {
             let bits = raw_bits_limit(ctx, h.bits);
-            decs.push(StaticDict::read(&mut r, 1 << bits, bits)?.decoder());
+            decs.push(StaticDict::read(&mut r, 1 << bits, bits)?.decoder(bits));
         }
         if r.overran() {
             return Err(corrupt_file("the dictionaries run past their section"));
