@@ -8,6 +8,7 @@ use super::super::pair::{Extents, outer};
 use super::super::vertices::{MAX_VERTEX_BITS, Quantized, Vertices};
 use super::super::{HccBvh, HccStats};
 use super::OocError;
+use super::encode;
 use super::file::{
     self, Header, SEC_BOXES, SEC_DICTS, SEC_FIRSTS, SEC_HIGH, SEC_IDS, SEC_STARTS, SEC_TREES,
     SEC_VIDS, SECTIONS,
@@ -19,7 +20,7 @@ use super::model::{
 use super::rebuild::Rebuild;
 use crate::codec::common::FormatError;
 use crate::codec::common::bits::{BitReader, unzigzag};
-use crate::codec::common::le::{f32_at, u32_at};
+use crate::codec::common::le::u32_at;
 use crate::codec::common::static_dict::{StaticDecoder, StaticDict};
 
 /// Everything reused from tree to tree.
@@ -241,21 +242,76 @@ pub(super) fn tree_stream<'a>(
     })
 }
 
-/// The high-level boxes and the trees' first triangles and vertices as
-/// the file stores them.
-pub(super) fn stored_firsts(h: &Header, sec: &[&[u8]; SECTIONS]) -> (Vec<[f32; 6]>, Vec<[u32; 2]>) {
-    let boxes = (0..h.high_nodes as usize)
-        .map(|i| std::array::from_fn(|e| f32_at(sec[SEC_BOXES], 24 * i + 4 * e)))
-        .collect();
-    let firsts = (0..h.trees as usize)
+/// The high-level boxes as the file stores them (section `bytes`; see
+/// `high_boxes` in the encoder), for the high-level tree `high` (shape
+/// only, as [`high_tree`] reads it).
+pub(super) fn stored_boxes(
+    coder: &Coder,
+    high: &[HighNode],
+    bytes: &[u8],
+) -> Result<Vec<[f32; 6]>, OocError> {
+    let bad = || corrupt_file("the high-level boxes are malformed");
+    let mut gs = vec![[0u32; 6]; high.len()];
+    let empty = |g: &[u32; 6]| (0..3).any(|a| g[a] > g[a + 3]);
+    let mut r = BitReader::new(bytes);
+    let mut bits = 0u64;
+    if let Some(root) = gs.first_mut() {
+        let b = coder.h.bits;
+        for c in root.iter_mut() {
+            *c = r.get(b) as u32;
+        }
+        bits += 6 * u64::from(b);
+        if empty(root) {
+            return Err(bad());
+        }
+    }
+    for (i, n) in high.iter().enumerate() {
+        if n.is_leaf() {
+            continue;
+        }
+        // Not empty: checked when it was read.
+        let p = gs[i];
+        let mut kids = [p, p];
+        for e in 0..6 {
+            let range = p[e % 3 + 3] - p[e % 3];
+            let w = encode::bits_for(range);
+            let side = r.get(1) as usize;
+            let off = r.get(w) as u32;
+            bits += 1 + u64::from(w);
+            if off > range {
+                return Err(bad());
+            }
+            // The child that does not share the parent's value.
+            kids[1 - side][e] = if e < 3 { p[e] + off } else { p[e] - off };
+        }
+        // Children follow their parent (`high_tree` numbers them so).
+        for (c, kid) in [n.a, n.b].into_iter().zip(kids) {
+            if empty(&kid) {
+                return Err(bad());
+            }
+            *gs.get_mut(c as usize).ok_or_else(bad)? = kid;
+        }
+    }
+    if r.overran() || bits.div_ceil(8) != bytes.len() as u64 {
+        return Err(bad());
+    }
+    let q = &coder.grid;
+    Ok(gs
+        .iter()
+        .map(|g| std::array::from_fn(|e| q.value(e % 3, g[e])))
+        .collect())
+}
+
+/// The trees' first triangles and vertices as the file stores them.
+pub(super) fn stored_firsts(h: &Header, sec: &[&[u8]; SECTIONS]) -> Vec<[u32; 2]> {
+    (0..h.trees as usize)
         .map(|k| {
             [
                 u32_at(sec[SEC_FIRSTS], 8 * k),
                 u32_at(sec[SEC_FIRSTS], 8 * k + 4),
             ]
         })
-        .collect();
-    (boxes, firsts)
+        .collect()
 }
 
 /// Decodes an o-HCCMesh file into its i-HCCMesh.
@@ -321,8 +377,9 @@ pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
         high[i].min = [bx[0], bx[1], bx[2]];
         high[i].max = [bx[3], bx[4], bx[5]];
     }
-    let (stored_boxes, firsts) = stored_firsts(&h, &sec);
-    if high.iter().zip(&stored_boxes).any(|(n, b)| {
+    let stored = stored_boxes(&coder, &high, sec[SEC_BOXES])?;
+    let firsts = stored_firsts(&h, &sec);
+    if high.iter().zip(&stored).any(|(n, b)| {
         n.min
             .into_iter()
             .chain(n.max)

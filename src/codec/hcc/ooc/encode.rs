@@ -4,7 +4,7 @@
 
 use super::super::HccBvh;
 use super::super::ids::{IdMap, VertexIds};
-use super::super::node::{Interconnection, TYPE_LEAF, node_type};
+use super::super::node::{HighNode, Interconnection, TYPE_LEAF, node_type};
 use super::super::template::TEMPLATES;
 use super::super::vertices::Quantized;
 use super::OocError;
@@ -24,8 +24,8 @@ pub struct OocSizes {
     pub header: usize,
     /// The contexts' dictionaries.
     pub dictionaries: usize,
-    /// The high-level tree: its shape (a bit a node) and its boxes
-    /// (uncompressed, as the paper keeps it: 24 bytes a node).
+    /// The high-level tree: its shape (a bit a node) and its boxes (on the
+    /// vertex grid, children against their parent: a few bytes a node).
     pub high_level: usize,
     /// Per low-level tree its first byte, first triangle and first stored
     /// vertex (random access: 12 bytes a tree).
@@ -275,6 +275,70 @@ fn high_shape(hcc: &HccBvh) -> Result<Vec<u8>, OocError> {
     Ok(w.finish())
 }
 
+/// The high-level tree's boxes on the vertex grid (layout in the module
+/// docs of [`ooc`](super)): the root's grid coordinates, then per inner
+/// node (in node order, parents first) and per extent which child shares
+/// the parent's value and how far inside the parent the other child's is.
+fn high_boxes(hcc: &HccBvh, q: &Quantized) -> Result<Vec<u8>, OocError> {
+    let bad = |what| OocError::NotCanonical {
+        tree: u32::MAX,
+        what,
+    };
+    let grid = |n: &HighNode| -> Result<[u32; 6], OocError> {
+        let mut g = [0u32; 6];
+        for (e, x) in n.min.into_iter().chain(n.max).enumerate() {
+            let c = q.nearest(e % 3, x);
+            if q.value(e % 3, c).to_bits() != x.to_bits() {
+                return Err(bad("a high-level box is not on the vertex grid"));
+            }
+            g[e] = c;
+        }
+        Ok(g)
+    };
+    let gs = hcc.high.iter().map(grid).collect::<Result<Vec<_>, _>>()?;
+    let mut w = BitWriter::default();
+    let Some(root) = gs.first() else {
+        return Ok(Vec::new());
+    };
+    for &c in root {
+        w.put(u64::from(c), q.bits);
+    }
+    for (n, p) in hcc.high.iter().zip(&gs) {
+        if n.is_leaf() {
+            continue;
+        }
+        // `high_shape` checked the children's positions.
+        let (l, r) = (gs[n.a as usize], gs[n.b as usize]);
+        for e in 0..6 {
+            let range = p[e % 3 + 3]
+                .checked_sub(p[e % 3])
+                .ok_or(bad("a high-level box is empty"))?;
+            let (right, other) = if l[e] == p[e] {
+                (0, r[e])
+            } else if r[e] == p[e] {
+                (1, l[e])
+            } else {
+                return Err(bad("a high-level box is not its children's union"));
+            };
+            let off = if e < 3 {
+                other.checked_sub(p[e])
+            } else {
+                p[e].checked_sub(other)
+            }
+            .filter(|&o| o <= range)
+            .ok_or(bad("a high-level box is not its children's union"))?;
+            w.put(right, 1);
+            w.put(u64::from(off), bits_for(range));
+        }
+    }
+    Ok(w.finish())
+}
+
+/// Bits that hold `v` (0 for 0): an offset inside a range of `v`.
+pub(super) fn bits_for(v: u32) -> u32 {
+    32 - v.leading_zeros()
+}
+
 /// Encodes `hcc` as an o-HCCMesh file; returns the bytes and their sizes
 /// by part.
 pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
@@ -316,12 +380,7 @@ pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
         streams.extend_from_slice(&w.finish());
     }
     let high = high_shape(hcc)?;
-    let boxes: Vec<u8> = hcc
-        .high
-        .iter()
-        .flat_map(|n| n.min.into_iter().chain(n.max))
-        .flat_map(f32::to_le_bytes)
-        .collect();
+    let boxes = high_boxes(hcc, q)?;
     let firsts: Vec<u8> = hcc
         .headers
         .iter()

@@ -3,8 +3,8 @@
 //! one-tree i-HCCMeshes kept in a [`PageCache`] under a byte budget.
 //!
 //! What stays in memory besides the cache is what the paper keeps
-//! uncompressed: the high-level tree with its boxes (read from the file's
-//! `high-level boxes` section, 24 bytes a node), each tree's first triangle
+//! uncompressed: the high-level tree with its boxes (decoded from the
+//! file's `high-level boxes` section at open), each tree's first triangle
 //! and first stored vertex, the contexts' decoders, and the id maps when
 //! the file has them.
 //!
@@ -33,8 +33,8 @@ use super::super::node::HighNode;
 use super::super::pair::outer;
 use super::super::{HccBvh, HccNode};
 use super::OocError;
-use super::decode::{Coder, high_tree, id_maps, stored_firsts, tree_stream};
-use super::file::{self, SEC_DICTS, SEC_HIGH, SEC_STARTS, SEC_TREES, SECTIONS};
+use super::decode::{Coder, high_tree, id_maps, stored_boxes, stored_firsts, tree_stream};
+use super::file::{self, SEC_BOXES, SEC_DICTS, SEC_HIGH, SEC_STARTS, SEC_TREES, SECTIONS};
 use crate::codec::ByteSize;
 use crate::codec::common::page_cache::{
     self, CacheStats, LiveToken, Page, PageCache, Pins, no_pins,
@@ -108,7 +108,8 @@ impl Paged {
         let (h, sec) = file::parse_with(b, false)?;
         let coder = Coder::new(&h, sec[SEC_DICTS])?;
         let (mut high, leaf_of_tree) = high_tree(&h, sec[SEC_HIGH])?;
-        let (boxes, firsts) = stored_firsts(&h, &sec);
+        let boxes = stored_boxes(&coder, &high, sec[SEC_BOXES])?;
+        let firsts = stored_firsts(&h, &sec);
         for (n, bx) in high.iter_mut().zip(&boxes) {
             n.min = [bx[0], bx[1], bx[2]];
             n.max = [bx[3], bx[4], bx[5]];
