@@ -20,7 +20,6 @@ use super::model::{
 use super::rebuild::Rebuild;
 use crate::codec::common::FormatError;
 use crate::codec::common::bits::{BitReader, unzigzag};
-use crate::codec::common::le::u32_at;
 use crate::codec::common::static_dict::{StaticDecoder, StaticDict};
 
 /// Everything reused from tree to tree.
@@ -223,23 +222,78 @@ impl Out {
 }
 
 /// Tree `k`'s stream: its bytes in `streams` between its start and the
-/// next tree's (or the section's end).
+/// next tree's (`starts` as [`tree_table`] reads them).
 pub(super) fn tree_stream<'a>(
-    starts: &[u8],
+    starts: &[u32],
     streams: &'a [u8],
     k: u32,
 ) -> Result<&'a [u8], OocError> {
     let k = k as usize;
-    let start = u32_at(starts, 4 * k) as usize;
-    let end = if 4 * (k + 1) < starts.len() {
-        u32_at(starts, 4 * (k + 1)) as usize
-    } else {
-        streams.len()
+    let range = starts.get(k).zip(starts.get(k + 1));
+    range
+        .and_then(|(&s, &e)| streams.get(s as usize..e as usize))
+        .ok_or(OocError::Corrupt {
+            tree: k as u32,
+            what: "the tree's stream lies outside the streams section",
+        })
+}
+
+/// Per tree, where its stream starts, and its first triangle rank and
+/// first stored vertex, each with one more entry for the totals: the
+/// prefix sums of the counts the sections `tree starts` and `tree firsts`
+/// store (layout in the module docs of [`ooc`](super)), checked against
+/// the header and the streams' length.
+pub(super) fn tree_table(
+    h: &Header,
+    sec: &[&[u8]; SECTIONS],
+) -> Result<(Vec<u32>, Vec<[u32; 2]>), OocError> {
+    let bad = |what| Err(corrupt_file(what));
+    let trees = h.trees as usize;
+    // Fields of `w` bits per tree (`w` read first, 6 bits each), summed.
+    let column_sums = |bytes: &[u8], columns: usize| -> Option<Vec<Vec<u64>>> {
+        let mut r = BitReader::new(bytes);
+        let widths: Vec<u32> = (0..columns).map(|_| r.get(6) as u32).collect();
+        if widths.iter().any(|&w| w > 32) {
+            return None;
+        }
+        let bits =
+            6 * columns as u64 + widths.iter().map(|&w| u64::from(w)).sum::<u64>() * trees as u64;
+        if bits.div_ceil(8) != bytes.len() as u64 {
+            return None;
+        }
+        let mut sums = vec![Vec::with_capacity(trees + 1); columns];
+        let mut acc = vec![0u64; columns];
+        for _ in 0..trees {
+            for c in 0..columns {
+                sums[c].push(acc[c]);
+                acc[c] += r.get(widths[c]);
+            }
+        }
+        for c in 0..columns {
+            sums[c].push(acc[c]);
+        }
+        (!r.overran()).then_some(sums)
     };
-    streams.get(start..end).ok_or(OocError::Corrupt {
-        tree: k as u32,
-        what: "the tree's stream lies outside the streams section",
-    })
+    let Some(starts) = column_sums(sec[SEC_STARTS], 1) else {
+        return bad("the tree starts are malformed");
+    };
+    let Some(firsts) = column_sums(sec[SEC_FIRSTS], 2) else {
+        return bad("the tree firsts are malformed");
+    };
+    if starts[0][trees] != sec[SEC_TREES].len() as u64 {
+        return bad("the trees' stream lengths do not add up to the streams section");
+    }
+    if firsts[0][trees] != u64::from(h.triangles)
+        || firsts[1][trees] != u64::from(h.stored_vertices)
+    {
+        return bad("the trees' triangles or vertices do not add up to the header's totals");
+    }
+    // Every sum is at most its total, a `u32`.
+    let starts = starts[0].iter().map(|&s| s as u32).collect();
+    let firsts = (0..=trees)
+        .map(|k| [firsts[0][k] as u32, firsts[1][k] as u32])
+        .collect();
+    Ok((starts, firsts))
 }
 
 /// The high-level boxes as the file stores them (section `bytes`; see
@@ -302,18 +356,6 @@ pub(super) fn stored_boxes(
         .collect())
 }
 
-/// The trees' first triangles and vertices as the file stores them.
-pub(super) fn stored_firsts(h: &Header, sec: &[&[u8]; SECTIONS]) -> Vec<[u32; 2]> {
-    (0..h.trees as usize)
-        .map(|k| {
-            [
-                u32_at(sec[SEC_FIRSTS], 8 * k),
-                u32_at(sec[SEC_FIRSTS], 8 * k + 4),
-            ]
-        })
-        .collect()
-}
-
 /// Decodes an o-HCCMesh file into its i-HCCMesh.
 pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
     let (h, sec) = file::parse(b)?;
@@ -329,10 +371,11 @@ pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
     out.q
         .data
         .reserve(cap(u32::try_from(vertex_bytes).unwrap_or(u32::MAX)) + cap(h.trees));
-    let (starts, streams) = (sec[SEC_STARTS], sec[SEC_TREES]);
+    let (starts, firsts) = tree_table(&h, &sec)?;
+    let streams = sec[SEC_TREES];
     let mut s = Scratch::default();
     for k in 0..h.trees {
-        let bytes = tree_stream(starts, streams, k)?;
+        let bytes = tree_stream(&starts, streams, k)?;
         decode_tree(k, bytes, &coder.decs, &h, &mut s, &mut out)?;
     }
     let count = |what: &'static str, got: usize, want: u32| {
@@ -378,7 +421,6 @@ pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
         high[i].max = [bx[3], bx[4], bx[5]];
     }
     let stored = stored_boxes(&coder, &high, sec[SEC_BOXES])?;
-    let firsts = stored_firsts(&h, &sec);
     if high.iter().zip(&stored).any(|(n, b)| {
         n.min
             .into_iter()

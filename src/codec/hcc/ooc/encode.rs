@@ -27,8 +27,8 @@ pub struct OocSizes {
     /// The high-level tree: its shape (a bit a node) and its boxes (on the
     /// vertex grid, children against their parent: a few bytes a node).
     pub high_level: usize,
-    /// Per low-level tree its first byte, first triangle and first stored
-    /// vertex (random access: 12 bytes a tree).
+    /// Per low-level tree its stream's length, triangle count and stored
+    /// vertex count (summed at open for random access; a few bits each).
     pub tree_starts: usize,
     /// Template symbols (tree structure and inter-connections), in bits/8.
     pub templates: f64,
@@ -334,6 +334,32 @@ fn high_boxes(hcc: &HccBvh, q: &Quantized) -> Result<Vec<u8>, OocError> {
     Ok(w.finish())
 }
 
+/// Per tree, the differences of consecutive entries of each column of
+/// prefix sums (one entry more than trees), each column in the fewest bits
+/// that hold its largest difference (6 bits first, per column), the
+/// columns interleaved tree by tree: the sections `tree starts` and `tree
+/// firsts` (layout in the module docs of [`ooc`](super)).
+fn tree_columns(columns: &[&[u32]]) -> Vec<u8> {
+    let diffs: Vec<Vec<u32>> = columns
+        .iter()
+        .map(|c| c.windows(2).map(|p| p[1] - p[0]).collect())
+        .collect();
+    let widths: Vec<u32> = diffs
+        .iter()
+        .map(|d| bits_for(d.iter().copied().max().unwrap_or(0)))
+        .collect();
+    let mut w = BitWriter::default();
+    for &b in &widths {
+        w.put(u64::from(b), 6);
+    }
+    for t in 0..diffs.first().map_or(0, Vec::len) {
+        for (d, &b) in diffs.iter().zip(&widths) {
+            w.put(u64::from(d[t]), b);
+        }
+    }
+    w.finish()
+}
+
 /// Bits that hold `v` (0 for 0): an offset inside a range of `v`.
 pub(super) fn bits_for(v: u32) -> u32 {
     32 - v.leading_zeros()
@@ -363,14 +389,14 @@ pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
     // Pass 2: the trees' streams, each starting on a byte.
     let mut encs: Vec<StaticEncoder> = dicts.iter().map(StaticDict::encoder).collect();
     let mut streams = Vec::new();
-    let mut starts = Vec::with_capacity(hcc.headers.len() * 4);
+    let mut starts = Vec::with_capacity(hcc.headers.len() + 1);
     let mut part_bits = [0u64; 3];
     for k in 0..hcc.headers.len() {
         let start = u32::try_from(streams.len()).map_err(|_| OocError::Corrupt {
             tree: k as u32,
             what: "the coded trees outgrow 4 GiB",
         })?;
-        starts.extend_from_slice(&start.to_le_bytes());
+        starts.push(start);
         let mut w = BitWriter::default();
         model_tree(hcc, q, k, &mut m, &mut |ctx, sym| {
             let before = w.bit_len();
@@ -379,14 +405,25 @@ pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
         })?;
         streams.extend_from_slice(&w.finish());
     }
+    starts.push(u32::try_from(streams.len()).map_err(|_| OocError::Corrupt {
+        tree: u32::MAX,
+        what: "the coded trees outgrow 4 GiB",
+    })?);
+    let starts = tree_columns(&[&starts]);
     let high = high_shape(hcc)?;
     let boxes = high_boxes(hcc, q)?;
-    let firsts: Vec<u8> = hcc
-        .headers
-        .iter()
-        .flat_map(|t| [t.first_triangle, t.vertex_start])
-        .flat_map(u32::to_le_bytes)
-        .collect();
+    let firsts = tree_columns(&[
+        &hcc.headers
+            .iter()
+            .map(|t| t.first_triangle)
+            .chain([hcc.triangle_count])
+            .collect::<Vec<_>>(),
+        &hcc.headers
+            .iter()
+            .map(|t| t.vertex_start)
+            .chain([hcc.stats.tree_vertices as u32])
+            .collect::<Vec<_>>(),
+    ]);
     let ids = hcc.ids.as_ref().map_or(Vec::new(), IdMap::to_bytes);
     let vids = hcc
         .vertex_ids

@@ -112,7 +112,7 @@
 //! | bytes | field |
 //! |---|---|
 //! | 0–7 | magic `CBVHHCO\0` |
-//! | 8–11 | version (4: version 3 stored the high-level boxes as `f32`, version 2's dictionaries had no split, version 1 had no high-level boxes nor tree firsts) |
+//! | 8–11 | version (5: version 4 stored the trees' starts and firsts as `u32`, version 3 also the high-level boxes as `f32`, version 2's dictionaries had no split, version 1 had no high-level boxes nor tree firsts) |
 //! | 12–15 | flags: bit 0 vertex ids kept, bit 1 tree order (no triangle id map), bit 2 multi-triangle leaves; others 0 |
 //! | 16–35 | counts of the i-HCCMesh: high-level nodes, low-level trees, node words, inter-connections, stored vertices |
 //! | 36–39 | triangle count |
@@ -131,8 +131,12 @@
 //! - *high-level shape*: one bit per high-level node (1 inner, 0 a
 //!   low-level tree) in depth-first order, left first (the order the
 //!   i-HCCMesh numbers them);
-//! - *tree starts*: per low-level tree, the byte where its stream starts
-//!   in the next section (`u32`);
+//! - *tree starts*: per low-level tree, the length of its stream in
+//!   bytes (opening sums them into where each tree's stream starts in the
+//!   next section, for random access), in one bit stream,
+//!   least-significant bit first: the width of the lengths (6 bits), then
+//!   the lengths in that many bits each, the last byte zero-padded; the
+//!   lengths add up to the streams section's;
 //! - *tree streams*: the trees' streams, each starting on a byte;
 //! - *ids*, *vertex ids*: the i-HCCMesh's sections of the same names,
 //!   empty when not kept;
@@ -147,10 +151,12 @@
 //!   the parent's extent on that axis (maximum − minimum) needs; the last
 //!   byte zero-padded. The whole decode rebuilds the boxes from the trees
 //!   and checks they are equal;
-//! - *tree firsts*: per low-level tree, the storage rank of its first
-//!   triangle and the index of its first stored vertex (`u32` each), so
-//!   that a tree decoded alone numbers its triangles and vertices as the
-//!   whole model does.
+//! - *tree firsts*: per low-level tree, its triangle count and its stored
+//!   vertex count, from which opening sums each tree's first triangle
+//!   rank and first stored vertex, so that a tree decoded alone numbers
+//!   its triangles and vertices as the whole model does. Laid out as the
+//!   tree starts, with two columns: the two widths (6 bits each), then
+//!   per tree its two counts.
 //!
 //! # Validation
 //! [`HccOocBvh::from_bytes`] checks the frame and every checksum, then
