@@ -475,3 +475,41 @@ fn out_of_core_verify_finds_damaged_trees() {
     }
     assert!(forged > 20, "only {forged} of 40 forged streams were found");
 }
+
+/// The high-level boxes are coded against their parents, and the trees'
+/// starts and firsts are stored as counts: forged flips in those sections
+/// (checksums rewritten) end in errors when the whole file is decoded (the
+/// boxes or counts no longer match the trees), never in a panic, whether
+/// the file is opened whole or out of core.
+#[test]
+fn forged_high_level_boxes_and_tree_tables_give_errors_not_panics() {
+    let mesh = mesh_of(Kind::Statue, 20_000);
+    let bvh = tree(&mesh, Layout::DepthFirst, 1);
+    let (bytes, _) = HccBvh::encode_with(&bvh, &mesh, &OocOptions::default().hcc())
+        .unwrap()
+        .to_ooc()
+        .unwrap();
+    // Tree starts, high-level boxes, tree firsts, from the section table.
+    for section in [2, 6, 7] {
+        let at = u64_at(&bytes, TABLE + 24 * section) as usize;
+        let len = u64_at(&bytes, TABLE + 24 * section + 8) as usize;
+        assert!(len > 8, "{len} bytes in section {section}");
+        let mut rng = Lcg(11);
+        let mut noticed = 0;
+        for _ in 0..60 {
+            let mut b = bytes.clone();
+            let flip = at + rng.next() as usize % len;
+            b[flip] ^= 1 << (rng.next() % 8);
+            reframe(&mut b);
+            noticed += usize::from(HccBvh::from_ooc(&b).is_err());
+            if let Ok(p) = HccOocBvh::from_bytes_with_budget(&b, 1) {
+                let _ = Codec::verify(&p);
+            }
+        }
+        // Only the last byte's padding bits go unread.
+        assert!(
+            noticed >= 50,
+            "only {noticed} of 60 forged files were errors (section {section})"
+        );
+    }
+}

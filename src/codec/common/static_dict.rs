@@ -1,6 +1,5 @@
 //! The static dictionary coder of HCCMesh (§5.2), with the paper's optimal
-//! dictionary size, behind the same [`SymbolEncoder`] / [`SymbolDecoder`]
-//! traits as RACBVH's adaptive coder ([`dict`](super::dict)).
+//! dictionary size.
 //!
 //! # The coder
 //!
@@ -19,36 +18,60 @@
 //! where the distribution is skewed (parallelogram residuals, corner
 //! cache ranks) and loses little where it is flat.
 //!
+//! # Split values (not in the paper)
+//!
+//! A context whose values are large and spread (the vertex residuals of a
+//! scanned model: 9–11 bits of entropy over thousands of distinct values)
+//! fills a dictionary with values seen a few times each, or escapes most
+//! of them: up to 5 bits a value over the entropy. So a value `v` of
+//! `L` bits is coded as a *symbol* and *extra bits*, split at `m`: values
+//! below `2^(m+1)` are their own symbol, no extra bits; a larger one is
+//! the symbol `(L − m) · 2^m + (the m bits below v's leading one)`
+//! followed by its `L − m − 1` low bits, raw. `m = 0` is the bucketed
+//! coding of RACBVH's box residuals (the bit length through the
+//! dictionary, the bits below the leading one raw); an `m` at least the
+//! width of the largest value is the plain coding of the paper. The
+//! encoder picks `m` per context with the dictionary (every `m` from 0 to
+//! that width, exhaustively), so a context never costs more than its plain
+//! coding, and the decoder's table holds each rank's value base and extra
+//! bit count: a look-up and one read, whatever `m`.
+//!
 //! # Optimal dictionary size (§5.2)
 //!
 //! The paper picks `s` minimising `B(s) = p(s)·bits(index) + (1 − p(s))·C_o`
 //! where `p(s)` is the share of the input the `s` most frequent symbols
 //! cover. [`StaticDict::optimal`] minimises the same quantity with this
 //! coder's real costs: every symbol's rank code, the escape's rank code
-//! plus `C_o` for every symbol left out, and the `s · C_o` bits of the
-//! stored dictionary itself, over every `s` from 0 to the number of
-//! distinct symbols and every `k` in `0..=MAX_K` (exhaustive with prefix
-//! sums, so `O(d log d)` per `k`, rather than the paper's first local
-//! minimum: with a prefix code `B(s)` need not be unimodal).
+//! plus `C_o` for every symbol left out, the extra bits of split values
+//! and the `s · C_o` bits of the stored dictionary itself, over every `s`
+//! from 0 to the number of distinct symbols, every `k` in `0..=MAX_K` and
+//! every split `m` (exhaustive with prefix sums, so `O(d log d)` per `k`
+//! and `m`, rather than the paper's first local minimum: with a prefix
+//! code `B(s)` need not be unimodal).
 //!
 //! # Layout
 //!
 //! A dictionary as stored (bit stream, least-significant bit first):
-//! `k` (2 bits), `raw_bits` (6 bits, 0–32), `s` (32 bits), the escape's
-//! rank (32 bits, at most `s`), then the `s` symbols in rank order with
-//! the escape's rank skipped, `raw_bits` bits each.
+//! `k` (2 bits), `raw_bits` (6 bits, 0–32), the split `m` (6 bits, 0–32),
+//! `s` (32 bits), the escape's rank (32 bits, at most `s`), then the `s`
+//! symbols in rank order with the escape's rank skipped, `raw_bits` bits
+//! each.
 
 use super::FormatError;
 use super::bits::{BitReader, BitWriter, golomb_len};
-use super::dict::{MAX_K, Step, SymbolDecoder, SymbolEncoder};
+use super::dict::{MAX_K, SymbolDecoder};
 
-/// A static dictionary: symbols by rank and the escape's rank.
+/// A static dictionary: symbols by rank, the escape's rank and the split
+/// of values into symbols and extra bits.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct StaticDict {
     /// Exp-Golomb parameter of the ranks.
     pub k: u32,
     /// Bits of a symbol sent raw after an escape.
     pub raw_bits: u32,
+    /// Values of more than `split + 1` bits are split into a symbol and
+    /// extra bits (see the module docs).
+    pub split: u32,
     /// The escape's rank (`0..=symbols.len()`).
     pub esc: u32,
     /// The dictionary's symbols in rank order, the escape's rank skipped.
@@ -60,59 +83,115 @@ fn width(v: u32) -> u32 {
     (32 - v.leading_zeros()).max(1)
 }
 
-impl StaticDict {
-    /// The dictionary of optimal size (§5.2, see the module docs) for a
-    /// context whose input holds symbol `sym` `count` times, for every
-    /// `(sym, count)` of `counts` (symbols distinct, counts nonzero).
-    pub fn optimal(counts: &[(u32, u64)]) -> Self {
-        let mut sorted = counts.to_vec();
-        sorted.sort_unstable_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
-        let raw_bits = width(sorted.iter().map(|c| c.0).max().unwrap_or(0));
-        let c_o = u64::from(raw_bits);
-        let d = sorted.len();
-        let total: u64 = sorted.iter().map(|c| c.1).sum();
-        // Prefix counts: covered[s] = occurrences of the s most frequent.
-        let mut covered = vec![0u64; d + 1];
+/// The largest split stored (6 bits): every value is its own symbol.
+const MAX_SPLIT: u32 = 32;
+
+/// Value `v` split at `m`: its symbol, its extra bits and their count.
+#[inline]
+fn split_value(v: u32, m: u32) -> (u32, u32, u32) {
+    let q = (32 - v.leading_zeros()).saturating_sub(m);
+    if q <= 1 {
+        return (v, 0, 0);
+    }
+    let n = q - 1;
+    let top = (v >> n) & ((1 << m) - 1);
+    ((q << m) | top, v & ((1 << n) - 1), n)
+}
+
+/// The base value (extra bits zero) and extra bit count of symbol `sym`
+/// split at `m`, if its value has at most `max_len` bits.
+fn join(sym: u32, m: u32, max_len: u32) -> Option<(u32, u32)> {
+    let q = u64::from(sym) >> m;
+    if q <= 1 {
+        return (width(sym) <= max_len || sym == 0).then_some((sym, 0));
+    }
+    // Bits of the value: its leading one, m below it, q − 1 extra.
+    if q + u64::from(m) > u64::from(max_len) {
+        return None;
+    }
+    let n = q as u32 - 1;
+    let top = (1u64 << m) | (u64::from(sym) & ((1u64 << m) - 1));
+    Some(((top << n) as u32, n))
+}
+
+/// The plain dictionary (every value its own symbol) of optimal size for
+/// symbol counts `sorted` (by decreasing count), with its cost in bits
+/// (dictionary and symbols).
+fn optimal_plain(sorted: &[(u32, u64)], split: u32) -> (StaticDict, u64) {
+    let raw_bits = width(sorted.iter().map(|c| c.0).max().unwrap_or(0));
+    let c_o = u64::from(raw_bits);
+    let d = sorted.len();
+    let total: u64 = sorted.iter().map(|c| c.1).sum();
+    // Prefix counts: covered[s] = occurrences of the s most frequent.
+    let mut covered = vec![0u64; d + 1];
+    for (i, c) in sorted.iter().enumerate() {
+        covered[i + 1] = covered[i] + c.1;
+    }
+    let (mut best, mut best_k, mut best_s) = (u64::MAX, 0, 0);
+    let mut at = vec![0u64; d + 1];
+    let mut after = vec![0u64; d + 1];
+    for k in 0..=MAX_K {
+        // at[i]: the first i symbols at ranks 0..i; after[i]: at ranks
+        // 1..=i (one place down, behind the escape).
         for (i, c) in sorted.iter().enumerate() {
-            covered[i + 1] = covered[i] + c.1;
+            at[i + 1] = at[i] + c.1 * golomb_len(i as u32, k);
+            after[i + 1] = after[i] + c.1 * golomb_len(i as u32 + 1, k);
         }
-        let (mut best, mut best_k, mut best_s) = (u64::MAX, 0, 0);
-        let mut at = vec![0u64; d + 1];
-        let mut after = vec![0u64; d + 1];
-        for k in 0..=MAX_K {
-            // at[i]: the first i symbols at ranks 0..i; after[i]: at ranks
-            // 1..=i (one place down, behind the escape).
-            for (i, c) in sorted.iter().enumerate() {
-                at[i + 1] = at[i] + c.1 * golomb_len(i as u32, k);
-                after[i + 1] = after[i] + c.1 * golomb_len(i as u32 + 1, k);
-            }
-            for s in 0..=d {
-                let esc_count = total - covered[s];
-                // The escape sits behind the symbols at least as frequent.
-                let pos = sorted[..s].partition_point(|c| c.1 >= esc_count);
-                let bits = at[pos]
-                    + esc_count * (golomb_len(pos as u32, k) + c_o)
-                    + (after[s] - after[pos])
-                    + s as u64 * c_o;
-                if bits < best {
-                    (best, best_k, best_s) = (bits, k, s);
-                }
+        for s in 0..=d {
+            let esc_count = total - covered[s];
+            // The escape sits behind the symbols at least as frequent.
+            let pos = sorted[..s].partition_point(|c| c.1 >= esc_count);
+            let bits = at[pos]
+                + esc_count * (golomb_len(pos as u32, k) + c_o)
+                + (after[s] - after[pos])
+                + s as u64 * c_o;
+            if bits < best {
+                (best, best_k, best_s) = (bits, k, s);
             }
         }
-        let esc_count = total - covered[best_s];
-        let esc = sorted[..best_s].partition_point(|c| c.1 >= esc_count) as u32;
-        Self {
-            k: best_k,
-            raw_bits,
-            esc,
-            symbols: sorted[..best_s].iter().map(|c| c.0).collect(),
+    }
+    let esc_count = total - covered[best_s];
+    let esc = sorted[..best_s].partition_point(|c| c.1 >= esc_count) as u32;
+    let dict = StaticDict {
+        k: best_k,
+        raw_bits,
+        split,
+        esc,
+        symbols: sorted[..best_s].iter().map(|c| c.0).collect(),
+    };
+    (dict, best)
+}
+
+impl StaticDict {
+    /// The dictionary of optimal size and split (§5.2, see the module
+    /// docs) for a context whose input holds value `v` `count` times, for
+    /// every `(v, count)` of `counts` (values distinct, counts nonzero).
+    pub fn optimal(counts: &[(u32, u64)]) -> Self {
+        let max = counts.iter().map(|c| c.0).max().unwrap_or(0);
+        let mut best: Option<(Self, u64)> = None;
+        for m in 0..=width(max) {
+            let mut syms: crate::hash::FastMap<u32, u64> = Default::default();
+            let mut extra = 0u64;
+            for &(v, n) in counts {
+                let (sym, _, bits) = split_value(v, m);
+                *syms.entry(sym).or_insert(0) += n;
+                extra += u64::from(bits) * n;
+            }
+            let mut sorted: Vec<(u32, u64)> = syms.into_iter().collect();
+            sorted.sort_unstable_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+            let (dict, bits) = optimal_plain(&sorted, m);
+            if best.as_ref().is_none_or(|b| bits + extra < b.1) {
+                best = Some((dict, bits + extra));
+            }
         }
+        best.map_or_else(|| optimal_plain(&[], MAX_SPLIT).0, |b| b.0)
     }
 
     /// Appends the dictionary to `w` (see the module docs).
     pub fn write(&self, w: &mut BitWriter) {
         w.put(u64::from(self.k), 2);
         w.put(u64::from(self.raw_bits), 6);
+        w.put(u64::from(self.split), 6);
         w.put(self.symbols.len() as u64, 32);
         w.put(u64::from(self.esc), 32);
         for &s in &self.symbols {
@@ -121,7 +200,8 @@ impl StaticDict {
     }
 
     /// Reads a dictionary written by [`write`](Self::write) of at most
-    /// `max_symbols` symbols, each below `2^max_raw_bits`.
+    /// `max_symbols` symbols, each below `2^max_raw_bits`, as are the
+    /// values they stand for.
     pub fn read(
         r: &mut BitReader<'_>,
         max_symbols: usize,
@@ -129,6 +209,7 @@ impl StaticDict {
     ) -> Result<Self, FormatError> {
         let k = r.get(2) as u32;
         let raw_bits = r.get(6) as u32;
+        let split = r.get(6) as u32;
         let s = r.get(32);
         let esc = r.get(32);
         let corrupt = |what| Err(FormatError::Corrupt { what });
@@ -137,6 +218,9 @@ impl StaticDict {
         }
         if raw_bits > max_raw_bits {
             return corrupt("a dictionary's raw symbol width is out of range");
+        }
+        if split > MAX_SPLIT {
+            return corrupt("a dictionary's split is out of range");
         }
         // Distinct symbols of `raw_bits` bits: at most 2^raw_bits of them.
         if s > max_symbols as u64 || s > 1u64 << raw_bits || r.overran() {
@@ -147,14 +231,19 @@ impl StaticDict {
         }
         let mut symbols = Vec::with_capacity((s as usize).min(1 << 12));
         for _ in 0..s {
-            symbols.push(r.get(raw_bits) as u32);
+            let sym = r.get(raw_bits) as u32;
             if r.overran() {
                 return corrupt("a dictionary runs past its section");
             }
+            if join(sym, split, max_raw_bits).is_none() {
+                return corrupt("a dictionary symbol stands for a value out of range");
+            }
+            symbols.push(sym);
         }
         Ok(Self {
             k,
             raw_bits,
+            split,
             esc: esc as u32,
             symbols,
         })
@@ -172,78 +261,131 @@ impl StaticDict {
             esc: self.esc,
             k: self.k,
             raw_bits: self.raw_bits,
+            split: self.split,
         }
     }
 
-    /// The decoder of this dictionary.
-    pub fn decoder(&self) -> StaticDecoder {
-        let mut table = self.symbols.clone();
-        table.insert(self.esc as usize, 0);
+    /// The decoder of this dictionary, whose values have at most
+    /// `max_len` bits (a dictionary [`read`](Self::read) with the same
+    /// bound; other symbols decode as 0).
+    pub fn decoder(&self, max_len: u32) -> StaticDecoder {
+        let mut table: Vec<Entry> = self
+            .symbols
+            .iter()
+            .map(|&s| {
+                let (base, extra) = join(s, self.split, max_len).unwrap_or((0, 0));
+                Entry { base, extra }
+            })
+            .collect();
+        table.insert(self.esc as usize, Entry { base: 0, extra: 0 });
         StaticDecoder {
+            whole: table.iter().all(|e| e.extra == 0),
             table,
             esc: self.esc,
             k: self.k,
             raw_bits: self.raw_bits,
+            split: self.split,
+            max_len,
         }
     }
 }
 
-/// Codes symbols with a [`StaticDict`].
+/// Codes values with a [`StaticDict`].
 pub struct StaticEncoder {
     rank_of: crate::hash::FastMap<u32, u32>,
     esc: u32,
     k: u32,
     raw_bits: u32,
+    split: u32,
 }
 
 impl StaticEncoder {
-    /// Codes `sym` into `w`.
-    pub fn put(&mut self, w: &mut BitWriter, sym: u32) {
-        let st = self.encode(sym);
-        w.put_golomb(st.rank, self.k);
-        if let Some(raw) = st.raw {
-            w.put(u64::from(raw), self.raw_bits);
-        }
-    }
-}
-
-impl SymbolEncoder for StaticEncoder {
-    fn encode(&mut self, sym: u32) -> Step {
+    /// Codes value `v` into `w`.
+    pub fn put(&mut self, w: &mut BitWriter, v: u32) {
+        let (sym, extra, n) = split_value(v, self.split);
         match self.rank_of.get(&sym) {
-            Some(&rank) => Step { rank, raw: None },
+            Some(&rank) => w.put_golomb(rank, self.k),
             None => {
                 debug_assert!(self.raw_bits >= 32 || sym >> self.raw_bits == 0);
-                Step {
-                    rank: self.esc,
-                    raw: Some(sym),
-                }
+                w.put_golomb(self.esc, self.k);
+                w.put(u64::from(sym), self.raw_bits);
             }
         }
+        w.put(u64::from(extra), n);
     }
 }
 
-/// Decodes symbols with a [`StaticDict`]: a rank and a table look-up.
+/// A rank's value with its extra bits zero, and their count.
+#[derive(Clone, Copy, Debug)]
+struct Entry {
+    base: u32,
+    extra: u32,
+}
+
+/// Decodes values with a [`StaticDict`]: a rank, a table look-up and the
+/// extra bits.
 #[derive(Clone, Debug)]
 pub struct StaticDecoder {
-    /// Symbols by rank (the escape's slot unused).
-    table: Vec<u32>,
+    /// Values by rank (the escape's slot unused).
+    table: Vec<Entry>,
     esc: u32,
     k: u32,
     raw_bits: u32,
+    split: u32,
+    max_len: u32,
+    /// No rank stands for a split value: the extra bits are not read, so
+    /// that where the next code starts does not wait for the table look-up
+    /// (the corner and template contexts).
+    whole: bool,
 }
 
 impl StaticDecoder {
-    /// Reads one symbol.
+    /// Reads one value.
     #[inline(always)]
     pub fn get(&self, r: &mut BitReader<'_>) -> Result<u32, FormatError> {
-        let rank = r.get_golomb(self.k)?;
-        if rank == self.esc {
-            return Ok(r.get(self.raw_bits) as u32);
+        // The rank's Exp-Golomb code and the extra bits after it from one
+        // look at the stream when they fit in it (as `get_golomb`).
+        let w = r.peek();
+        let n = w.trailing_zeros();
+        let k = self.k;
+        if n + k > 28 {
+            return Err(FormatError::Corrupt {
+                what: "an Exp-Golomb code is too long",
+            });
         }
-        match self.table.get(rank as usize) {
-            Some(&s) => Ok(s),
-            None => Err(FormatError::Corrupt {
+        let total = 2 * n + 1 + k;
+        let body = (w >> (n + 1)) & ((1u64 << (n + k)) - 1);
+        let rank = (((1u64 << (n + k)) | body) - (1u64 << k)) as u32;
+        if rank == self.esc {
+            r.skip(total);
+            return self.escaped(r);
+        }
+        let Some(e) = self.table.get(rank as usize) else {
+            return Err(FormatError::Corrupt {
                 what: "a dictionary rank is out of range",
+            });
+        };
+        if self.whole {
+            r.skip(total);
+            return Ok(e.base);
+        }
+        // `peek` gives at least 57 bits.
+        if total + e.extra <= 57 {
+            r.skip(total + e.extra);
+            return Ok(e.base | ((w >> total) & ((1u64 << e.extra) - 1)) as u32);
+        }
+        r.skip(total);
+        Ok(e.base | r.get(e.extra) as u32)
+    }
+
+    /// The value of a symbol sent raw after an escape.
+    #[cold]
+    fn escaped(&self, r: &mut BitReader<'_>) -> Result<u32, FormatError> {
+        let sym = r.get(self.raw_bits) as u32;
+        match join(sym, self.split, self.max_len) {
+            Some((base, extra)) => Ok(base | r.get(extra) as u32),
+            None => Err(FormatError::Corrupt {
+                what: "an escaped symbol stands for a value out of range",
             }),
         }
     }
@@ -281,7 +423,7 @@ mod tests {
         let mut r = BitReader::new(&bytes);
         let back = StaticDict::read(&mut r, syms.len(), 32).unwrap();
         assert_eq!(back, dict);
-        let dec = back.decoder();
+        let dec = back.decoder(32);
         for &s in syms {
             assert_eq!(dec.get(&mut r).unwrap(), s);
         }
@@ -295,9 +437,18 @@ mod tests {
         let syms: Vec<u32> = (0..5000u32)
             .map(|i| if i % 10 == 9 { 1000 + i } else { i % 4 })
             .collect();
-        let (dict, bits) = round_trip(&syms);
-        assert_eq!(dict.symbols.len(), 4, "the singletons stay out");
+        let p = plain(&syms);
+        assert_eq!(p.symbols.len(), 4, "the singletons stay out");
+        let (_, bits) = round_trip(&syms);
         assert!(bits < 5000 * 6, "{bits} bits");
+        assert!(bits <= cost(&p, &syms), "splitting never costs more");
+    }
+
+    /// The plain dictionary (no split) of optimal size for `syms`.
+    fn plain(syms: &[u32]) -> StaticDict {
+        let mut sorted = counts(syms);
+        sorted.sort_unstable_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+        optimal_plain(&sorted, MAX_SPLIT).0
     }
 
     #[test]
@@ -306,38 +457,88 @@ mod tests {
         round_trip(&[7]);
         round_trip(&[u32::MAX, 0, u32::MAX]);
         let flat: Vec<u32> = (0..300).collect();
-        let (dict, _) = round_trip(&flat);
-        assert!(dict.symbols.is_empty(), "singletons are cheaper raw");
+        let p = plain(&flat);
+        assert!(p.symbols.is_empty(), "singletons are cheaper raw");
+        let (_, bits) = round_trip(&flat);
+        assert!(bits <= cost(&p, &flat), "splitting never costs more");
+    }
+
+    /// Bits of `d` and of `syms` coded with it.
+    fn cost(d: &StaticDict, syms: &[u32]) -> u64 {
+        let mut w = BitWriter::default();
+        d.write(&mut w);
+        let mut enc = d.encoder();
+        for &s in syms {
+            enc.put(&mut w, s);
+        }
+        w.bit_len()
     }
 
     #[test]
     fn the_chosen_size_is_no_worse_than_its_neighbours() {
         let syms: Vec<u32> = (0..4000u32).map(|i| (i * i) % 97 % (1 + i % 23)).collect();
         let c = counts(&syms);
-        let dict = StaticDict::optimal(&c);
-        let cost = |d: &StaticDict| {
-            let mut w = BitWriter::default();
-            d.write(&mut w);
-            let mut enc = d.encoder();
-            for &s in &syms {
-                enc.put(&mut w, s);
-            }
-            w.bit_len()
-        };
-        let best = cost(&dict);
-        // Any other size (same k, escape placed by count) costs as much.
         let mut sorted = c.clone();
         sorted.sort_unstable_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+        let (dict, bits) = optimal_plain(&sorted, MAX_SPLIT);
+        let best = cost(&dict, &syms);
+        // The cost the search minimised is the real one, less the fields
+        // of the dictionary's head (k, widths, counts).
+        assert_eq!(best, bits + 2 + 6 + 6 + 32 + 32);
+        // Any other size (same k, escape placed by count) costs as much.
         for s in 0..=sorted.len() {
             let esc_count: u64 = sorted[s..].iter().map(|c| c.1).sum();
             let other = StaticDict {
                 k: dict.k,
                 raw_bits: dict.raw_bits,
+                split: MAX_SPLIT,
                 esc: sorted[..s].partition_point(|c| c.1 >= esc_count) as u32,
                 symbols: sorted[..s].iter().map(|c| c.0).collect(),
             };
-            assert!(cost(&other) >= best, "s = {s}");
+            assert!(cost(&other, &syms) >= best, "s = {s}");
         }
+    }
+
+    #[test]
+    fn splitting_round_trips_every_value() {
+        let mut x = 7u64;
+        for m in 0..=MAX_SPLIT {
+            for i in 0..2000u32 {
+                x = x
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                // Values of every width.
+                let v = ((x >> 32) as u32) >> (i % 33).min(31) >> u32::from(i % 33 == 32);
+                let (sym, extra, n) = split_value(v, m);
+                assert!(sym <= v, "a symbol is never above its value");
+                let (base, bits) = join(sym, m, 32).unwrap();
+                assert_eq!((bits, base | extra), (n, v), "v = {v}, m = {m}");
+                if v > 0 {
+                    assert_eq!(join(sym, m, width(v) - 1), None, "v = {v}, m = {m}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn spread_values_are_split_and_cost_less_than_plain_coding() {
+        // Residual-like values: mostly small, a wide tail, few repeats.
+        let mut x = 3u64;
+        let syms: Vec<u32> = (0..20000)
+            .map(|_| {
+                x = x
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((x >> 40) as u32) >> ((x >> 8) % 16)
+            })
+            .collect();
+        let (dict, bits) = round_trip(&syms);
+        assert!(dict.split < 8, "split at {}", dict.split);
+        let plain = cost(&plain(&syms), &syms);
+        assert!(bits * 10 < plain * 9, "{bits} bits split, {plain} plain");
+        // And a skewed input of small values keeps them whole.
+        let (dict, _) = round_trip(&(0..5000u32).map(|i| i % 7 % 3).collect::<Vec<_>>());
+        assert_eq!(split_value(2, dict.split).2, 0);
     }
 
     #[test]
@@ -345,6 +546,7 @@ mod tests {
         let mut w = BitWriter::default();
         w.put(0, 2);
         w.put(40, 6); // raw bits above 32
+        w.put(0, 6);
         w.put(0, 32);
         w.put(0, 32);
         let b = w.finish();
@@ -352,20 +554,49 @@ mod tests {
         let mut w = BitWriter::default();
         w.put(0, 2);
         w.put(8, 6);
+        w.put(0, 6);
         w.put(1 << 30, 32); // more symbols than the stream holds
         w.put(0, 32);
         let b = w.finish();
         assert!(StaticDict::read(&mut BitReader::new(&b), usize::MAX, 32).is_err());
+        // A split above 32, and a symbol whose value is wider than allowed.
+        for (split, sym) in [(33, 0), (2, 6 << 2)] {
+            let mut w = BitWriter::default();
+            w.put(0, 2);
+            w.put(5, 6);
+            w.put(split, 6);
+            w.put(1, 32);
+            w.put(0, 32);
+            w.put(sym, 5);
+            let b = w.finish();
+            assert!(StaticDict::read(&mut BitReader::new(&b), 10, 7).is_err());
+        }
         // A rank past the table.
         let d = StaticDict {
             k: 0,
             raw_bits: 4,
+            split: MAX_SPLIT,
             esc: 0,
             symbols: vec![3],
         };
         let mut w = BitWriter::default();
         w.put_golomb(5, 0);
         let b = w.finish();
-        assert!(d.decoder().get(&mut BitReader::new(&b)).is_err());
+        assert!(d.decoder(32).get(&mut BitReader::new(&b)).is_err());
+        // An escaped symbol whose value is wider than the decoder's bound.
+        let d = StaticDict {
+            k: 0,
+            raw_bits: 8,
+            split: 2,
+            esc: 0,
+            symbols: Vec::new(),
+        };
+        let mut w = BitWriter::default();
+        w.put_golomb(0, 0);
+        w.put(6 << 2, 8);
+        w.put(0, 32);
+        let b = w.finish();
+        assert!(d.decoder(7).get(&mut BitReader::new(&b)).is_err());
+        assert!(d.decoder(8).get(&mut BitReader::new(&b)).is_ok());
     }
 }

@@ -8,6 +8,7 @@ use super::super::pair::{Extents, outer};
 use super::super::vertices::{MAX_VERTEX_BITS, Quantized, Vertices};
 use super::super::{HccBvh, HccStats};
 use super::OocError;
+use super::encode;
 use super::file::{
     self, Header, SEC_BOXES, SEC_DICTS, SEC_FIRSTS, SEC_HIGH, SEC_IDS, SEC_STARTS, SEC_TREES,
     SEC_VIDS, SECTIONS,
@@ -19,7 +20,6 @@ use super::model::{
 use super::rebuild::Rebuild;
 use crate::codec::common::FormatError;
 use crate::codec::common::bits::{BitReader, unzigzag};
-use crate::codec::common::le::{f32_at, u32_at};
 use crate::codec::common::static_dict::{StaticDecoder, StaticDict};
 
 /// Everything reused from tree to tree.
@@ -100,7 +100,7 @@ impl Coder {
         let mut decs = Vec::with_capacity(CONTEXTS);
         for ctx in 0..CONTEXTS {
             let bits = raw_bits_limit(ctx, h.bits);
-            decs.push(StaticDict::read(&mut r, 1 << bits, bits)?.decoder());
+            decs.push(StaticDict::read(&mut r, 1 << bits, bits)?.decoder(bits));
         }
         if r.overran() {
             return Err(corrupt_file("the dictionaries run past their section"));
@@ -222,40 +222,138 @@ impl Out {
 }
 
 /// Tree `k`'s stream: its bytes in `streams` between its start and the
-/// next tree's (or the section's end).
+/// next tree's (`starts` as [`tree_table`] reads them).
 pub(super) fn tree_stream<'a>(
-    starts: &[u8],
+    starts: &[u32],
     streams: &'a [u8],
     k: u32,
 ) -> Result<&'a [u8], OocError> {
     let k = k as usize;
-    let start = u32_at(starts, 4 * k) as usize;
-    let end = if 4 * (k + 1) < starts.len() {
-        u32_at(starts, 4 * (k + 1)) as usize
-    } else {
-        streams.len()
-    };
-    streams.get(start..end).ok_or(OocError::Corrupt {
-        tree: k as u32,
-        what: "the tree's stream lies outside the streams section",
-    })
+    let range = starts.get(k).zip(starts.get(k + 1));
+    range
+        .and_then(|(&s, &e)| streams.get(s as usize..e as usize))
+        .ok_or(OocError::Corrupt {
+            tree: k as u32,
+            what: "the tree's stream lies outside the streams section",
+        })
 }
 
-/// The high-level boxes and the trees' first triangles and vertices as
-/// the file stores them.
-pub(super) fn stored_firsts(h: &Header, sec: &[&[u8]; SECTIONS]) -> (Vec<[f32; 6]>, Vec<[u32; 2]>) {
-    let boxes = (0..h.high_nodes as usize)
-        .map(|i| std::array::from_fn(|e| f32_at(sec[SEC_BOXES], 24 * i + 4 * e)))
+/// Per tree, where its stream starts, and its first triangle rank and
+/// first stored vertex, each with one more entry for the totals: the
+/// prefix sums of the counts the sections `tree starts` and `tree firsts`
+/// store (layout in the module docs of [`ooc`](super)), checked against
+/// the header and the streams' length.
+pub(super) fn tree_table(
+    h: &Header,
+    sec: &[&[u8]; SECTIONS],
+) -> Result<(Vec<u32>, Vec<[u32; 2]>), OocError> {
+    let bad = |what| Err(corrupt_file(what));
+    let trees = h.trees as usize;
+    // Fields of `w` bits per tree (`w` read first, 6 bits each), summed.
+    let column_sums = |bytes: &[u8], columns: usize| -> Option<Vec<Vec<u64>>> {
+        let mut r = BitReader::new(bytes);
+        let widths: Vec<u32> = (0..columns).map(|_| r.get(6) as u32).collect();
+        if widths.iter().any(|&w| w > 32) {
+            return None;
+        }
+        let bits =
+            6 * columns as u64 + widths.iter().map(|&w| u64::from(w)).sum::<u64>() * trees as u64;
+        if bits.div_ceil(8) != bytes.len() as u64 {
+            return None;
+        }
+        let mut sums = vec![Vec::with_capacity(trees + 1); columns];
+        let mut acc = vec![0u64; columns];
+        for _ in 0..trees {
+            for c in 0..columns {
+                sums[c].push(acc[c]);
+                acc[c] += r.get(widths[c]);
+            }
+        }
+        for c in 0..columns {
+            sums[c].push(acc[c]);
+        }
+        (!r.overran()).then_some(sums)
+    };
+    let Some(starts) = column_sums(sec[SEC_STARTS], 1) else {
+        return bad("the tree starts are malformed");
+    };
+    let Some(firsts) = column_sums(sec[SEC_FIRSTS], 2) else {
+        return bad("the tree firsts are malformed");
+    };
+    if starts[0][trees] != sec[SEC_TREES].len() as u64 {
+        return bad("the trees' stream lengths do not add up to the streams section");
+    }
+    if firsts[0][trees] != u64::from(h.triangles)
+        || firsts[1][trees] != u64::from(h.stored_vertices)
+    {
+        return bad("the trees' triangles or vertices do not add up to the header's totals");
+    }
+    // Every sum is at most its total, a `u32`.
+    let starts = starts[0].iter().map(|&s| s as u32).collect();
+    let firsts = (0..=trees)
+        .map(|k| [firsts[0][k] as u32, firsts[1][k] as u32])
         .collect();
-    let firsts = (0..h.trees as usize)
-        .map(|k| {
-            [
-                u32_at(sec[SEC_FIRSTS], 8 * k),
-                u32_at(sec[SEC_FIRSTS], 8 * k + 4),
-            ]
-        })
-        .collect();
-    (boxes, firsts)
+    Ok((starts, firsts))
+}
+
+/// The high-level boxes as the file stores them (section `bytes`; see
+/// `high_boxes` in the encoder), for the high-level tree `high` (shape
+/// only, as [`high_tree`] reads it).
+pub(super) fn stored_boxes(
+    coder: &Coder,
+    high: &[HighNode],
+    bytes: &[u8],
+) -> Result<Vec<[f32; 6]>, OocError> {
+    let bad = || corrupt_file("the high-level boxes are malformed");
+    let mut gs = vec![[0u32; 6]; high.len()];
+    let empty = |g: &[u32; 6]| (0..3).any(|a| g[a] > g[a + 3]);
+    let mut r = BitReader::new(bytes);
+    let mut bits = 0u64;
+    if let Some(root) = gs.first_mut() {
+        let b = coder.h.bits;
+        for c in root.iter_mut() {
+            *c = r.get(b) as u32;
+        }
+        bits += 6 * u64::from(b);
+        if empty(root) {
+            return Err(bad());
+        }
+    }
+    for (i, n) in high.iter().enumerate() {
+        if n.is_leaf() {
+            continue;
+        }
+        // Not empty: checked when it was read.
+        let p = gs[i];
+        let mut kids = [p, p];
+        for e in 0..6 {
+            let range = p[e % 3 + 3] - p[e % 3];
+            let w = encode::bits_for(range);
+            let side = r.get(1) as usize;
+            let off = r.get(w) as u32;
+            bits += 1 + u64::from(w);
+            if off > range {
+                return Err(bad());
+            }
+            // The child that does not share the parent's value.
+            kids[1 - side][e] = if e < 3 { p[e] + off } else { p[e] - off };
+        }
+        // Children follow their parent (`high_tree` numbers them so).
+        for (c, kid) in [n.a, n.b].into_iter().zip(kids) {
+            if empty(&kid) {
+                return Err(bad());
+            }
+            *gs.get_mut(c as usize).ok_or_else(bad)? = kid;
+        }
+    }
+    if r.overran() || bits.div_ceil(8) != bytes.len() as u64 {
+        return Err(bad());
+    }
+    let q = &coder.grid;
+    Ok(gs
+        .iter()
+        .map(|g| std::array::from_fn(|e| q.value(e % 3, g[e])))
+        .collect())
 }
 
 /// Decodes an o-HCCMesh file into its i-HCCMesh.
@@ -273,10 +371,11 @@ pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
     out.q
         .data
         .reserve(cap(u32::try_from(vertex_bytes).unwrap_or(u32::MAX)) + cap(h.trees));
-    let (starts, streams) = (sec[SEC_STARTS], sec[SEC_TREES]);
+    let (starts, firsts) = tree_table(&h, &sec)?;
+    let streams = sec[SEC_TREES];
     let mut s = Scratch::default();
     for k in 0..h.trees {
-        let bytes = tree_stream(starts, streams, k)?;
+        let bytes = tree_stream(&starts, streams, k)?;
         decode_tree(k, bytes, &coder.decs, &h, &mut s, &mut out)?;
     }
     let count = |what: &'static str, got: usize, want: u32| {
@@ -321,8 +420,8 @@ pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
         high[i].min = [bx[0], bx[1], bx[2]];
         high[i].max = [bx[3], bx[4], bx[5]];
     }
-    let (stored_boxes, firsts) = stored_firsts(&h, &sec);
-    if high.iter().zip(&stored_boxes).any(|(n, b)| {
+    let stored = stored_boxes(&coder, &high, sec[SEC_BOXES])?;
+    if high.iter().zip(&stored).any(|(n, b)| {
         n.min
             .into_iter()
             .chain(n.max)

@@ -4,7 +4,7 @@
 
 use super::super::HccBvh;
 use super::super::ids::{IdMap, VertexIds};
-use super::super::node::{Interconnection, TYPE_LEAF, node_type};
+use super::super::node::{HighNode, Interconnection, TYPE_LEAF, node_type};
 use super::super::template::TEMPLATES;
 use super::super::vertices::Quantized;
 use super::OocError;
@@ -24,11 +24,11 @@ pub struct OocSizes {
     pub header: usize,
     /// The contexts' dictionaries.
     pub dictionaries: usize,
-    /// The high-level tree: its shape (a bit a node) and its boxes
-    /// (uncompressed, as the paper keeps it: 24 bytes a node).
+    /// The high-level tree: its shape (a bit a node) and its boxes (on the
+    /// vertex grid, children against their parent: a few bytes a node).
     pub high_level: usize,
-    /// Per low-level tree its first byte, first triangle and first stored
-    /// vertex (random access: 12 bytes a tree).
+    /// Per low-level tree its stream's length, triangle count and stored
+    /// vertex count (summed at open for random access; a few bits each).
     pub tree_starts: usize,
     /// Template symbols (tree structure and inter-connections), in bits/8.
     pub templates: f64,
@@ -275,6 +275,96 @@ fn high_shape(hcc: &HccBvh) -> Result<Vec<u8>, OocError> {
     Ok(w.finish())
 }
 
+/// The high-level tree's boxes on the vertex grid (layout in the module
+/// docs of [`ooc`](super)): the root's grid coordinates, then per inner
+/// node (in node order, parents first) and per extent which child shares
+/// the parent's value and how far inside the parent the other child's is.
+fn high_boxes(hcc: &HccBvh, q: &Quantized) -> Result<Vec<u8>, OocError> {
+    let bad = |what| OocError::NotCanonical {
+        tree: u32::MAX,
+        what,
+    };
+    let grid = |n: &HighNode| -> Result<[u32; 6], OocError> {
+        let mut g = [0u32; 6];
+        for (e, x) in n.min.into_iter().chain(n.max).enumerate() {
+            let c = q.nearest(e % 3, x);
+            if q.value(e % 3, c).to_bits() != x.to_bits() {
+                return Err(bad("a high-level box is not on the vertex grid"));
+            }
+            g[e] = c;
+        }
+        Ok(g)
+    };
+    let gs = hcc.high.iter().map(grid).collect::<Result<Vec<_>, _>>()?;
+    let mut w = BitWriter::default();
+    let Some(root) = gs.first() else {
+        return Ok(Vec::new());
+    };
+    for &c in root {
+        w.put(u64::from(c), q.bits);
+    }
+    for (n, p) in hcc.high.iter().zip(&gs) {
+        if n.is_leaf() {
+            continue;
+        }
+        // `high_shape` checked the children's positions.
+        let (l, r) = (gs[n.a as usize], gs[n.b as usize]);
+        for e in 0..6 {
+            let range = p[e % 3 + 3]
+                .checked_sub(p[e % 3])
+                .ok_or(bad("a high-level box is empty"))?;
+            let (right, other) = if l[e] == p[e] {
+                (0, r[e])
+            } else if r[e] == p[e] {
+                (1, l[e])
+            } else {
+                return Err(bad("a high-level box is not its children's union"));
+            };
+            let off = if e < 3 {
+                other.checked_sub(p[e])
+            } else {
+                p[e].checked_sub(other)
+            }
+            .filter(|&o| o <= range)
+            .ok_or(bad("a high-level box is not its children's union"))?;
+            w.put(right, 1);
+            w.put(u64::from(off), bits_for(range));
+        }
+    }
+    Ok(w.finish())
+}
+
+/// Per tree, the differences of consecutive entries of each column of
+/// prefix sums (one entry more than trees), each column in the fewest bits
+/// that hold its largest difference (6 bits first, per column), the
+/// columns interleaved tree by tree: the sections `tree starts` and `tree
+/// firsts` (layout in the module docs of [`ooc`](super)).
+fn tree_columns(columns: &[&[u32]]) -> Vec<u8> {
+    let diffs: Vec<Vec<u32>> = columns
+        .iter()
+        .map(|c| c.windows(2).map(|p| p[1] - p[0]).collect())
+        .collect();
+    let widths: Vec<u32> = diffs
+        .iter()
+        .map(|d| bits_for(d.iter().copied().max().unwrap_or(0)))
+        .collect();
+    let mut w = BitWriter::default();
+    for &b in &widths {
+        w.put(u64::from(b), 6);
+    }
+    for t in 0..diffs.first().map_or(0, Vec::len) {
+        for (d, &b) in diffs.iter().zip(&widths) {
+            w.put(u64::from(d[t]), b);
+        }
+    }
+    w.finish()
+}
+
+/// Bits that hold `v` (0 for 0): an offset inside a range of `v`.
+pub(super) fn bits_for(v: u32) -> u32 {
+    32 - v.leading_zeros()
+}
+
 /// Encodes `hcc` as an o-HCCMesh file; returns the bytes and their sizes
 /// by part.
 pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
@@ -299,14 +389,14 @@ pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
     // Pass 2: the trees' streams, each starting on a byte.
     let mut encs: Vec<StaticEncoder> = dicts.iter().map(StaticDict::encoder).collect();
     let mut streams = Vec::new();
-    let mut starts = Vec::with_capacity(hcc.headers.len() * 4);
+    let mut starts = Vec::with_capacity(hcc.headers.len() + 1);
     let mut part_bits = [0u64; 3];
     for k in 0..hcc.headers.len() {
         let start = u32::try_from(streams.len()).map_err(|_| OocError::Corrupt {
             tree: k as u32,
             what: "the coded trees outgrow 4 GiB",
         })?;
-        starts.extend_from_slice(&start.to_le_bytes());
+        starts.push(start);
         let mut w = BitWriter::default();
         model_tree(hcc, q, k, &mut m, &mut |ctx, sym| {
             let before = w.bit_len();
@@ -315,19 +405,25 @@ pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
         })?;
         streams.extend_from_slice(&w.finish());
     }
+    starts.push(u32::try_from(streams.len()).map_err(|_| OocError::Corrupt {
+        tree: u32::MAX,
+        what: "the coded trees outgrow 4 GiB",
+    })?);
+    let starts = tree_columns(&[&starts]);
     let high = high_shape(hcc)?;
-    let boxes: Vec<u8> = hcc
-        .high
-        .iter()
-        .flat_map(|n| n.min.into_iter().chain(n.max))
-        .flat_map(f32::to_le_bytes)
-        .collect();
-    let firsts: Vec<u8> = hcc
-        .headers
-        .iter()
-        .flat_map(|t| [t.first_triangle, t.vertex_start])
-        .flat_map(u32::to_le_bytes)
-        .collect();
+    let boxes = high_boxes(hcc, q)?;
+    let firsts = tree_columns(&[
+        &hcc.headers
+            .iter()
+            .map(|t| t.first_triangle)
+            .chain([hcc.triangle_count])
+            .collect::<Vec<_>>(),
+        &hcc.headers
+            .iter()
+            .map(|t| t.vertex_start)
+            .chain([hcc.stats.tree_vertices as u32])
+            .collect::<Vec<_>>(),
+    ]);
     let ids = hcc.ids.as_ref().map_or(Vec::new(), IdMap::to_bytes);
     let vids = hcc
         .vertex_ids

@@ -8,7 +8,7 @@ use crate::codec::common::le::{f32x3_at, u32_at};
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps, container};
 
 /// The file version this build writes and reads.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 5;
 /// The o-HCCMesh file's magic.
 pub const MAGIC: [u8; 8] = *b"CBVHHCO\0";
 const MASS_AT: usize = 88;
@@ -193,28 +193,6 @@ pub fn parse_with(b: &[u8], streams: bool) -> Result<(Header, [&[u8]; SECTIONS])
         return Err(header_err(
             "length",
             format!("{} bytes follow the last section", b.len() as u64 - at),
-        ));
-    }
-    if u64::from(h.trees) * 4 != out[SEC_STARTS].len() as u64 {
-        return Err(header_err(
-            "tree starts",
-            format!("{} bytes for {} trees", out[SEC_STARTS].len(), h.trees),
-        ));
-    }
-    if u64::from(h.high_nodes) * 24 != out[SEC_BOXES].len() as u64 {
-        return Err(header_err(
-            "high-level boxes",
-            format!(
-                "{} bytes for {} high-level nodes",
-                out[SEC_BOXES].len(),
-                h.high_nodes
-            ),
-        ));
-    }
-    if u64::from(h.trees) * 8 != out[SEC_FIRSTS].len() as u64 {
-        return Err(header_err(
-            "tree firsts",
-            format!("{} bytes for {} trees", out[SEC_FIRSTS].len(), h.trees),
         ));
     }
     if (h.tree_order && !out[SEC_IDS].is_empty()) || (!h.vertex_ids && !out[SEC_VIDS].is_empty()) {

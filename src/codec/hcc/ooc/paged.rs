@@ -3,8 +3,8 @@
 //! one-tree i-HCCMeshes kept in a [`PageCache`] under a byte budget.
 //!
 //! What stays in memory besides the cache is what the paper keeps
-//! uncompressed: the high-level tree with its boxes (read from the file's
-//! `high-level boxes` section, 24 bytes a node), each tree's first triangle
+//! uncompressed: the high-level tree with its boxes (decoded from the
+//! file's `high-level boxes` section at open), each tree's first triangle
 //! and first stored vertex, the contexts' decoders, and the id maps when
 //! the file has them.
 //!
@@ -33,8 +33,8 @@ use super::super::node::HighNode;
 use super::super::pair::outer;
 use super::super::{HccBvh, HccNode};
 use super::OocError;
-use super::decode::{Coder, high_tree, id_maps, stored_firsts, tree_stream};
-use super::file::{self, SEC_DICTS, SEC_HIGH, SEC_STARTS, SEC_TREES, SECTIONS};
+use super::decode::{Coder, high_tree, id_maps, stored_boxes, tree_stream, tree_table};
+use super::file::{self, SEC_BOXES, SEC_DICTS, SEC_HIGH, SEC_TREES, SECTIONS};
 use crate::codec::ByteSize;
 use crate::codec::common::page_cache::{
     self, CacheStats, LiveToken, Page, PageCache, Pins, no_pins,
@@ -70,6 +70,9 @@ pub(super) struct Paged {
     /// Per tree, its first triangle rank and first stored vertex; one more
     /// entry holds the totals.
     firsts: Vec<[u32; 2]>,
+    /// Per tree, where its stream starts in the streams section; one more
+    /// entry holds the section's length.
+    starts: Vec<u32>,
     ids: Option<IdMap>,
     vertex_ids: Option<VertexIds>,
     cache: PageCache<TreePage>,
@@ -108,7 +111,8 @@ impl Paged {
         let (h, sec) = file::parse_with(b, false)?;
         let coder = Coder::new(&h, sec[SEC_DICTS])?;
         let (mut high, leaf_of_tree) = high_tree(&h, sec[SEC_HIGH])?;
-        let (boxes, firsts) = stored_firsts(&h, &sec);
+        let boxes = stored_boxes(&coder, &high, sec[SEC_BOXES])?;
+        let (starts, firsts) = tree_table(&h, &sec)?;
         for (n, bx) in high.iter_mut().zip(&boxes) {
             n.min = [bx[0], bx[1], bx[2]];
             n.max = [bx[3], bx[4], bx[5]];
@@ -121,22 +125,7 @@ impl Paged {
             return Err(bad("a stored high-level box is not finite"));
         }
         // Trees are numbered as the high-level leaves are met depth-first.
-        debug_assert_eq!(leaf_of_tree.len(), firsts.len());
-        let mut all = firsts;
-        all.push([h.triangles, h.stored_vertices]);
-        if all[0] != [0, 0] && h.trees > 0 {
-            return Err(bad(
-                "the first tree does not start at triangle and vertex 0",
-            ));
-        }
-        if all
-            .windows(2)
-            .any(|w| w[1][0] < w[0][0] || w[1][1] < w[0][1])
-        {
-            return Err(bad(
-                "the trees' first triangles or vertices do not ascend to the header's totals",
-            ));
-        }
+        debug_assert_eq!(leaf_of_tree.len() + 1, firsts.len());
         let (ids, vertex_ids) = id_maps(&h, &sec)?;
         let range = |s: &[u8]| {
             let at = s.as_ptr() as usize - b.as_ptr() as usize;
@@ -148,7 +137,8 @@ impl Paged {
             sections,
             coder,
             high,
-            firsts: all,
+            firsts,
+            starts,
             ids,
             vertex_ids,
             cache: PageCache::new(budget, max_page),
@@ -163,7 +153,7 @@ impl Paged {
 
     /// Decodes tree `k` (no cache).
     fn decode(&self, k: u32) -> Result<TreePage, OocError> {
-        let bytes = tree_stream(self.section(SEC_STARTS), self.section(SEC_TREES), k)?;
+        let bytes = tree_stream(&self.starts, self.section(SEC_TREES), k)?;
         let (hcc, _) = self.coder.tree(k, bytes)?;
         let n = hcc.bytes_total() + size_of::<TreePage>();
         Ok(TreePage {
@@ -397,7 +387,7 @@ impl Paged {
         for (t, leaf) in leaf_box.iter().enumerate() {
             let k = t as u32;
             let bad = |what| OocError::Corrupt { tree: k, what };
-            let bytes = tree_stream(self.section(SEC_STARTS), streams, k)?;
+            let bytes = tree_stream(&self.starts, streams, k)?;
             let (hcc, root) = self.coder.tree(k, bytes)?;
             hcc.verify()?;
             let [first, base] = self.firsts[t];
@@ -486,7 +476,7 @@ impl Paged {
     pub(super) fn parts(&self) -> Vec<(&'static str, usize)> {
         vec![
             ("high-level", self.high.len() * size_of::<HighNode>()),
-            ("tree-firsts", self.firsts.len() * 8),
+            ("tree-firsts", self.firsts.len() * 8 + self.starts.len() * 4),
             ("ids", self.ids.as_ref().map_or(0, IdMap::bytes)),
             (
                 "vertex-ids",
