@@ -115,24 +115,33 @@ impl<'a> BitReader<'a> {
     /// Consumes one Exp-Golomb code of parameter `k`.
     #[inline(always)]
     pub fn get_golomb(&mut self, k: u32) -> Result<u32, FormatError> {
-        let w = self.peek();
-        let n = w.trailing_zeros();
-        if n + k > 28 {
-            return Err(FormatError::Corrupt {
-                what: "an Exp-Golomb code is too long",
-            });
-        }
-        let total = 2 * n + 1 + k;
-        let body = (w >> (n + 1)) & ((1u64 << (n + k)) - 1);
-        self.pos += u64::from(total);
-        let x = (1u64 << (n + k)) | body;
-        Ok((x - (1u64 << k)) as u32)
+        let (value, len) = golomb_at(self.peek(), k)?;
+        self.pos += u64::from(len);
+        Ok(value)
     }
 
     /// Whether more bits were consumed than the stream holds.
     pub fn overran(&self) -> bool {
         self.pos > self.limit
     }
+}
+
+/// The Exp-Golomb code of parameter `k` at the start of `w` (bits from
+/// [`BitReader::peek`]): its value and its length in bits, which the caller
+/// skips (a dictionary decoder reads what follows the code from the same
+/// `w` when it fits). Codes longer than the 57 bits a peek guarantees are
+/// errors.
+#[inline(always)]
+pub fn golomb_at(w: u64, k: u32) -> Result<(u32, u32), FormatError> {
+    let n = w.trailing_zeros();
+    if n + k > 28 {
+        return Err(FormatError::Corrupt {
+            what: "an Exp-Golomb code is too long",
+        });
+    }
+    let body = (w >> (n + 1)) & ((1u64 << (n + k)) - 1);
+    let value = (((1u64 << (n + k)) | body) - (1u64 << k)) as u32;
+    Ok((value, 2 * n + 1 + k))
 }
 
 /// Zig-zag map of a signed value.

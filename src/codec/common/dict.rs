@@ -20,7 +20,7 @@
 //! range coder can be put in its place.
 
 use super::FormatError;
-use super::bits::BitReader;
+use super::bits::{BitReader, golomb_at};
 
 /// Largest Exp-Golomb parameter the encoder may choose.
 pub const MAX_K: u32 = 3;
@@ -155,16 +155,7 @@ impl DictDecoder {
         max_len: u32,
     ) -> Result<u32, FormatError> {
         let w = r.peek();
-        let n = w.trailing_zeros();
-        let k = self.k;
-        if n + k > 28 {
-            return Err(FormatError::Corrupt {
-                what: "an Exp-Golomb code is too long",
-            });
-        }
-        let total = 2 * n + 1 + k;
-        let body = (w >> (n + 1)) & ((1u64 << (n + k)) - 1);
-        let rank = (((1u64 << (n + k)) | body) - (1u64 << k)) as u32;
+        let (rank, total) = golomb_at(w, self.k)?;
         if rank >= self.by_rank.len() as u32 {
             return Err(FormatError::Corrupt {
                 what: "a dictionary rank is out of range",

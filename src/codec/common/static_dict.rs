@@ -58,7 +58,7 @@
 //! each.
 
 use super::FormatError;
-use super::bits::{BitReader, BitWriter, golomb_len};
+use super::bits::{BitReader, BitWriter, golomb_at, golomb_len};
 use super::dict::{MAX_K, SymbolDecoder};
 
 /// A static dictionary: symbols by rank, the escape's rank and the split
@@ -346,16 +346,7 @@ impl StaticDecoder {
         // The rank's Exp-Golomb code and the extra bits after it from one
         // look at the stream when they fit in it (as `get_golomb`).
         let w = r.peek();
-        let n = w.trailing_zeros();
-        let k = self.k;
-        if n + k > 28 {
-            return Err(FormatError::Corrupt {
-                what: "an Exp-Golomb code is too long",
-            });
-        }
-        let total = 2 * n + 1 + k;
-        let body = (w >> (n + 1)) & ((1u64 << (n + k)) - 1);
-        let rank = (((1u64 << (n + k)) | body) - (1u64 << k)) as u32;
+        let (rank, total) = golomb_at(w, self.k)?;
         if rank == self.esc {
             r.skip(total);
             return self.escaped(r);
