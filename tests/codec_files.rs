@@ -258,7 +258,8 @@ fn cli_render_reports_the_decode_cache_of_an_out_of_core_file() {
     ]);
     assert!(ok, "{err}");
     let png = temp("cli-render-cache.png");
-    let render = |budget: &[&str]| {
+    // The render's output with `extra` arguments after the common ones.
+    let render = |extra: &[&str]| {
         let mut args = vec![
             "render",
             f,
@@ -268,14 +269,17 @@ fn cli_render_reports_the_decode_cache_of_an_out_of_core_file() {
             "64",
             "--height",
             "48",
-            "--json",
         ];
-        args.extend_from_slice(budget);
+        args.extend_from_slice(extra);
         let (ok, out, err) = cbvh(&args);
         assert!(ok, "{err}");
+        out
+    };
+    let json = |extra: &[&str]| {
+        let out = render(&[extra, &["--json"]].concat());
         serde_json::from_str::<serde_json::Value>(&out).unwrap()
     };
-    let small = render(&["--cache-mib", "0"]);
+    let small = json(&["--cache-mib", "0"]);
     let cache = &small["cache"];
     assert_eq!(cache["budget_bytes"], 0, "{small}");
     assert!(cache["decodes"].as_u64().unwrap() > 0, "{small}");
@@ -284,22 +288,10 @@ fn cli_render_reports_the_decode_cache_of_an_out_of_core_file() {
             >= small["primary_rays"].as_u64().unwrap() / 64,
         "{small}"
     );
-    let whole = render(&[]);
+    let whole = json(&[]);
     assert!(whole["cache"].is_null(), "{whole}");
     assert_eq!(whole["rays"], small["rays"]);
-    let (ok, out, err) = cbvh(&[
-        "render",
-        f,
-        "-o",
-        png.to_str().unwrap(),
-        "--width",
-        "32",
-        "--height",
-        "24",
-        "--cache-mib",
-        "0",
-    ]);
-    assert!(ok, "{err}");
+    let out = render(&["--cache-mib", "0"]);
     assert!(out.contains("decode cache      0.0 MiB budget"), "{out}");
     for p in [&file, &png] {
         std::fs::remove_file(p).ok();

@@ -198,14 +198,20 @@ fn u64_at(b: &[u8], at: usize) -> u64 {
     u64::from_le_bytes(b[at..at + 8].try_into().unwrap())
 }
 
+/// Offset and length of section `k`, from the section table.
+fn section(b: &[u8], k: usize) -> (usize, usize) {
+    let at = TABLE + 24 * k;
+    (u64_at(b, at) as usize, u64_at(b, at + 8) as usize)
+}
+
 /// Rewrites every section checksum and the header's so that damage
 /// inside the sections reaches the decoder (a forged file).
 fn reframe(b: &mut [u8]) {
     for k in 0..8 {
-        let at = TABLE + 24 * k;
-        let (off, len) = (u64_at(b, at) as usize, u64_at(b, at + 8) as usize);
+        let (off, len) = section(b, k);
         let h = xxh3_64(&b[off..off + len]);
-        b[at + 16..at + 24].copy_from_slice(&h.to_le_bytes());
+        let at = TABLE + 24 * k + 16;
+        b[at..at + 8].copy_from_slice(&h.to_le_bytes());
     }
     let h = xxh3_64(&b[..HEADER_LEN - 8]);
     b[HEADER_LEN - 8..HEADER_LEN].copy_from_slice(&h.to_le_bytes());
@@ -454,8 +460,7 @@ fn out_of_core_verify_finds_damaged_trees() {
         .to_ooc()
         .unwrap();
     // The streams section, from the section table.
-    let streams = u64_at(&bytes, TABLE + 24 * 3) as usize;
-    let len = u64_at(&bytes, TABLE + 24 * 3 + 8) as usize;
+    let (streams, len) = section(&bytes, 3);
     let mut flipped = bytes.clone();
     flipped[streams + len / 2] ^= 0x10;
     let paged = HccOocBvh::from_bytes_with_budget(&flipped, 1).expect("opening skips the streams");
@@ -490,10 +495,9 @@ fn forged_high_level_boxes_and_tree_tables_give_errors_not_panics() {
         .to_ooc()
         .unwrap();
     // Tree starts, high-level boxes, tree firsts, from the section table.
-    for section in [2, 6, 7] {
-        let at = u64_at(&bytes, TABLE + 24 * section) as usize;
-        let len = u64_at(&bytes, TABLE + 24 * section + 8) as usize;
-        assert!(len > 8, "{len} bytes in section {section}");
+    for k in [2, 6, 7] {
+        let (at, len) = section(&bytes, k);
+        assert!(len > 8, "{len} bytes in section {k}");
         let mut rng = Lcg(11);
         let mut noticed = 0;
         for _ in 0..60 {
@@ -509,7 +513,7 @@ fn forged_high_level_boxes_and_tree_tables_give_errors_not_panics() {
         // Only the last byte's padding bits go unread.
         assert!(
             noticed >= 50,
-            "only {noticed} of 60 forged files were errors (section {section})"
+            "only {noticed} of 60 forged files were errors (section {k})"
         );
     }
 }
