@@ -23,7 +23,8 @@ mod batch;
 
 pub use batch::ChildBoxes;
 
-use crate::geom::{Aabb, Triangle};
+use crate::geom::{Aabb, Ray, Triangle};
+use crate::query::RayHit;
 
 /// The most children an inner node may have (8-wide trees).
 pub const MAX_CHILDREN: usize = 8;
@@ -107,6 +108,37 @@ pub trait NodeCursor: Sync {
 
     /// Number of triangles in the tree.
     fn triangle_count(&self) -> usize;
+
+    /// The closest hit of `ray` within `[0, t_max]`, as
+    /// [`query::closest_hit`](crate::query::closest_hit) defines it.
+    ///
+    /// The default is the generic traversal over
+    /// [`children`](Self::children) and
+    /// [`for_each_triangle`](Self::for_each_triangle)
+    /// ([`closest_hit_generic`](crate::query::ray::closest_hit_generic)).
+    /// A codec whose layout allows a faster traversal overrides it (CLBVH
+    /// tests eight stored boxes per AVX2 instruction without building
+    /// batches); the override must give the same hit, bit for bit, and is
+    /// tested against the default.
+    #[inline]
+    fn closest_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> Option<RayHit>
+    where
+        Self: Sized,
+    {
+        crate::query::ray::closest_hit_generic(self, ray, t_max, stats)
+    }
+
+    /// Whether `ray` hits a triangle within `[0, t_max]`, as
+    /// [`query::any_hit`](crate::query::any_hit) defines it; overridden,
+    /// like [`closest_hit`](Self::closest_hit), by codecs with a faster
+    /// traversal.
+    #[inline]
+    fn any_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> bool
+    where
+        Self: Sized,
+    {
+        crate::query::ray::any_hit_generic(self, ray, t_max, stats)
+    }
 }
 
 /// [`NodeCursor::children`] for a node with more than two children, by

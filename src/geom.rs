@@ -287,6 +287,14 @@ impl Ray {
         }
     }
 
+    /// The watertight triangle test's axis permutation `[kx, ky, kz]` and
+    /// shear constants (for codecs that run [`ray_triangle`]'s operations
+    /// on several triangles at once).
+    #[inline]
+    pub(crate) fn shear_frame(&self) -> ([usize; 3], [f32; 3]) {
+        (self.k, self.shear)
+    }
+
     /// The point at parameter `t`.
     #[inline]
     pub fn at(&self, t: f32) -> Vec3A {

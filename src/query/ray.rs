@@ -42,8 +42,24 @@ pub(crate) fn keep_closer(
 }
 
 /// The closest hit of `ray` within `[0, t_max]`, with the two-sided
-/// watertight triangle test ([`ray_triangle`]).
+/// watertight triangle test ([`ray_triangle`]): the cursor's own traversal
+/// ([`NodeCursor::closest_hit`]) where it has one, else
+/// [`closest_hit_generic`]. Every codec gives the same hit.
+#[inline]
 pub fn closest_hit<C: NodeCursor>(
+    c: &C,
+    ray: &Ray,
+    t_max: f32,
+    stats: &mut TraversalStats,
+) -> Option<RayHit> {
+    c.closest_hit(ray, t_max, stats)
+}
+
+/// [`closest_hit`] through the generic traversal over the cursor's
+/// batches, whatever the codec: the default of
+/// [`NodeCursor::closest_hit`], and the reference a codec's own traversal
+/// is tested against.
+pub fn closest_hit_generic<C: NodeCursor>(
     c: &C,
     ray: &Ray,
     t_max: f32,
@@ -105,8 +121,22 @@ pub fn closest_hit_with<C: NodeCursor>(
     best
 }
 
-/// Whether `ray` hits any triangle within `[0, t_max]` (shadow rays).
+/// Whether `ray` hits any triangle within `[0, t_max]` (shadow rays): the
+/// cursor's own traversal ([`NodeCursor::any_hit`]) where it has one, else
+/// [`any_hit_generic`].
+#[inline]
 pub fn any_hit<C: NodeCursor>(c: &C, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> bool {
+    c.any_hit(ray, t_max, stats)
+}
+
+/// [`any_hit`] through the generic traversal (the default of
+/// [`NodeCursor::any_hit`]).
+pub fn any_hit_generic<C: NodeCursor>(
+    c: &C,
+    ray: &Ray,
+    t_max: f32,
+    stats: &mut TraversalStats,
+) -> bool {
     any_hit_with(c, ray, t_max, stats, |_, tri| {
         ray_triangle(ray, tri, t_max).is_some()
     })

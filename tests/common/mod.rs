@@ -85,7 +85,7 @@ pub fn edge_case_meshes() -> Vec<Mesh> {
     vec![one, same, flat, huge]
 }
 
-fn tri(mesh: &Mesh, id: u32) -> Triangle {
+pub fn tri(mesh: &Mesh, id: u32) -> Triangle {
     triangle_from_arrays(mesh.triangle_vertices(id as usize))
 }
 

@@ -197,6 +197,26 @@ impl NodeCursor for ClBvhCompact {
     fn triangle_count(&self) -> usize {
         self.0.triangle_count()
     }
+
+    #[inline]
+    fn closest_hit(
+        &self,
+        ray: &crate::geom::Ray,
+        t_max: f32,
+        stats: &mut crate::cursor::TraversalStats,
+    ) -> Option<crate::query::RayHit> {
+        self.0.closest_hit(ray, t_max, stats)
+    }
+
+    #[inline]
+    fn any_hit(
+        &self,
+        ray: &crate::geom::Ray,
+        t_max: f32,
+        stats: &mut crate::cursor::TraversalStats,
+    ) -> bool {
+        self.0.any_hit(ray, t_max, stats)
+    }
 }
 
 impl crate::codec::ByteSize for ClBvhCompact {

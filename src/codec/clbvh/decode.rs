@@ -8,8 +8,9 @@ use super::node::{
 };
 use super::simd::{SoaBoxes, dequantize};
 use super::{ClBvh, LeafKind};
-use crate::cursor::{ChildBoxes, Children, MAX_CHILDREN, NodeCursor};
-use crate::geom::{Aabb, Triangle};
+use crate::cursor::{ChildBoxes, Children, MAX_CHILDREN, NodeCursor, TraversalStats};
+use crate::geom::{Aabb, Ray, Triangle};
+use crate::query::RayHit;
 
 /// Lane value of a [`ClNode`] that stands for a whole node.
 const WHOLE: u32 = u32::MAX;
@@ -220,6 +221,18 @@ impl NodeCursor for ClBvh {
             LeafKind::Fast => self.triangles.len(),
             LeafKind::Compact => self.slot_of.len(),
         }
+    }
+
+    /// CLBVH's own traversal ([`super::trace`]).
+    #[inline]
+    fn closest_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> Option<RayHit> {
+        super::trace::closest_hit(self, ray, t_max, stats)
+    }
+
+    /// CLBVH's own traversal ([`super::trace`]).
+    #[inline]
+    fn any_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> bool {
+        super::trace::any_hit(self, ray, t_max, stats)
     }
 }
 
