@@ -22,6 +22,7 @@ use super::{ClBvh, ClError, ClOptions, LeafKind};
 use crate::build::CanonicalBvh;
 use crate::codec::ByteSize;
 use crate::codec::common::MassProps;
+use crate::codec::common::huge::huge;
 use crate::codec::common::quant::Grid;
 use crate::geom::Aabb;
 use crate::mesh::Mesh;
@@ -228,14 +229,14 @@ impl ClBvh {
         }
         Ok(ClBvh {
             options: *options,
-            inner: e.inner,
-            arena: e.arena,
+            inner: huge(e.inner),
+            arena: huge(e.arena),
             multi_nodes: e.multi,
             root,
             root_box: bvh.root_aabb(),
-            vertices: mesh.vertices.clone(),
+            vertices: huge(mesh.vertices.clone()),
             triangles: match options.leaves {
-                LeafKind::Fast => mesh.triangles.clone(),
+                LeafKind::Fast => huge(mesh.triangles.clone()),
                 LeafKind::Compact => Vec::new(),
             },
             slot_of: e.slot_of,

@@ -24,6 +24,7 @@
 //! the triangle and slot sections hold one entry a triangle (the one the
 //! variant does not use is empty).
 
+use crate::codec::common::huge::huge;
 use std::path::Path;
 
 use xxhash_rust::xxh3::xxh3_64;
@@ -251,19 +252,23 @@ impl ClBvh {
         let w = |c: &[u8], k: usize| u32_at(c, 4 * k);
         Ok(ClBvh {
             options,
-            inner,
-            arena: words(&b[ranges[1].clone()]).collect(),
+            inner: huge(inner),
+            arena: huge(words(&b[ranges[1].clone()]).collect()),
             multi_nodes,
             root,
             root_box,
-            vertices: b[ranges[2].clone()]
-                .chunks_exact(12)
-                .map(|c| [w(c, 0), w(c, 1), w(c, 2)].map(f32::from_bits))
-                .collect(),
-            triangles: b[ranges[3].clone()]
-                .chunks_exact(12)
-                .map(|c| [w(c, 0), w(c, 1), w(c, 2)])
-                .collect(),
+            vertices: huge(
+                b[ranges[2].clone()]
+                    .chunks_exact(12)
+                    .map(|c| [w(c, 0), w(c, 1), w(c, 2)].map(f32::from_bits))
+                    .collect(),
+            ),
+            triangles: huge(
+                b[ranges[3].clone()]
+                    .chunks_exact(12)
+                    .map(|c| [w(c, 0), w(c, 1), w(c, 2)])
+                    .collect(),
+            ),
             slot_of: words(&b[ranges[4].clone()]).collect(),
             blocks: b[ranges[5].clone()]
                 .chunks_exact(8)

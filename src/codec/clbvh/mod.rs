@@ -59,14 +59,18 @@
 //! - **Rays** (closest and any hit) have a traversal of their own
 //!   (module `trace`, through the cursor's
 //!   [`closest_hit`](crate::cursor::NodeCursor::closest_hit) and
-//!   [`any_hit`](crate::cursor::NodeCursor::any_hit)): eight stored boxes an AVX2 instruction (a
-//!   multi-leaf node's dequantized in registers), nearest child first by a
-//!   branch-free rank, a single hit child entered without the stack, a
-//!   multi-leaf node's lanes tested right away, and four triangles of a
-//!   lane at once with the watertight test's own operations. The same
-//!   hits, bit for bit, as the generic traversal (tested); about 1.3× its
-//!   camera rays/s on the 1 M statue. Without AVX2 the generic traversal
-//!   runs.
+//!   [`any_hit`](crate::cursor::NodeCursor::any_hit)): eight stored boxes
+//!   an AVX2 instruction (a multi-leaf node's dequantized in registers),
+//!   nearest child first by a branch-free rank, a single hit child entered
+//!   without the stack, a multi-leaf node's lanes tested right away, and
+//!   four triangles of a lane at once with the watertight test's own
+//!   operations. The same hits, bit for bit, as the generic traversal
+//!   (tested); about 1.3× its camera rays/s on the 1 M statue. Without
+//!   AVX2 the generic traversal runs.
+//! - **Huge pages**: the node arrays, the vertices and the triangles are
+//!   moved into memory advised for transparent huge pages
+//!   ([`huge`](crate::codec::common::huge)) when the tree is encoded or
+//!   read, as Embree does with its own; see that module for the figures.
 //! - **Uncompressed reference**: [`ClOptions::multi_leaf`] `= false` gives
 //!   the same 8-wide tree with regular nodes only (the paper's BVH8), for
 //!   the figures.

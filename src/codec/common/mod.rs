@@ -27,6 +27,7 @@ pub mod bits;
 pub mod container;
 pub mod dict;
 mod error;
+pub mod huge;
 pub mod le;
 pub mod mass;
 pub mod packed;

@@ -6,6 +6,7 @@ use crate::build::{CanonicalBvh, LEAF_FLAG};
 use crate::codec::ByteSize;
 use crate::codec::common::FormatError;
 use crate::codec::common::MassProps;
+use crate::codec::common::huge::huge;
 use crate::mesh::Mesh;
 
 /// The uncompressed BVH with its mesh.
@@ -91,9 +92,9 @@ impl PlainBvh {
             })
             .collect();
         Ok(Self {
-            nodes,
-            vertices: mesh.vertices.clone(),
-            triangles: mesh.triangles.clone(),
+            nodes: huge(nodes),
+            vertices: huge(mesh.vertices.clone()),
+            triangles: huge(mesh.triangles.clone()),
             leaf_ids: if single {
                 Vec::new()
             } else {

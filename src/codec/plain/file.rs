@@ -36,6 +36,7 @@ use xxhash_rust::xxh3::xxh3_64;
 use super::node::PlainNode;
 use super::{PlainBvh, PlainError};
 use crate::codec::common::container;
+use crate::codec::common::huge::huge;
 use crate::codec::common::le::u32_at;
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps, atomic_write};
 
@@ -210,10 +211,10 @@ impl PlainBvh {
             .collect();
         let leaf_ids = words(&b[ranges[3].clone()]).collect();
         Ok(PlainBvh {
-            nodes,
-            vertices,
-            triangles,
-            leaf_ids,
+            nodes: huge(nodes),
+            vertices: huge(vertices),
+            triangles: huge(triangles),
+            leaf_ids: huge(leaf_ids),
             mass,
         })
     }
