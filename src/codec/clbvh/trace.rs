@@ -281,7 +281,30 @@ mod x86 {
 
     /// Up to four triangles, corner `c`'s axis `a` in row `3 * c + a`, one
     /// triangle a lane.
-    type Rows4 = [[f32; 4]; 9];
+    type Rows4 = [__m128; 9];
+
+    /// Rows 0–3 of four triangles from their first four floats each (and
+    /// rows 4–7 from the next four): a 4 × 4 transpose in registers. Built
+    /// lane by lane in memory instead, each row's load waited for four
+    /// scalar stores it could not be forwarded from.
+    ///
+    /// # Safety
+    /// Only for AVX2 code (see [`triangles4`]).
+    #[inline(always)]
+    unsafe fn transpose4(a: __m128, b: __m128, c: __m128, d: __m128) -> [__m128; 4] {
+        // SAFETY: the caller runs with AVX2 (see `# Safety`), a superset of
+        // the SSE these shuffles need; no memory is touched.
+        unsafe {
+            let (t0, t1) = (_mm_unpacklo_ps(a, b), _mm_unpacklo_ps(c, d));
+            let (t2, t3) = (_mm_unpackhi_ps(a, b), _mm_unpackhi_ps(c, d));
+            [
+                _mm_movelh_ps(t0, t1),
+                _mm_movehl_ps(t1, t0),
+                _mm_movelh_ps(t2, t3),
+                _mm_movehl_ps(t3, t2),
+            ]
+        }
+    }
 
     /// Hits of up to four triangles found at once.
     struct Hits4 {
@@ -304,11 +327,10 @@ mod x86 {
     #[inline(always)]
     unsafe fn triangles4(w: &Water, rows: &Rows4, live: usize, limit: f32) -> Option<Hits4> {
         // SAFETY: the caller runs with AVX2 (see `# Safety`), which every
-        // intrinsic below needs; each load reads a row, 16 readable bytes,
-        // and each store writes an array of four, 16 writable bytes
-        // (unaligned loads and stores).
+        // intrinsic below needs; each store writes an array of four, 16
+        // writable bytes (unaligned).
         unsafe {
-            let ld = |r: usize| _mm_loadu_ps(rows[r].as_ptr());
+            let ld = |r: usize| rows[r];
             let [kx, ky, kz] = w.k;
             let [ox, oy, oz] = w.org;
             let [sx, sy, sz] = w.shear;
@@ -408,23 +430,41 @@ mod x86 {
     ) -> bool {
         let hdr = bvh.arena[b];
         let n = (hdr & 0xFFFF) as usize;
-        let mut rows: Rows4 = [[0.0; 4]; 9];
         let mut ids = [0u32; 4];
         let mut j = first;
         while j < last {
             let live = (last - j).min(4);
-            match bvh.options.leaves {
+            // Dead lanes repeat the last live triangle.
+            let tri = |l: usize| j + l.min(live - 1);
+            let rows: Rows4 = match bvh.options.leaves {
                 LeafKind::Fast => {
                     let id = &bvh.arena[b + 1..b + 1 + n];
                     let corners = &bvh.arena[b + 1 + n..b + 1 + 10 * n];
-                    for l in 0..4 {
-                        // Dead lanes repeat the last live triangle.
-                        let t = j + l.min(live - 1);
-                        let c = &corners[9 * t..9 * t + 9];
-                        for (r, row) in rows.iter_mut().enumerate() {
-                            row[l] = f32::from_bits(c[r]);
-                        }
-                        ids[l] = id[t];
+                    let c: [&[u32; 9]; 4] = std::array::from_fn(|l| {
+                        ids[l] = id[tri(l)];
+                        corners[9 * tri(l)..9 * tri(l) + 9]
+                            .try_into()
+                            .expect("nine words")
+                    });
+                    // SAFETY: each load reads four of a triangle's nine
+                    // words, 16 readable bytes (unaligned); this function
+                    // runs with AVX2, which `transpose4` needs.
+                    unsafe {
+                        let ld = |l: usize, o: usize| _mm_loadu_ps(c[l][o..].as_ptr().cast());
+                        let lo = transpose4(ld(0, 0), ld(1, 0), ld(2, 0), ld(3, 0));
+                        let mid = transpose4(ld(0, 4), ld(1, 4), ld(2, 4), ld(3, 4));
+                        let z2 = |l: usize| f32::from_bits(c[l][8]);
+                        [
+                            lo[0],
+                            lo[1],
+                            lo[2],
+                            lo[3],
+                            mid[0],
+                            mid[1],
+                            mid[2],
+                            mid[3],
+                            _mm_setr_ps(z2(0), z2(1), z2(2), z2(3)),
+                        ]
                     }
                 }
                 LeafKind::Compact => {
@@ -432,18 +472,18 @@ mod x86 {
                     let uniq = &bvh.arena[b + 1..b + 1 + u];
                     let id = &bvh.arena[b + 1 + u..b + 1 + u + n];
                     let local: &[u8] = bytemuck::cast_slice(&bvh.arena[b + 1 + u + n..]);
-                    for l in 0..4 {
-                        let t = j + l.min(live - 1);
-                        for c in 0..3 {
-                            let p = bvh.vertices[uniq[local[3 * t + c] as usize] as usize];
-                            for a in 0..3 {
-                                rows[3 * c + a][l] = p[a];
-                            }
-                        }
-                        ids[l] = id[t];
-                    }
+                    let p: [[[f32; 3]; 3]; 4] = std::array::from_fn(|l| {
+                        ids[l] = id[tri(l)];
+                        std::array::from_fn(|c| {
+                            bvh.vertices[uniq[local[3 * tri(l) + c] as usize] as usize]
+                        })
+                    });
+                    std::array::from_fn(|r| {
+                        let (c, a) = (r / 3, r % 3);
+                        _mm_setr_ps(p[0][c][a], p[1][c][a], p[2][c][a], p[3][c][a])
+                    })
                 }
-            }
+            };
             stats.primitive_tests += live as u64;
             // SAFETY: this function runs with AVX2.
             match unsafe { triangles4(w, &rows, live, *limit) } {
@@ -463,9 +503,14 @@ mod x86 {
                     }
                 }
                 None => {
+                    let mut lanes = [[0.0f32; 4]; 9];
+                    for (lane, row) in lanes.iter_mut().zip(&rows) {
+                        // SAFETY: `lane` is 16 writable bytes (unaligned).
+                        unsafe { _mm_storeu_ps(lane.as_mut_ptr(), *row) };
+                    }
                     for l in 0..live {
                         let p = |c: usize| {
-                            Vec3A::new(rows[3 * c][l], rows[3 * c + 1][l], rows[3 * c + 2][l])
+                            Vec3A::new(lanes[3 * c][l], lanes[3 * c + 1][l], lanes[3 * c + 2][l])
                         };
                         if let Some(h) = ray_triangle(ray, &[p(0), p(1), p(2)], *limit)
                             && hit(ids[l], &h, limit)
