@@ -244,6 +244,21 @@ mod x86 {
     #[target_feature(enable = "avx2")]
     fn ranked(hit: u32, enter: __m256, t: &[f32; 8]) -> [u32; 8] {
         let mut by_rank = [0u32; 8];
+        // One or two lanes, the usual case, by one comparison.
+        let rest = hit & hit.wrapping_sub(1);
+        if hit != 0 && rest & rest.wrapping_sub(1) == 0 {
+            let a = hit.trailing_zeros();
+            if rest == 0 {
+                by_rank[0] = a;
+            } else {
+                let b = rest.trailing_zeros();
+                // `a < b`: `a` first unless `b` is strictly nearer.
+                let swap = t[b as usize] < t[a as usize];
+                by_rank[0] = if swap { b } else { a };
+                by_rank[1] = if swap { a } else { b };
+            }
+            return by_rank;
+        }
         let mut m = hit;
         while m != 0 {
             let i = m.trailing_zeros();
