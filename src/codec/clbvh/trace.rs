@@ -487,16 +487,22 @@ mod x86 {
                     let uniq = &bvh.arena[b + 1..b + 1 + u];
                     let id = &bvh.arena[b + 1 + u..b + 1 + u + n];
                     let local: &[u8] = bytemuck::cast_slice(&bvh.arena[b + 1 + u + n..]);
-                    let p: [[[f32; 3]; 3]; 4] = std::array::from_fn(|l| {
-                        ids[l] = id[tri(l)];
-                        std::array::from_fn(|c| {
-                            bvh.vertices[uniq[local[3 * tri(l) + c] as usize] as usize]
-                        })
-                    });
-                    std::array::from_fn(|r| {
-                        let (c, a) = (r / 3, r % 3);
-                        _mm_setr_ps(p[0][c][a], p[1][c][a], p[2][c][a], p[3][c][a])
-                    })
+                    for (l, i) in ids.iter_mut().enumerate() {
+                        *i = id[tri(l)];
+                    }
+                    let vertex = |l: usize, c: usize| {
+                        let v = &bvh.vertices[uniq[local[3 * tri(l) + c] as usize] as usize];
+                        _mm_setr_ps(v[0], v[1], v[2], 0.0)
+                    };
+                    let corner = |c: usize| {
+                        // SAFETY: this function runs with AVX2, which
+                        // `transpose4` needs.
+                        unsafe {
+                            transpose4(vertex(0, c), vertex(1, c), vertex(2, c), vertex(3, c))
+                        }
+                    };
+                    let (a, b, c) = (corner(0), corner(1), corner(2));
+                    [a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2]]
                 }
             };
             stats.primitive_tests += live as u64;
