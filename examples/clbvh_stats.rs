@@ -171,11 +171,8 @@ fn main() {
     for (k, (label, nodes, leaves, mesh_b, enc)) in rows.enumerate() {
         let t = median(&mut times[k]);
         let per = |x: f64| x / n as f64;
-        let node_mem = if k == 0 {
-            f64::NAN
-        } else {
-            nodes / bvh8_nodes as f64 - 1.0
-        };
+        // Plain's binary nodes have no 8-wide counterpart.
+        let node_mem = (k != 0).then(|| nodes / bvh8_nodes as f64 - 1.0);
         let st = &stats[k];
         if a.json {
             let v = serde_json::json!({
@@ -191,12 +188,12 @@ fn main() {
             println!("{v}");
         } else {
             println!(
-                "{label:>14} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.1}% {:>8.2} {:>8.2} {:>9.3} {:>8.2}",
+                "{label:>14} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>9} {:>8.2} {:>8.2} {:>9.3} {:>8.2}",
                 per(nodes),
                 per(leaves),
                 per(mesh_b),
                 per(nodes + leaves + mesh_b),
-                node_mem * 100.0,
+                node_mem.map_or("–".to_string(), |m| format!("{:.1}%", m * 100.0)),
                 st.nodes_visited as f64 / nr,
                 st.primitive_tests as f64 / nr,
                 nr / t / 1e6,
