@@ -24,7 +24,6 @@
 //! the triangle and slot sections hold one entry a triangle (the one the
 //! variant does not use is empty).
 
-use crate::codec::common::huge::huge;
 use std::path::Path;
 
 use xxhash_rust::xxh3::xxh3_64;
@@ -32,7 +31,8 @@ use xxhash_rust::xxh3::xxh3_64;
 use super::node::InnerNode;
 use super::{ClBvh, ClError, ClOptions, LeafKind};
 use crate::codec::common::container::{check_header, section_entry, write_sections};
-use crate::codec::common::le::u32_at;
+use crate::codec::common::huge::huge;
+use crate::codec::common::le::{u32_at, word_bytes, words};
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps, atomic_write};
 use crate::geom::Aabb;
 
@@ -55,17 +55,8 @@ const NAMES: [&str; SECTIONS] = [
 ];
 const ELEM: [u64; SECTIONS] = [224, 4, 12, 12, 4, 8];
 
-fn words(b: &[u8]) -> impl Iterator<Item = u32> + '_ {
-    b.chunks_exact(4)
-        .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
-}
-
 fn header_err(field: &'static str, why: impl Into<String>) -> ClError {
     FormatError::header(field, why).into()
-}
-
-fn le_words(it: impl Iterator<Item = u32>) -> Vec<u8> {
-    it.flat_map(u32::to_le_bytes).collect()
 }
 
 impl ClBvh {
@@ -73,12 +64,12 @@ impl ClBvh {
     pub fn to_bytes(&self) -> Vec<u8> {
         let inner: &[u32] = bytemuck::cast_slice(&self.inner);
         let sections: [Vec<u8>; SECTIONS] = [
-            le_words(inner.iter().copied()),
-            le_words(self.arena.iter().copied()),
-            le_words(self.vertices.iter().flatten().map(|f| f.to_bits())),
-            le_words(self.triangles.iter().flatten().copied()),
-            le_words(self.slot_of.iter().copied()),
-            le_words(self.blocks.iter().flatten().copied()),
+            word_bytes(inner.iter().copied()),
+            word_bytes(self.arena.iter().copied()),
+            word_bytes(self.vertices.iter().flatten().map(|f| f.to_bits())),
+            word_bytes(self.triangles.iter().flatten().copied()),
+            word_bytes(self.slot_of.iter().copied()),
+            word_bytes(self.blocks.iter().flatten().copied()),
         ];
         let mut out = Vec::with_capacity(HEADER_LEN + sections.iter().map(Vec::len).sum::<usize>());
         out.extend_from_slice(match self.options.leaves {

@@ -8,6 +8,19 @@ pub fn u32_at(b: &[u8], at: usize) -> u32 {
     u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
 }
 
+/// The `u32`s of `b`, one every four bytes (a trailing partial word is
+/// left out; the callers' sections are whole words).
+#[inline]
+pub fn words(b: &[u8]) -> impl ExactSizeIterator<Item = u32> + '_ {
+    b.chunks_exact(4)
+        .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+}
+
+/// The little-endian bytes of `it`'s words, in order.
+pub fn word_bytes(it: impl Iterator<Item = u32>) -> Vec<u8> {
+    it.flat_map(u32::to_le_bytes).collect()
+}
+
 /// The `u64` at byte `at` of `b`.
 #[inline]
 pub fn u64_at(b: &[u8], at: usize) -> u64 {

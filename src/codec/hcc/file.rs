@@ -45,7 +45,7 @@ use super::node::{HighNode, TreeHeader};
 use super::vertices::{Quantized, VertexTree, Vertices};
 use super::{HccBvh, HccError, HccStats};
 use crate::codec::common::container;
-use crate::codec::common::le::{f32x3_at, u32_at};
+use crate::codec::common::le::{f32x3_at, u32_at, word_bytes, words};
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps, atomic_write};
 
 /// The file version this build writes and reads.
@@ -74,15 +74,6 @@ const FLAG_QUANTIZED: u32 = 2;
 const FLAG_VERTEX_IDS: u32 = 4;
 const FLAG_TREE_ORDER: u32 = 8;
 
-fn words(b: &[u8]) -> impl Iterator<Item = u32> + '_ {
-    b.chunks_exact(4)
-        .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
-}
-
-fn le(it: impl Iterator<Item = u32>) -> Vec<u8> {
-    it.flat_map(u32::to_le_bytes).collect()
-}
-
 fn header_err(field: &'static str, why: impl Into<String>) -> HccError {
     FormatError::header(field, why).into()
 }
@@ -90,29 +81,35 @@ fn header_err(field: &'static str, why: impl Into<String>) -> HccError {
 impl HccBvh {
     /// The file bytes (see the module docs for the layout).
     pub fn to_bytes(&self) -> Vec<u8> {
-        let high = le(self.high.iter().flat_map(|n| {
+        let high = word_bytes(self.high.iter().flat_map(|n| {
             n.min
                 .into_iter()
                 .chain(n.max)
                 .map(f32::to_bits)
                 .chain([n.a, n.b])
         }));
-        let headers = le(self
-            .headers
-            .iter()
-            .flat_map(|h| [h.node_start, h.ic_start, h.vertex_start, h.first_triangle]));
-        let nodes = le(self.nodes.iter().copied());
-        let ics = le(self.ics.iter().copied());
+        let headers = word_bytes(
+            self.headers
+                .iter()
+                .flat_map(|h| [h.node_start, h.ic_start, h.vertex_start, h.first_triangle]),
+        );
+        let nodes = word_bytes(self.nodes.iter().copied());
+        let ics = word_bytes(self.ics.iter().copied());
         let (verts, runs) = match &self.vertices {
-            Vertices::F32(v) => (le(v.iter().flatten().map(|c| c.to_bits())), Vec::new()),
+            Vertices::F32(v) => (
+                word_bytes(v.iter().flatten().map(|c| c.to_bits())),
+                Vec::new(),
+            ),
             Vertices::Packed(q) => (
                 q.data.clone(),
-                le(q.trees
-                    .iter()
-                    .flat_map(|t| [t.axes[0], t.axes[1], t.axes[2], t.byte])),
+                word_bytes(
+                    q.trees
+                        .iter()
+                        .flat_map(|t| [t.axes[0], t.axes[1], t.axes[2], t.byte]),
+                ),
             ),
         };
-        let starts = le(self.block_start.iter().copied());
+        let starts = word_bytes(self.block_start.iter().copied());
         let ids = self.ids.as_ref().map_or(Vec::new(), IdMap::to_bytes);
         let vids = self
             .vertex_ids

@@ -37,7 +37,7 @@ use super::node::PlainNode;
 use super::{PlainBvh, PlainError};
 use crate::codec::common::container;
 use crate::codec::common::huge::huge;
-use crate::codec::common::le::u32_at;
+use crate::codec::common::le::{u32_at, words};
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps, atomic_write};
 
 /// The file version this build writes and reads.
@@ -47,11 +47,6 @@ pub const MAGIC: [u8; 8] = *b"CBVHPLN\0";
 const HEADER_LEN: usize = 192;
 const TABLE: usize = 88;
 const NAMES: [&str; 4] = ["nodes", "vertices", "triangles", "leaf ids"];
-
-fn words(b: &[u8]) -> impl Iterator<Item = u32> + '_ {
-    b.chunks_exact(4)
-        .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
-}
 
 fn header_err(field: &'static str, why: impl Into<String>) -> PlainError {
     FormatError::header(field, why).into()
