@@ -234,9 +234,9 @@ impl ClBvh {
             multi_nodes: e.multi,
             root,
             root_box: bvh.root_aabb(),
-            vertices: huge(mesh.vertices.clone()),
+            vertices: huge(mesh.vertices.iter().copied()),
             triangles: match options.leaves {
-                LeafKind::Fast => huge(mesh.triangles.clone()),
+                LeafKind::Fast => huge(mesh.triangles.iter().copied()),
                 LeafKind::Compact => Vec::new(),
             },
             slot_of: e.slot_of,

@@ -230,35 +230,31 @@ impl ClBvh {
                 expect_tris(4, 1)?;
             }
         }
-        let inner = b[ranges[0].clone()]
-            .chunks_exact(224)
-            .map(|c| {
-                let w: Vec<u32> = words(c).collect();
-                let mut n = InnerNode::EMPTY;
-                let dst: &mut [u32] = bytemuck::cast_slice_mut(std::slice::from_mut(&mut n));
-                dst.copy_from_slice(&w);
-                n
-            })
-            .collect();
+        let inner = b[ranges[0].clone()].chunks_exact(224).map(|c| {
+            let mut n = InnerNode::EMPTY;
+            let dst: &mut [u32] = bytemuck::cast_slice_mut(std::slice::from_mut(&mut n));
+            for (d, w) in dst.iter_mut().zip(words(c)) {
+                *d = w;
+            }
+            n
+        });
         let w = |c: &[u8], k: usize| u32_at(c, 4 * k);
         Ok(ClBvh {
             options,
             inner: huge(inner),
-            arena: huge(words(&b[ranges[1].clone()]).collect()),
+            arena: huge(words(&b[ranges[1].clone()])),
             multi_nodes,
             root,
             root_box,
             vertices: huge(
                 b[ranges[2].clone()]
                     .chunks_exact(12)
-                    .map(|c| [w(c, 0), w(c, 1), w(c, 2)].map(f32::from_bits))
-                    .collect(),
+                    .map(|c| [w(c, 0), w(c, 1), w(c, 2)].map(f32::from_bits)),
             ),
             triangles: huge(
                 b[ranges[3].clone()]
                     .chunks_exact(12)
-                    .map(|c| [w(c, 0), w(c, 1), w(c, 2)])
-                    .collect(),
+                    .map(|c| [w(c, 0), w(c, 1), w(c, 2)]),
             ),
             slot_of: words(&b[ranges[4].clone()]).collect(),
             blocks: b[ranges[5].clone()]

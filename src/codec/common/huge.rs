@@ -6,9 +6,9 @@
 //! the whole tree is a few dozen entries. Linux hands out huge pages to
 //! anonymous memory only where asked (`/sys/kernel/mm/transparent_hugepage/
 //! enabled` is `madvise` on most distributions), so Embree asks, and so does
-//! this module: [`huge`] moves a large vector into fresh memory advised with
-//! `madvise(MADV_HUGEPAGE)` *before* it is written, so that its pages fault
-//! in huge.
+//! this module: [`huge`] collects a large array into fresh memory advised
+//! with `madvise(MADV_HUGEPAGE)` *before* it is written, so that its pages
+//! fault in huge.
 //!
 //! What it buys depends on the machine's memory virtualisation. `peers`
 //! (1 M statue, 512² camera rays, one thread), on two of this project's
@@ -24,20 +24,24 @@
 /// Vectors smaller than this stay where they are (a huge page is 2 MiB).
 const MIN_BYTES: usize = 4 << 20;
 
-/// `v`, moved into memory advised for transparent huge pages when it is
-/// large and the system supports the advice (see the module docs); the
-/// same elements either way.
-pub fn huge<T: Copy>(v: Vec<T>) -> Vec<T> {
+/// `items` collected into memory advised for transparent huge pages when
+/// they are large and the system supports the advice (see the module
+/// docs); the same elements either way. Taking an iterator of known
+/// length, not a vector, lets callers copy or decode straight into that
+/// memory: a mesh's arrays are copied once, a file's sections decoded
+/// once. A vector passed in is reused as it is when it is small.
+pub fn huge<T: Copy>(items: impl IntoIterator<Item = T, IntoIter: ExactSizeIterator>) -> Vec<T> {
+    let items = items.into_iter();
     #[cfg(target_os = "linux")]
-    if size_of_val(v.as_slice()) >= MIN_BYTES {
-        let mut w: Vec<T> = Vec::with_capacity(v.len());
+    if items.len().saturating_mul(size_of::<T>()) >= MIN_BYTES {
+        let mut w: Vec<T> = Vec::with_capacity(items.len());
         let start = w.as_ptr() as usize;
-        let end = start + v.len() * size_of::<T>();
+        let end = start + w.capacity() * size_of::<T>();
         const PAGE: usize = 2 << 20;
         let (lo, hi) = (start.next_multiple_of(PAGE), end / PAGE * PAGE);
         if lo < hi {
-            // SAFETY: `lo..hi` lies inside `w`'s allocation (its capacity
-            // covers `start..end`), which this function owns; MADV_HUGEPAGE
+            // SAFETY: `lo..hi` lies inside `w`'s allocation (`start..end`
+            // is its capacity), which this function owns; MADV_HUGEPAGE
             // only advises the kernel how to back those pages and never
             // changes their contents or the mapping's validity. A failure
             // (an old kernel, THP disabled) is harmless and ignored.
@@ -45,10 +49,10 @@ pub fn huge<T: Copy>(v: Vec<T>) -> Vec<T> {
                 libc::madvise(lo as *mut libc::c_void, hi - lo, libc::MADV_HUGEPAGE);
             }
         }
-        w.extend_from_slice(&v);
+        w.extend(items);
         return w;
     }
-    v
+    items.collect()
 }
 
 #[cfg(test)]
@@ -61,8 +65,8 @@ mod tests {
             let v: Vec<u32> = (0..n as u32)
                 .map(|x| x.wrapping_mul(2_654_435_761))
                 .collect();
-            let w = huge(v.clone());
-            assert_eq!(w, v);
+            assert_eq!(huge(v.clone()), v);
+            assert_eq!(huge(v.iter().copied()), v);
         }
     }
 }

@@ -72,29 +72,25 @@ impl PlainBvh {
             }
         }
         let single = bvh.max_leaf_triangles == 1;
-        let nodes = bvh
-            .nodes
-            .iter()
-            .map(|n| {
-                let (left, right) = if !n.is_leaf() {
-                    (n.a, n.b)
-                } else if single && n.leaf_range().len() == 1 {
-                    (bvh.leaf_triangles[n.a as usize], LEAF_FLAG | 1)
-                } else {
-                    (n.a, n.b)
-                };
-                PlainNode {
-                    min: n.min,
-                    max: n.max,
-                    left,
-                    right,
-                }
-            })
-            .collect();
+        let nodes = bvh.nodes.iter().map(|n| {
+            let (left, right) = if !n.is_leaf() {
+                (n.a, n.b)
+            } else if single && n.leaf_range().len() == 1 {
+                (bvh.leaf_triangles[n.a as usize], LEAF_FLAG | 1)
+            } else {
+                (n.a, n.b)
+            };
+            PlainNode {
+                min: n.min,
+                max: n.max,
+                left,
+                right,
+            }
+        });
         Ok(Self {
             nodes: huge(nodes),
-            vertices: huge(mesh.vertices.clone()),
-            triangles: huge(mesh.triangles.clone()),
+            vertices: huge(mesh.vertices.iter().copied()),
+            triangles: huge(mesh.triangles.iter().copied()),
             leaf_ids: if single {
                 Vec::new()
             } else {

@@ -187,29 +187,23 @@ impl PlainBvh {
         // Fixed-size reads (no per-record allocation): the word `k` of a
         // record `c`.
         let w = |c: &[u8], k: usize| u32_at(c, 4 * k);
-        let nodes = b[ranges[0].clone()]
-            .chunks_exact(32)
-            .map(|c| PlainNode {
-                min: [w(c, 0), w(c, 1), w(c, 2)].map(f32::from_bits),
-                max: [w(c, 3), w(c, 4), w(c, 5)].map(f32::from_bits),
-                left: w(c, 6),
-                right: w(c, 7),
-            })
-            .collect();
+        let nodes = b[ranges[0].clone()].chunks_exact(32).map(|c| PlainNode {
+            min: [w(c, 0), w(c, 1), w(c, 2)].map(f32::from_bits),
+            max: [w(c, 3), w(c, 4), w(c, 5)].map(f32::from_bits),
+            left: w(c, 6),
+            right: w(c, 7),
+        });
         let vertices = b[ranges[1].clone()]
             .chunks_exact(12)
-            .map(|c| [w(c, 0), w(c, 1), w(c, 2)].map(f32::from_bits))
-            .collect();
+            .map(|c| [w(c, 0), w(c, 1), w(c, 2)].map(f32::from_bits));
         let triangles = b[ranges[2].clone()]
             .chunks_exact(12)
-            .map(|c| [w(c, 0), w(c, 1), w(c, 2)])
-            .collect();
-        let leaf_ids = words(&b[ranges[3].clone()]).collect();
+            .map(|c| [w(c, 0), w(c, 1), w(c, 2)]);
         Ok(PlainBvh {
             nodes: huge(nodes),
             vertices: huge(vertices),
             triangles: huge(triangles),
-            leaf_ids: huge(leaf_ids),
+            leaf_ids: huge(words(&b[ranges[3].clone()])),
             mass,
         })
     }
