@@ -239,8 +239,8 @@ mod x86 {
 
     /// The hit lanes of `hit` nearest first (`by_rank[r]` is the lane of
     /// rank `r`; equal distances in lane order), from their entry
-    /// distances `enter` (also stored as `t`). One or two lanes (most
-    /// nodes) are ordered by one comparison; with more, each hit lane's
+    /// distances `enter` (also stored as `t`). One or two lanes are
+    /// ordered by one comparison; with more, each hit lane's
     /// rank is counted with two eight-lane comparisons: the lanes hit
     /// nearer than it, or as near and before it. (A fixed eight rounds of
     /// that, one per lane hit or not, measured 5 % slower than this loop's
@@ -249,7 +249,7 @@ mod x86 {
     #[target_feature(enable = "avx2")]
     fn ranked(hit: u32, enter: __m256, t: &[f32; 8]) -> [u32; 8] {
         let mut by_rank = [0u32; 8];
-        // One or two lanes, the usual case, by one comparison.
+        // One or two lanes, by one comparison.
         let rest = hit & hit.wrapping_sub(1);
         if hit != 0 && rest & rest.wrapping_sub(1) == 0 {
             let a = hit.trailing_zeros();
@@ -350,16 +350,15 @@ mod x86 {
         // intrinsic below needs; each store writes an array of four, 16
         // writable bytes (unaligned).
         unsafe {
-            let ld = |r: usize| rows[r];
             let [kx, ky, kz] = w.k;
             let [ox, oy, oz] = w.org;
             let [sx, sy, sz] = w.shear;
             // Corner `c` relative to the origin, on the permuted axes.
             let rel = |c: usize| {
                 (
-                    _mm_sub_ps(ld(3 * c + kx), ox),
-                    _mm_sub_ps(ld(3 * c + ky), oy),
-                    _mm_sub_ps(ld(3 * c + kz), oz),
+                    _mm_sub_ps(rows[3 * c + kx], ox),
+                    _mm_sub_ps(rows[3 * c + ky], oy),
+                    _mm_sub_ps(rows[3 * c + kz], oz),
                 )
             };
             let (a, b, c) = (rel(0), rel(1), rel(2));
