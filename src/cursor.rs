@@ -118,8 +118,10 @@ pub trait NodeCursor: Sync {
     /// ([`closest_hit_generic`](crate::query::ray::closest_hit_generic)).
     /// A codec whose layout allows a faster traversal overrides it (CLBVH
     /// tests eight stored boxes per AVX2 instruction without building
-    /// batches); the override must give the same hit, bit for bit, and is
-    /// tested against the default.
+    /// batches; i-HCCMesh descends into the nearer of a decoded pair
+    /// without copying its 48-byte handles through a batch and the stack);
+    /// the override must give the same hit, bit for bit, and is tested
+    /// against the default.
     #[inline]
     fn closest_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> Option<RayHit>
     where

@@ -6,11 +6,12 @@ mod common;
 use cbvh::Mesh;
 use cbvh::build::{BuildOptions, CanonicalBvh, Layout, build};
 use cbvh::codec::hcc::template::{TEMPLATE_COUNT, TEMPLATES};
-use cbvh::codec::hcc::{HccBvh, HccError, MAX_LEAF_TRIANGLES};
+use cbvh::codec::hcc::{HccBvh, HccError, HccOptions, MAX_LEAF_TRIANGLES};
 use cbvh::codec::plain::PlainBvh;
 use cbvh::cursor::NodeCursor;
-use cbvh::geom::triangle_from_arrays;
+use cbvh::geom::{Ray, triangle_from_arrays};
 use common::*;
+use glam::Vec3A;
 use proptest::prelude::*;
 
 fn tree(mesh: &Mesh, leaf: usize, layout: Layout) -> CanonicalBvh {
@@ -429,7 +430,6 @@ fn an_inner_root_whose_template_id_exceeds_its_vertex_count_verifies() {
 #[test]
 fn quantized_vertices_stay_within_half_a_step() {
     use cbvh::codec::ByteSize;
-    use cbvh::codec::hcc::HccOptions;
     let mesh = cbvh::scene::generate(cbvh::scene::Kind::Turbine, 4000, 3, &mut |_, _| {}).unwrap();
     for (bits, leaf) in [(16, 1), (10, 8), (24, 4)] {
         let t = tree(&mesh, leaf, Layout::DepthFirst);
@@ -477,7 +477,6 @@ fn quantized_vertices_stay_within_half_a_step() {
 
 #[test]
 fn tree_order_numbers_triangles_as_stored_without_maps() {
-    use cbvh::codec::hcc::HccOptions;
     use cbvh::codec::{ByteSize, Codec, OpenOptions};
     let mesh = cbvh::scene::generate(cbvh::scene::Kind::Statue, 3000, 7, &mut |_, _| {}).unwrap();
     let n = mesh.triangles.len();
@@ -546,5 +545,73 @@ fn tree_order_numbers_triangles_as_stored_without_maps() {
         assert!(!back.has_triangle_ids());
         assert_eq!(back.decoded_mesh(), db);
         assert_eq!(back.to_bytes(), b.to_bytes());
+    }
+}
+
+/// i-HCCMesh's own ray traversal (module `trace`) against the generic
+/// traversal over its cursor, on the same tree: the same closest hit, bit
+/// for bit, and the same any hit, on random, centroid and camera rays with
+/// and without a limit; lossless and quantized vertices, one and four
+/// triangles a leaf, on a statue, a soup and flat, collinear and
+/// far-from-origin meshes.
+#[test]
+fn own_traversal_equals_the_generic_one_bit_for_bit() {
+    use cbvh::query;
+    let statue =
+        cbvh::scene::generate(cbvh::scene::Kind::Statue, 6000, 3, &mut |_, _| {}).expect("statue");
+    let meshes = [
+        statue,
+        soup(11, 2000, 3.0),
+        grid(30, false),
+        grid(20, true),
+        fan(700, 1e4),
+    ];
+    let bits = |h: Option<query::RayHit>| {
+        h.map(|h| (h.t.to_bits(), h.triangle, h.u.to_bits(), h.v.to_bits()))
+    };
+    for (m, mesh) in meshes.iter().enumerate() {
+        let (lo, hi) = mesh.bounds().unwrap();
+        let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
+        let size = (hi - lo).length().max(1e-3);
+        let eye = (lo + hi) * 0.5 + Vec3A::new(0.1, 0.2, 2.5) * size;
+        let mut rays = test_rays(mesh, m as u64, 600);
+        for y in 0..24 {
+            for x in 0..24 {
+                let p = lo + (hi - lo) * Vec3A::new(x as f32 / 23.0, y as f32 / 23.0, 0.5);
+                rays.push(Ray::new(eye, (p - eye).normalize_or(Vec3A::Z)));
+            }
+        }
+        for (leaf, options) in [
+            (1, HccOptions::default()),
+            (1, HccOptions::tree_order(Some(16))),
+            (4, HccOptions::default()),
+            (4, HccOptions::tree_order(Some(12))),
+        ] {
+            let t = tree(mesh, leaf, Layout::DepthFirst);
+            let h = HccBvh::encode_with(&t, mesh, &options).expect("encode");
+            let mut s = cbvh::TraversalStats::default();
+            let mut hits = 0;
+            for ray in &rays {
+                for t_max in [f32::INFINITY, 0.9 * size, 1e-3] {
+                    let own = query::closest_hit(&h, ray, t_max, &mut s);
+                    let generic = query::ray::closest_hit_generic(&h, ray, t_max, &mut s);
+                    assert_eq!(
+                        bits(own),
+                        bits(generic),
+                        "mesh {m}, leaf {leaf}, {options:?}, {ray:?}, t_max {t_max}"
+                    );
+                    hits += usize::from(own.is_some());
+                    assert_eq!(
+                        query::any_hit(&h, ray, t_max, &mut s),
+                        query::ray::any_hit_generic(&h, ray, t_max, &mut s),
+                        "mesh {m}, leaf {leaf}, {options:?}, {ray:?}, t_max {t_max}"
+                    );
+                }
+            }
+            // The collinear grid has no area: only rays along its line
+            // and through its points hit it.
+            let enough = if m == 3 { 1 } else { rays.len() / 4 };
+            assert!(hits >= enough, "mesh {m}: only {hits} hits");
+        }
     }
 }

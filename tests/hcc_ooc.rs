@@ -358,6 +358,7 @@ fn out_of_core_answers_as_pre_loaded() {
         let bytes = whole.file_bytes().to_vec();
         let decoded = whole.decoded_bytes();
         let expect = walk(&whole);
+        let rays = test_rays(&mesh, leaf as u64, 300);
         let path = std::env::temp_dir().join(format!(
             "cbvh-hcc-ooc-paged-{}-{leaf}.hccz",
             std::process::id()
@@ -379,6 +380,31 @@ fn out_of_core_answers_as_pre_loaded() {
                         "{o:?}, leaves of {leaf}, budget {budget}"
                     );
                 }
+                // Rays through the i-HCCMesh's own traversal over the
+                // paged trees: the generic traversal's hits, and the
+                // pre-loaded model's.
+                let bits = |h: Option<cbvh::query::RayHit>| {
+                    h.map(|h| (h.t.to_bits(), h.triangle, h.u.to_bits(), h.v.to_bits()))
+                };
+                let mut st = cbvh::TraversalStats::default();
+                let mut hits = 0;
+                for ray in &rays {
+                    let own = cbvh::query::closest_hit(&paged, ray, f32::INFINITY, &mut st);
+                    hits += usize::from(own.is_some());
+                    let generic =
+                        cbvh::query::ray::closest_hit_generic(&paged, ray, f32::INFINITY, &mut st);
+                    let pre = cbvh::query::closest_hit(&whole, ray, f32::INFINITY, &mut st);
+                    assert_eq!(bits(own), bits(generic), "{o:?}, leaves of {leaf}, {ray:?}");
+                    assert_eq!(bits(own), bits(pre), "{o:?}, leaves of {leaf}, {ray:?}");
+                    for t_max in [f32::INFINITY, 1e-3] {
+                        assert_eq!(
+                            cbvh::query::any_hit(&paged, ray, t_max, &mut st),
+                            cbvh::query::ray::any_hit_generic(&paged, ray, t_max, &mut st),
+                            "{o:?}, leaves of {leaf}, {ray:?}"
+                        );
+                    }
+                }
+                assert!(hits > rays.len() / 4, "only {hits} hits");
                 for id in (0..mesh.triangles.len() as u32).step_by(97) {
                     assert_eq!(paged.triangle(id), whole.triangle(id));
                     assert_eq!(paged.triangle_vertices(id), whole.triangle_vertices(id));

@@ -11,8 +11,9 @@ use super::node::{
 };
 use super::template::TEMPLATES;
 use super::vertices::{F32Verts, TreeVerts, Vertices};
-use crate::cursor::{Children, NodeCursor};
-use crate::geom::{Aabb, Triangle};
+use crate::cursor::{Children, NodeCursor, TraversalStats};
+use crate::geom::{Aabb, Ray, Triangle};
+use crate::query::ray::RayHit;
 
 const KIND_HIGH: u8 = 3;
 const KIND_EMPTY: u8 = 4;
@@ -502,6 +503,13 @@ impl HccBvh {
     }
 }
 
+impl super::trace::Pairs for HccBvh {
+    #[inline(always)]
+    fn pair(&self, node: &HccNode) -> [(HccNode, Aabb); 2] {
+        self.children_of(node)
+    }
+}
+
 impl NodeCursor for HccBvh {
     type Node = HccNode;
 
@@ -553,6 +561,18 @@ impl NodeCursor for HccBvh {
 
     fn triangle_count(&self) -> usize {
         self.triangle_count as usize
+    }
+
+    /// i-HCCMesh's own traversal ([`super::trace`]).
+    #[inline]
+    fn closest_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> Option<RayHit> {
+        super::trace::closest_hit(self, self, ray, t_max, stats)
+    }
+
+    /// i-HCCMesh's own traversal ([`super::trace`]).
+    #[inline]
+    fn any_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> bool {
+        super::trace::any_hit(self, self, ray, t_max, stats)
     }
 }
 

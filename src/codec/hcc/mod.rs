@@ -129,6 +129,7 @@ pub mod node;
 pub mod ooc;
 mod pair;
 pub mod template;
+mod trace;
 mod verify;
 mod vertices;
 

@@ -3,14 +3,17 @@
 
 use std::path::Path;
 
+use super::super::trace::{self, Pairs};
 use super::super::{HccBvh, HccNode};
+use super::paged::Paged;
 use super::{HccOocBvh, Mode, OocError, OocOptions, file};
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
 use crate::codec::{ByteSize, Codec, CodecKind, OpenOptions};
-use crate::cursor::{Children, NodeCursor};
-use crate::geom::{Aabb, Triangle};
+use crate::cursor::{Children, NodeCursor, TraversalStats};
+use crate::geom::{Aabb, Ray, Triangle};
 use crate::mesh::Mesh;
+use crate::query::ray::RayHit;
 
 impl NodeCursor for HccOocBvh {
     type Node = HccNode;
@@ -70,6 +73,32 @@ impl NodeCursor for HccOocBvh {
             Mode::Whole { hcc, .. } => hcc.triangle_count(),
             Mode::Paged(p) => p.triangle_count(),
         }
+    }
+
+    /// The i-HCCMesh's own traversal (module `hcc::trace`), over the
+    /// decoded mesh or the paged trees.
+    #[inline]
+    fn closest_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> Option<RayHit> {
+        match &self.mode {
+            Mode::Whole { hcc, .. } => hcc.closest_hit(ray, t_max, stats),
+            Mode::Paged(p) => trace::closest_hit(self, p, ray, t_max, stats),
+        }
+    }
+
+    /// As [`closest_hit`](Self::closest_hit).
+    #[inline]
+    fn any_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> bool {
+        match &self.mode {
+            Mode::Whole { hcc, .. } => hcc.any_hit(ray, t_max, stats),
+            Mode::Paged(p) => trace::any_hit(self, p, ray, t_max, stats),
+        }
+    }
+}
+
+impl Pairs for Paged {
+    #[inline(always)]
+    fn pair(&self, node: &HccNode) -> [(HccNode, Aabb); 2] {
+        self.children_of(node)
     }
 }
 
