@@ -483,3 +483,63 @@ fn cbvh_vs_trimesh_contacts_equal_trimesh_vs_trimesh() {
     assert!(total > 20);
     assert!(!c1.fallback_bvh_built() && !c2.fallback_bvh_built());
 }
+
+/// `--replay`: every shape's narrow phase timed again along the first
+/// run's recorded trajectory, step for step: a time for every step where
+/// that run had contact points, none where it made no call.
+#[test]
+fn a_replay_times_every_contact_step_of_the_first_runs_trajectory() {
+    use cbvh::sim::droptest::Replay;
+    let mut statue = mesh_of(Kind::Statue, 2000, 1);
+    let turbine = mesh_of(Kind::Turbine, 2000, 1);
+    droptest::place(&mut statue, &turbine, &Placement::default());
+    let scene = DropScene {
+        dropped: statue,
+        base: turbine,
+        steps: 40,
+        dt: 1.0 / 60.0,
+        contact_recycling: false,
+        codec_options: AnyOptions::default(),
+    };
+    let spec = |kind| RunSpec {
+        kind,
+        mode: ContactMode::default(),
+    };
+    let plain = droptest::run_replaying(
+        &scene,
+        spec(ShapeKind::Cbvh(CodecKind::Plain)),
+        Replay::Own,
+        &mut |_, _| {},
+    )
+    .unwrap();
+    assert_eq!(plain.trajectory.from, "plain");
+    let contact_steps: Vec<usize> = (0..scene.steps)
+        .filter(|&k| plain.contact_points_per_step[k] > 0)
+        .collect();
+    assert!(contact_steps.len() > 5, "{contact_steps:?}");
+    // Before the first contact the bodies' boxes are apart: no call.
+    let first = contact_steps[0];
+    assert!(first >= 3, "contact from step {first}");
+    for kind in [ShapeKind::Cbvh(CodecKind::Clbvh), ShapeKind::Parry] {
+        let r = droptest::run_replaying(
+            &scene,
+            spec(kind),
+            Replay::Along(&plain.trajectory),
+            &mut |_, _| {},
+        )
+        .unwrap();
+        assert_eq!(r.replay_along.as_deref(), Some("plain"));
+        let ms = &r.replay_narrow_phase_ms_per_step;
+        assert_eq!(ms.len(), scene.steps);
+        assert!(contact_steps.iter().all(|&k| ms[k] > 0.0), "{ms:?}");
+        assert!(ms[..3].iter().all(|&t| t == 0.0), "{ms:?}");
+        assert!(r.replay_narrow_phase_ms.unwrap().median > 0.0);
+    }
+    let off = droptest::run(
+        &scene,
+        spec(ShapeKind::Cbvh(CodecKind::Plain)),
+        &mut |_, _| {},
+    )
+    .unwrap();
+    assert!(off.replay_along.is_none() && off.replay_narrow_phase_ms_per_step.is_empty());
+}

@@ -9,7 +9,7 @@ use cbvh::codec::racbvh::RacOptions;
 use cbvh::codec::{AnyCodec, AnyOptions, CodecKind, OpenOptions};
 use cbvh::parry::ContactMode;
 use cbvh::scene::Kind;
-use cbvh::sim::droptest::{self, DropScene, Placement, RunReport, RunSpec, ShapeKind};
+use cbvh::sim::droptest::{self, DropScene, Placement, Replay, RunReport, RunSpec, ShapeKind};
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Options common to the sims.
@@ -73,6 +73,14 @@ pub struct SimArgs {
         value_name = "X,Z"
     )]
     pub offset: Offset,
+    /// After each run, time its narrow phase once more along the first
+    /// run's trajectory (the poses rapier asked the first run's narrow
+    /// phase for, step by step), so that every shape's replay median is
+    /// of the same contact work; a run's own median follows its own
+    /// trajectory, which parts from another's as soon as two shapes order
+    /// their contacts differently.
+    #[arg(long)]
+    pub replay: bool,
     /// Midpoint-subdivide the dropped mesh this many times (each ×4
     /// triangles, same shape): a scan at a higher resolution, e.g. the
     /// 75 k bunny with 3 gives 4.8 M triangles.
@@ -336,10 +344,20 @@ pub fn run_sim(
     let mut runs: Vec<RunReport> = Vec::new();
     for spec in specs {
         let pb = bar(&spec.name(), scene.steps as u64);
-        let r = droptest::run(&scene, spec, &mut |s, _| pb.set_position(s as u64))?;
+        let replay = match runs.first() {
+            _ if !args.replay => Replay::Off,
+            None => Replay::Own,
+            Some(first) => Replay::Along(&first.trajectory),
+        };
+        let r =
+            droptest::run_replaying(&scene, spec, replay, &mut |s, _| pb.set_position(s as u64))?;
         pb.finish_and_clear();
+        let replayed = match (&r.replay_along, r.replay_narrow_phase_ms) {
+            (Some(along), Some(t)) => format!(", along {along}'s trajectory {:.3} ms", t.median),
+            _ => String::new(),
+        };
         eprintln!(
-            "  {:<13} done: narrow phase median {:.3} ms, interference median {:.3} ms",
+            "  {:<13} done: narrow phase median {:.3} ms{replayed}, interference median {:.3} ms",
             r.shape, r.narrow_phase_ms.median, r.interference_ms.median
         );
         runs.push(r);
@@ -510,6 +528,25 @@ fn print_table(runs: &[RunReport], size: f32) {
          its weight × size; contacts without restitution only take energy out, so a rise is \
          energy the contacts put in"
     );
+    if let Some(along) = runs.first().and_then(|r| r.replay_along.clone()) {
+        println!();
+        println!(
+            "narrow phase replayed along {along}'s trajectory (the same poses for every shape), over its steps in contact:"
+        );
+        let first = runs[0].replay_narrow_phase_ms.unwrap_or_default().median;
+        for r in runs {
+            if let Some(t) = r.replay_narrow_phase_ms {
+                println!(
+                    "{:<19} median {:>8.3} ms  p95 {:>8.3} ms  max {:>8.3} ms  {:.3}× {along}'s",
+                    r.shape,
+                    t.median,
+                    t.p95,
+                    t.max,
+                    t.median / first.max(1e-9)
+                );
+            }
+        }
+    }
     if let Some(base) = runs.iter().find(|r| r.shape == "parry") {
         println!();
         for r in runs.iter().filter(|r| r.shape != "parry") {

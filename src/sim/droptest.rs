@@ -8,14 +8,15 @@ use std::str::FromStr;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-use parry3d::math::Vector;
-use parry3d::query::DefaultQueryDispatcher;
-use parry3d::shape::SharedShape;
+use parry3d::math::{Pose as PPose, Vector};
+use parry3d::query::{DefaultQueryDispatcher, PersistentQueryDispatcher};
+use parry3d::shape::{Shape, SharedShape};
+use rapier3d::geometry::{ContactData, ContactManifoldData};
 use rapier3d::prelude::{
     ColliderBuilder, ColliderHandle, NarrowPhase, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle,
 };
 
-use super::timed::Timed;
+use super::timed::{Timed, shape_address};
 use crate::build::BuildOptions;
 use crate::codec::{AnyOptions, CacheStats, CodecKind};
 use crate::mesh::Mesh;
@@ -235,6 +236,113 @@ pub fn reset_peak_rss() -> bool {
     std::fs::write("/proc/self/clear_refs", "5").is_ok()
 }
 
+/// Which trajectory a run's narrow phase is timed along once more after
+/// the run (see [`Trajectory`]).
+#[derive(Clone, Copy, Debug)]
+pub enum Replay<'a> {
+    /// None.
+    Off,
+    /// The run's own: the first run of a comparison, whose trajectory the
+    /// others follow.
+    Own,
+    /// Another run's.
+    Along(&'a Trajectory),
+}
+
+/// The narrow phase's work in one run, step by step: every
+/// `contact_manifolds` call rapier made (the relative pose, the prediction
+/// distance, which collider came first) and whether the step had contact
+/// points. Shapes timed along one trajectory ([`Replay`]) do the same
+/// contact work, pose for pose, whatever their own runs did: two lossless
+/// codecs that meet the same triangle pairs in different orders reduce
+/// them to slightly different patches, and their bodies then part ways
+/// within a few steps.
+#[derive(Clone, Debug, Default)]
+pub struct Trajectory {
+    /// The run it was recorded in (see [`RunSpec::name`]).
+    pub from: String,
+    steps: Vec<Vec<Call>>,
+    in_contact: Vec<bool>,
+}
+
+/// One recorded `contact_manifolds` call.
+#[derive(Clone, Copy, Debug)]
+struct Call {
+    pos12: PPose,
+    prediction: f32,
+    base_first: bool,
+}
+
+/// Times a trajectory is replayed; each step's best time is kept.
+pub const REPLAY_ROUNDS: usize = 5;
+
+/// The narrow phase of `base` and `dropped` through `dispatcher` along
+/// `t`, step by step, in milliseconds: the best of [`REPLAY_ROUNDS`]
+/// replays. A step takes well under a millisecond on the default scenes,
+/// where one timing is at the mercy of an interrupt or a busy neighbour
+/// on a shared machine; the best of five is the step's own cost.
+fn replay_along<D: PersistentQueryDispatcher<ContactManifoldData, ContactData>>(
+    dispatcher: &D,
+    t: &Trajectory,
+    base: &dyn Shape,
+    dropped: &dyn Shape,
+) -> Vec<f64> {
+    let mut best = vec![f64::INFINITY; t.steps.len()];
+    for _ in 0..REPLAY_ROUNDS {
+        for (b, ms) in best
+            .iter_mut()
+            .zip(replay_once(dispatcher, t, base, dropped))
+        {
+            *b = b.min(ms);
+        }
+    }
+    best
+}
+
+/// One replay of `t` (see [`replay_along`]): rapier's calls of each step
+/// made again, in order, with one manifold list and workspace carried from
+/// step to step as rapier carries them (both dropped at a step without
+/// calls, where rapier drops the pair). A step without calls takes 0 ms.
+fn replay_once<D: PersistentQueryDispatcher<ContactManifoldData, ContactData>>(
+    dispatcher: &D,
+    t: &Trajectory,
+    base: &dyn Shape,
+    dropped: &dyn Shape,
+) -> Vec<f64> {
+    let mut manifolds = Vec::new();
+    let mut workspace = None;
+    t.steps
+        .iter()
+        .map(|calls| {
+            if calls.is_empty() {
+                manifolds.clear();
+                workspace = None;
+                return 0.0;
+            }
+            let t0 = Instant::now();
+            for c in calls {
+                let (g1, g2) = if c.base_first {
+                    (base, dropped)
+                } else {
+                    (dropped, base)
+                };
+                // The run made these calls with this dispatcher's kind:
+                // none is unsupported, and an error would only end the
+                // call early.
+                let _ = dispatcher.contact_manifolds(
+                    &c.pos12,
+                    g1,
+                    g2,
+                    c.prediction,
+                    &mut manifolds,
+                    &mut workspace,
+                );
+            }
+            t0.elapsed().as_secs_f64() * 1e3
+        })
+        .collect()
+}
+
 /// What one run measured.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct RunReport {
@@ -300,6 +408,18 @@ pub struct RunReport {
     pub caches: Option<[CacheStats; 2]>,
     /// Whether parry's fallback `Bvh` was built for a cbvh shape.
     pub fallback_bvh_built: bool,
+    /// The run whose trajectory the narrow phase was timed along again
+    /// after the run ([`Replay`]; `None` without a replay).
+    pub replay_along: Option<String>,
+    /// The narrow phase timed along that trajectory, over its steps in
+    /// contact: the same contact work for every shape timed along it.
+    pub replay_narrow_phase_ms: Option<TimeStats>,
+    /// Narrow-phase milliseconds of every step of the replay (empty
+    /// without one).
+    pub replay_narrow_phase_ms_per_step: Vec<f64>,
+    /// This run's own trajectory, for other runs to be timed along.
+    #[serde(skip)]
+    pub trajectory: Trajectory,
     /// Narrow-phase milliseconds of every step.
     pub narrow_phase_ms_per_step: Vec<f64>,
     /// Triangle pairs in contact in every step.
@@ -413,6 +533,18 @@ pub fn run(
     spec: RunSpec,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<RunReport, String> {
+    run_replaying(scene, spec, Replay::Off, progress)
+}
+
+/// [`run`], then the narrow phase timed once more along the trajectory
+/// `replay` names, with the run's shapes and a fresh dispatcher of the
+/// run's kind (a decode cache as the run left it).
+pub fn run_replaying(
+    scene: &DropScene,
+    spec: RunSpec,
+    replay: Replay<'_>,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<RunReport, String> {
     let kind = spec.kind;
     let rss_reset = reset_peak_rss();
     let t0 = Instant::now();
@@ -430,17 +562,23 @@ pub fn run(
     let counters = ContactCounters::shared();
     let timed = match kind {
         ShapeKind::Parry => None,
-        _ => Some(Timed::new(
-            Dispatcher::new(spec.mode)
-                .with_counters(counters.clone())
-                .then_default(),
-        )),
+        _ => Some(
+            Timed::new(
+                Dispatcher::new(spec.mode)
+                    .with_counters(counters.clone())
+                    .then_default(),
+            )
+            .recording(),
+        ),
     };
-    let parry_timed = Timed::new(DefaultQueryDispatcher);
-    let counter = match &timed {
-        Some(t) => t.counter(),
-        None => parry_timed.counter(),
+    let parry_timed = Timed::new(DefaultQueryDispatcher).recording();
+    let (counter, call_log) = match &timed {
+        Some(t) => (t.counter(), t.calls()),
+        None => (parry_timed.counter(), parry_timed.calls()),
     };
+    let call_log = call_log.expect("both dispatchers record");
+    let base_address = shape_address(&*s_base.0);
+    let mut calls_per_step = Vec::with_capacity(scene.steps);
     let mut world = PhysicsWorld {
         gravity: Vector::new(0.0, -9.81, 0.0),
         ..Default::default()
@@ -490,6 +628,17 @@ pub fn run(
         world.step();
         step_ms.push(t.elapsed().as_secs_f64() * 1e3);
         narrow.push((counter.load(Ordering::Relaxed) - before) as f64 / 1e6);
+        let calls = std::mem::take(&mut *call_log.lock().unwrap_or_else(|e| e.into_inner()));
+        calls_per_step.push(
+            calls
+                .into_iter()
+                .map(|c| Call {
+                    pos12: c.pos12,
+                    prediction: c.prediction,
+                    base_first: c.first == base_address,
+                })
+                .collect::<Vec<_>>(),
+        );
         let [_, tri_contacts, _] = counters.take();
         let (mut manifolds, mut points) = (0, 0);
         for pair in world.narrow_phase.contact_pairs() {
@@ -548,6 +697,35 @@ pub fn run(
             .collect()
     };
     let narrow_in_contact = in_contact(&narrow);
+    let trajectory = Trajectory {
+        from: spec.name(),
+        steps: calls_per_step,
+        in_contact: points_per_step.iter().map(|&p| p > 0).collect(),
+    };
+    let along = match replay {
+        Replay::Off => None,
+        Replay::Own => Some(&trajectory),
+        Replay::Along(t) => Some(t),
+    };
+    let replay_ms = along.map(|t| {
+        let ms = match kind {
+            ShapeKind::Parry => replay_along(&DefaultQueryDispatcher, t, &*s_base, &*s_drop),
+            _ => replay_along(
+                &Dispatcher::new(spec.mode).then_default(),
+                t,
+                &*s_base,
+                &*s_drop,
+            ),
+        };
+        let stats = TimeStats::of(
+            &ms.iter()
+                .zip(&t.in_contact)
+                .filter(|(_, c)| **c)
+                .map(|(m, _)| *m)
+                .collect::<Vec<_>>(),
+        );
+        (t.from.clone(), stats, ms)
+    });
     let body = &world.bodies[drop_body];
     let tr = body.translation();
     let rot = body.rotation();
@@ -586,6 +764,10 @@ pub fn run(
             .and_then(|(a, b)| Some([a.codec().cache_stats()?, b.codec().cache_stats()?])),
         fallback_bvh_built: cbvh
             .is_some_and(|(a, b)| a.fallback_bvh_built() || b.fallback_bvh_built()),
+        replay_along: replay_ms.as_ref().map(|r| r.0.clone()),
+        replay_narrow_phase_ms: replay_ms.as_ref().map(|r| r.1),
+        replay_narrow_phase_ms_per_step: replay_ms.map(|r| r.2).unwrap_or_default(),
+        trajectory,
         narrow_phase_ms_per_step: narrow,
         contact_pairs_per_step: pairs_per_step,
         manifolds_per_step,

@@ -15,5 +15,5 @@
 pub mod droptest;
 pub mod timed;
 
-pub use droptest::{DropScene, Placement, RunReport, RunSpec, ShapeKind};
+pub use droptest::{DropScene, Placement, Replay, RunReport, RunSpec, ShapeKind, Trajectory};
 pub use timed::Timed;

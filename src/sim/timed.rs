@@ -2,8 +2,8 @@
 //! contact manifolds, i.e. the narrow phase's collision work, separately
 //! from rapier's solver. Used by the drop-test sims for every shape alike.
 
-use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use parry3d::math::{Pose as PPose, Real, Vector};
@@ -15,12 +15,31 @@ use parry3d::query::{
 };
 use parry3d::shape::Shape;
 
+/// One `contact_manifolds` call as [`Timed`] records it: the relative
+/// pose, the prediction distance and the address of the first shape's data
+/// (to tell which collider came first).
+#[derive(Clone, Copy, Debug)]
+pub struct RecordedCall {
+    /// The pose of the second shape relative to the first.
+    pub pos12: PPose,
+    /// The prediction distance.
+    pub prediction: Real,
+    /// The address of the first shape (`g1`), as a number.
+    pub first: usize,
+}
+
+/// The calls recorded so far, shared with the caller.
+pub type CallLog = Arc<Mutex<Vec<RecordedCall>>>;
+
 /// Wraps a dispatcher and adds the wall time of every `contact_manifolds`
-/// call to a shared nanosecond counter.
+/// call to a shared nanosecond counter; optionally records every call
+/// ([`Timed::recording`]), so that another shape can be timed on the same
+/// poses later.
 #[derive(Clone, Debug)]
 pub struct Timed<D> {
     inner: D,
     nanos: Arc<AtomicU64>,
+    calls: Option<CallLog>,
 }
 
 impl<D> Timed<D> {
@@ -29,12 +48,25 @@ impl<D> Timed<D> {
         Self {
             inner,
             nanos: Arc::new(AtomicU64::new(0)),
+            calls: None,
         }
+    }
+
+    /// Also records every `contact_manifolds` call into the log
+    /// [`Timed::calls`] returns (after the timed call, outside its time).
+    pub fn recording(mut self) -> Self {
+        self.calls = Some(CallLog::default());
+        self
     }
 
     /// The shared counter of nanoseconds spent in contact manifolds.
     pub fn counter(&self) -> Arc<AtomicU64> {
         self.nanos.clone()
+    }
+
+    /// The shared log of recorded calls (`None` unless recording).
+    pub fn calls(&self) -> Option<CallLog> {
+        self.calls.clone()
     }
 }
 
@@ -126,6 +158,14 @@ impl<M, C, D: PersistentQueryDispatcher<M, C>> PersistentQueryDispatcher<M, C> f
             .contact_manifolds(pos12, g1, g2, prediction, manifolds, workspace);
         self.nanos
             .fetch_add(t0.elapsed().as_nanos() as u64, Ordering::Relaxed);
+        if let Some(log) = &self.calls {
+            let call = RecordedCall {
+                pos12: *pos12,
+                prediction,
+                first: shape_address(g1),
+            };
+            log.lock().unwrap_or_else(|e| e.into_inner()).push(call);
+        }
         r
     }
 
@@ -149,4 +189,10 @@ impl<M, C, D: PersistentQueryDispatcher<M, C>> PersistentQueryDispatcher<M, C> f
             manifold,
         )
     }
+}
+
+/// The address of a shape's data, as a number: the same for every clone of
+/// the `Arc` a collider holds.
+pub fn shape_address(shape: &dyn Shape) -> usize {
+    shape as *const dyn Shape as *const () as usize
 }
