@@ -296,27 +296,37 @@ fn a_ball_comes_to_rest_on_a_cbvh_floor() {
     assert!(!shape.fallback_bvh_built());
 }
 
-#[test]
-fn drop_test_steps_without_the_fallback_and_agrees_with_parry() {
+/// A 2 000-triangle statue placed above a 2 000-triangle turbine, for
+/// `steps` steps at 60 Hz.
+fn small_drop_scene(steps: usize) -> DropScene {
     let mut statue = mesh_of(Kind::Statue, 2000, 1);
     let turbine = mesh_of(Kind::Turbine, 2000, 1);
     droptest::place(&mut statue, &turbine, &Placement::default());
-    let scene = DropScene {
+    DropScene {
         dropped: statue,
         base: turbine,
-        steps: 60,
+        steps,
         dt: 1.0 / 60.0,
         contact_recycling: false,
         codec_options: AnyOptions::default(),
-    };
-    let spec = |kind| RunSpec {
+    }
+}
+
+/// A run of `kind` in the default (patch) contact mode.
+fn patch_run(kind: ShapeKind) -> RunSpec {
+    RunSpec {
         kind,
         mode: ContactMode::default(),
-    };
-    let parry = droptest::run(&scene, spec(ShapeKind::Parry), &mut |_, _| {}).unwrap();
+    }
+}
+
+#[test]
+fn drop_test_steps_without_the_fallback_and_agrees_with_parry() {
+    let scene = small_drop_scene(60);
+    let parry = droptest::run(&scene, patch_run(ShapeKind::Parry), &mut |_, _| {}).unwrap();
     let plain = droptest::run(
         &scene,
-        spec(ShapeKind::Cbvh(CodecKind::Plain)),
+        patch_run(ShapeKind::Cbvh(CodecKind::Plain)),
         &mut |_, _| {},
     )
     .unwrap();
@@ -324,7 +334,7 @@ fn drop_test_steps_without_the_fallback_and_agrees_with_parry() {
     // way, on its own traversals.
     let rac = droptest::run(
         &scene,
-        spec(ShapeKind::CbvhTenthCache(CodecKind::Racbvh)),
+        patch_run(ShapeKind::CbvhTenthCache(CodecKind::Racbvh)),
         &mut |_, _| {},
     )
     .unwrap();
@@ -490,24 +500,10 @@ fn cbvh_vs_trimesh_contacts_equal_trimesh_vs_trimesh() {
 #[test]
 fn a_replay_times_every_contact_step_of_the_first_runs_trajectory() {
     use cbvh::sim::droptest::Replay;
-    let mut statue = mesh_of(Kind::Statue, 2000, 1);
-    let turbine = mesh_of(Kind::Turbine, 2000, 1);
-    droptest::place(&mut statue, &turbine, &Placement::default());
-    let scene = DropScene {
-        dropped: statue,
-        base: turbine,
-        steps: 40,
-        dt: 1.0 / 60.0,
-        contact_recycling: false,
-        codec_options: AnyOptions::default(),
-    };
-    let spec = |kind| RunSpec {
-        kind,
-        mode: ContactMode::default(),
-    };
+    let scene = small_drop_scene(40);
     let plain = droptest::run_replaying(
         &scene,
-        spec(ShapeKind::Cbvh(CodecKind::Plain)),
+        patch_run(ShapeKind::Cbvh(CodecKind::Plain)),
         Replay::Own,
         &mut |_, _| {},
     )
@@ -523,7 +519,7 @@ fn a_replay_times_every_contact_step_of_the_first_runs_trajectory() {
     for kind in [ShapeKind::Cbvh(CodecKind::Clbvh), ShapeKind::Parry] {
         let r = droptest::run_replaying(
             &scene,
-            spec(kind),
+            patch_run(kind),
             Replay::Along(&plain.trajectory),
             &mut |_, _| {},
         )
@@ -537,7 +533,7 @@ fn a_replay_times_every_contact_step_of_the_first_runs_trajectory() {
     }
     let off = droptest::run(
         &scene,
-        spec(ShapeKind::Cbvh(CodecKind::Plain)),
+        patch_run(ShapeKind::Cbvh(CodecKind::Plain)),
         &mut |_, _| {},
     )
     .unwrap();
