@@ -468,11 +468,6 @@ fn corruption_is_an_error_never_a_wrong_answer() {
     }
 }
 
-/// Bits of a hit, so that `-0.0` and `0.0` (or two NaNs) are told apart.
-fn hit_bits(h: Option<query::RayHit>) -> Option<(u32, u32, u32, u32)> {
-    h.map(|h| (h.t.to_bits(), h.triangle, h.u.to_bits(), h.v.to_bits()))
-}
-
 /// Rays at vertices and along edges, where the watertight test's edge
 /// functions come out exactly zero and it decides in double precision.
 fn vertex_rays(mesh: &Mesh, seed: u64, n: usize) -> Vec<cbvh::geom::Ray> {

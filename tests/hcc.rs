@@ -566,9 +566,6 @@ fn own_traversal_equals_the_generic_one_bit_for_bit() {
         grid(20, true),
         fan(700, 1e4),
     ];
-    let bits = |h: Option<query::RayHit>| {
-        h.map(|h| (h.t.to_bits(), h.triangle, h.u.to_bits(), h.v.to_bits()))
-    };
     for (m, mesh) in meshes.iter().enumerate() {
         let (lo, hi) = mesh.bounds().unwrap();
         let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
@@ -596,8 +593,8 @@ fn own_traversal_equals_the_generic_one_bit_for_bit() {
                     let own = query::closest_hit(&h, ray, t_max, &mut s);
                     let generic = query::ray::closest_hit_generic(&h, ray, t_max, &mut s);
                     assert_eq!(
-                        bits(own),
-                        bits(generic),
+                        hit_bits(own),
+                        hit_bits(generic),
                         "mesh {m}, leaf {leaf}, {options:?}, {ray:?}, t_max {t_max}"
                     );
                     hits += usize::from(own.is_some());

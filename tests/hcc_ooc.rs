@@ -383,9 +383,6 @@ fn out_of_core_answers_as_pre_loaded() {
                 // Rays through the i-HCCMesh's own traversal over the
                 // paged trees: the generic traversal's hits, and the
                 // pre-loaded model's.
-                let bits = |h: Option<cbvh::query::RayHit>| {
-                    h.map(|h| (h.t.to_bits(), h.triangle, h.u.to_bits(), h.v.to_bits()))
-                };
                 let mut st = cbvh::TraversalStats::default();
                 let mut hits = 0;
                 for ray in &rays {
@@ -394,8 +391,16 @@ fn out_of_core_answers_as_pre_loaded() {
                     let generic =
                         cbvh::query::ray::closest_hit_generic(&paged, ray, f32::INFINITY, &mut st);
                     let pre = cbvh::query::closest_hit(&whole, ray, f32::INFINITY, &mut st);
-                    assert_eq!(bits(own), bits(generic), "{o:?}, leaves of {leaf}, {ray:?}");
-                    assert_eq!(bits(own), bits(pre), "{o:?}, leaves of {leaf}, {ray:?}");
+                    assert_eq!(
+                        hit_bits(own),
+                        hit_bits(generic),
+                        "{o:?}, leaves of {leaf}, {ray:?}"
+                    );
+                    assert_eq!(
+                        hit_bits(own),
+                        hit_bits(pre),
+                        "{o:?}, leaves of {leaf}, {ray:?}"
+                    );
                     for t_max in [f32::INFINITY, 1e-3] {
                         assert_eq!(
                             cbvh::query::any_hit(&paged, ray, t_max, &mut st),

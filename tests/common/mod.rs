@@ -151,6 +151,12 @@ pub fn brute_closest(mesh: &Mesh, ray: &Ray, t_max: f32) -> Option<(f32, u32)> {
     best
 }
 
+/// Bits of a hit, so that two hits compare equal only when identical
+/// (`-0.0` and `0.0`, or two NaNs, are told apart).
+pub fn hit_bits(h: Option<query::RayHit>) -> Option<(u32, u32, u32, u32)> {
+    h.map(|h| (h.t.to_bits(), h.triangle, h.u.to_bits(), h.v.to_bits()))
+}
+
 /// Rays: random ones and ones aimed at triangle centroids.
 pub fn test_rays(mesh: &Mesh, seed: u64, n: usize) -> Vec<Ray> {
     let mut rng = Rng(seed);
