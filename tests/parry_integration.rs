@@ -505,6 +505,7 @@ fn a_replay_times_every_contact_step_of_the_first_runs_trajectory() {
         &scene,
         patch_run(ShapeKind::Cbvh(CodecKind::Plain)),
         Replay::Own,
+        droptest::REPLAY_ROUNDS,
         &mut |_, _| {},
     )
     .unwrap();
@@ -521,6 +522,7 @@ fn a_replay_times_every_contact_step_of_the_first_runs_trajectory() {
             &scene,
             patch_run(kind),
             Replay::Along(&plain.trajectory),
+            1,
             &mut |_, _| {},
         )
         .unwrap();

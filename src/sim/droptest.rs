@@ -273,22 +273,25 @@ struct Call {
     base_first: bool,
 }
 
-/// Times a trajectory is replayed; each step's best time is kept.
+/// Times a trajectory is replayed by default (the sims' `--replay-rounds`);
+/// each step's best time is kept.
 pub const REPLAY_ROUNDS: usize = 5;
 
 /// The narrow phase of `base` and `dropped` through `dispatcher` along
-/// `t`, step by step, in milliseconds: the best of [`REPLAY_ROUNDS`]
-/// replays. A step takes well under a millisecond on the default scenes,
-/// where one timing is at the mercy of an interrupt or a busy neighbour
-/// on a shared machine; the best of five is the step's own cost.
+/// `t`, step by step, in milliseconds: the best of `rounds` replays (at
+/// least one; [`REPLAY_ROUNDS`] by default). A step takes well under a
+/// millisecond on the default scenes, where one timing is at the mercy of
+/// an interrupt or a busy neighbour on a shared machine; the best of
+/// several is the step's own cost.
 fn replay_along<D: PersistentQueryDispatcher<ContactManifoldData, ContactData>>(
     dispatcher: &D,
     t: &Trajectory,
     base: &dyn Shape,
     dropped: &dyn Shape,
+    rounds: usize,
 ) -> Vec<f64> {
     let mut best = vec![f64::INFINITY; t.steps.len()];
-    for _ in 0..REPLAY_ROUNDS {
+    for _ in 0..rounds.max(1) {
         for (b, ms) in best
             .iter_mut()
             .zip(replay_once(dispatcher, t, base, dropped))
@@ -533,16 +536,18 @@ pub fn run(
     spec: RunSpec,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<RunReport, String> {
-    run_replaying(scene, spec, Replay::Off, progress)
+    run_replaying(scene, spec, Replay::Off, REPLAY_ROUNDS, progress)
 }
 
 /// [`run`], then the narrow phase timed once more along the trajectory
 /// `replay` names, with the run's shapes and a fresh dispatcher of the
-/// run's kind (a decode cache as the run left it).
+/// run's kind (a decode cache as the run left it): each step's best of
+/// `rounds` replays (see [`REPLAY_ROUNDS`]).
 pub fn run_replaying(
     scene: &DropScene,
     spec: RunSpec,
     replay: Replay<'_>,
+    rounds: usize,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<RunReport, String> {
     let kind = spec.kind;
@@ -709,12 +714,15 @@ pub fn run_replaying(
     };
     let replay_ms = along.map(|t| {
         let ms = match kind {
-            ShapeKind::Parry => replay_along(&DefaultQueryDispatcher, t, &*s_base, &*s_drop),
+            ShapeKind::Parry => {
+                replay_along(&DefaultQueryDispatcher, t, &*s_base, &*s_drop, rounds)
+            }
             _ => replay_along(
                 &Dispatcher::new(spec.mode).then_default(),
                 t,
                 &*s_base,
                 &*s_drop,
+                rounds,
             ),
         };
         let stats = TimeStats::of(
