@@ -5,7 +5,7 @@
 use std::collections::BTreeSet;
 use std::ops::ControlFlow;
 
-use cbvh::cursor::{Children, NodeCursor};
+use cbvh::cursor::{Children, MAX_CHILDREN, NodeCursor};
 use cbvh::geom::{
     Aabb, Pose, Ray, Triangle, closest_point_on_triangle, ray_triangle, triangle_from_arrays,
 };
@@ -477,7 +477,8 @@ fn box_distance(x: &Aabb, y: &Aabb) -> f32 {
 }
 
 /// The parallel two-tree traversal ([`query::bvtt_par`], from fronts of
-/// several sizes) reports brute force's pairs, and branch-and-bound over two
+/// several sizes, none overshooting its size by a whole expansion) reports
+/// brute force's pairs, and branch-and-bound over two
 /// trees ([`query::bvtt_min`], with the distance between the triangles'
 /// boxes as the cost) finds brute force's smallest cost, for several poses.
 pub fn check_bvtt_par_and_min<A: NodeCursor, B: NodeCursor>(
@@ -510,6 +511,14 @@ pub fn check_bvtt_par_and_min<A: NodeCursor, B: NodeCursor>(
             }
         }
         for target in [1, 8, 64] {
+            // The front stops expanding once it reaches the target: at
+            // most one expansion's children beyond it (a task each).
+            let front = query::bvtt_front(a, b, &pose, prediction, target, &mut stats);
+            assert!(
+                front.len() < target + MAX_CHILDREN,
+                "a front of {} pairs for a target of {target} at {pose:?}",
+                front.len()
+            );
             let (states, _) = query::bvtt_par(
                 a,
                 b,
