@@ -84,8 +84,13 @@ pub struct SimArgs {
     /// How many times `--replay` replays the trajectory; each step keeps
     /// its best time. More rounds take more out of a noisy machine's
     /// timings (each round costs about one run's narrow phase).
-    #[arg(long, default_value_t = droptest::REPLAY_ROUNDS, value_parser = rounds, requires = "replay")]
-    pub replay_rounds: usize,
+    #[arg(
+        long,
+        default_value_t = droptest::REPLAY_ROUNDS as u32,
+        value_parser = clap::value_parser!(u32).range(1..),
+        requires = "replay"
+    )]
+    pub replay_rounds: u32,
     /// Midpoint-subdivide the dropped mesh this many times (each ×4
     /// triangles, same shape): a scan at a higher resolution, e.g. the
     /// 75 k bunny with 3 gives 4.8 M triangles.
@@ -354,9 +359,13 @@ pub fn run_sim(
             None => Replay::Own,
             Some(first) => Replay::Along(&first.trajectory),
         };
-        let r = droptest::run_replaying(&scene, spec, replay, args.replay_rounds, &mut |s, _| {
-            pb.set_position(s as u64)
-        })?;
+        let r = droptest::run_replaying(
+            &scene,
+            spec,
+            replay,
+            args.replay_rounds as usize,
+            &mut |s, _| pb.set_position(s as u64),
+        )?;
         pb.finish_and_clear();
         let replayed = match (&r.replay_along, r.replay_narrow_phase_ms) {
             (Some(along), Some(t)) => format!(", along {along}'s trajectory {:.3} ms", t.median),
@@ -606,15 +615,5 @@ fn print_table(runs: &[RunReport], size: f32) {
             r.final_translation[1],
             r.final_translation[2]
         );
-    }
-}
-
-/// `--replay-rounds`: a whole number of at least 1.
-fn rounds(s: &str) -> Result<usize, String> {
-    match s.parse::<usize>() {
-        Ok(n) if n >= 1 => Ok(n),
-        _ => Err(format!(
-            "expected a whole number of rounds, at least 1, got {s:?}"
-        )),
     }
 }
