@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! cargo run --release --example hcc_ooc_stats -- [--gen statue --tris 1000000 --seed 1 | --mesh FILE]
-//!     [--vertex-bits 16] [--ids] [--rounds 5] [--json]
+//!     [--vertex-bits 16] [--ids] [--leaf-size 1] [--rounds 5] [--json]
 //! ```
 //!
 //! The i-HCCMesh is built in tree order (no id maps: the paper's form)
@@ -46,6 +46,10 @@ struct Args {
     /// Keep the input's triangle and vertex ids.
     #[arg(long)]
     ids: bool,
+    /// The most triangles a leaf of the canonical tree holds (above 1:
+    /// the i-HCCMesh's multi-triangle leaves).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
+    leaf_size: u16,
     /// Timing rounds.
     #[arg(long, default_value_t = 5)]
     rounds: usize,
@@ -73,6 +77,7 @@ fn main() {
     };
     let n = mesh.triangles.len();
     let opts = BuildOptions {
+        max_leaf_triangles: usize::from(a.leaf_size),
         layout: Layout::DepthFirst,
         ..Default::default()
     };
@@ -125,7 +130,7 @@ fn main() {
             .collect();
         let v = serde_json::json!({
             "triangles": n, "vertices": mesh.vertices.len(), "vertex_bits": a.vertex_bits,
-            "ids": a.ids, "threads": 1,
+            "ids": a.ids, "leaf_size": a.leaf_size, "threads": 1,
             "o_bytes_per_triangle": per(bytes.len() as f64),
             "o_bytes_per_triangle_by_part": o_parts,
             "i_bytes_per_triangle": per(i_total as f64),
@@ -143,9 +148,10 @@ fn main() {
         return;
     }
     println!(
-        "{n} triangles, {} vertices, {}-bit grid, {}",
+        "{n} triangles, {} vertices, {}-bit grid, at most {} triangle(s) a leaf, {}",
         mesh.vertices.len(),
         a.vertex_bits,
+        a.leaf_size,
         if a.ids {
             "input ids kept"
         } else {
