@@ -309,6 +309,7 @@ fn small_drop_scene(steps: usize) -> DropScene {
         dt: 1.0 / 60.0,
         contact_recycling: false,
         codec_options: AnyOptions::default(),
+        build_options: BuildOptions::default(),
     }
 }
 

@@ -295,3 +295,53 @@ fn sims_check_every_flag_before_the_first_run() {
         v["scene"]
     );
 }
+
+/// `--leaf-size N` builds every cbvh shape's tree with leaves of up to N
+/// triangles: plain's nodes shrink, hcc runs with multi-triangle leaves,
+/// and CLBVH's leaves grow to hold the tree's (its 4 would be an error
+/// under leaves of 5).
+#[test]
+fn leaf_size_sets_the_cbvh_shapes_leaves() {
+    let bin = env!("CARGO_BIN_EXE_lucy-on-turbine");
+    let json = temp("leaves.json");
+    let run_with = |leaf: &str| {
+        let (ok, stderr) = run(
+            bin,
+            &[
+                "--statue-tris",
+                "3000",
+                "--turbine-tris",
+                "3000",
+                "--steps",
+                "30",
+                "--shapes",
+                "plain,hcc,clbvh,clbvh-compact",
+                "--contacts",
+                "patches",
+                "--leaf-size",
+                leaf,
+                "--json",
+                json.to_str().unwrap(),
+            ],
+        );
+        let v = report(ok, &stderr, &json);
+        assert_eq!(v["scene"]["leaf_size"], leaf.parse::<u64>().unwrap());
+        let runs = v["runs"].as_array().unwrap().clone();
+        let bytes = |name: &str| {
+            let r = runs.iter().find(|r| r["shape"] == name).unwrap();
+            assert!(r["steps_in_contact"].as_u64().unwrap() > 0, "{r}");
+            r["bytes_per_triangle"].as_f64().unwrap()
+        };
+        (bytes("plain"), bytes("hcc"), bytes("clbvh"))
+    };
+    let one = run_with("1");
+    let five = run_with("5");
+    // Fewer nodes for plain (32 bytes each); hcc's nodes shrink too.
+    assert!(five.0 < 0.8 * one.0, "plain {} → {}", one.0, five.0);
+    assert!(five.1 < one.1, "hcc {} → {}", one.1, five.1);
+    assert!(five.2 > 0.0);
+    let (ok, stderr) = run(bin, &["--leaf-size", "0", "--steps", "1"]);
+    assert!(!ok);
+    assert!(stderr.contains("--leaf-size"), "{stderr}");
+    assert!(!stderr.contains("dropping"), "{stderr}");
+}

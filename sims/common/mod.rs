@@ -5,6 +5,8 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 
 use cbvh::Mesh;
+use cbvh::build::BuildOptions;
+use cbvh::codec::clbvh::{ClOptions, CompactOptions};
 use cbvh::codec::racbvh::RacOptions;
 use cbvh::codec::{AnyCodec, AnyOptions, CodecKind, OpenOptions};
 use cbvh::parry::ContactMode;
@@ -96,6 +98,13 @@ pub struct SimArgs {
     /// 75 k bunny with 3 gives 4.8 M triangles.
     #[arg(long, default_value_t = 0)]
     pub subdivide: u32,
+    /// The most triangles a leaf of the cbvh shapes' trees holds (1, the
+    /// papers' form, by default). Above 1, plain, racbvh and hcc leaves
+    /// hold up to that many (hcc's multi-triangle leaves); CLBVH collapses
+    /// its own leaves from that tree, of up to 4 triangles (compact: 6) or
+    /// this many if more.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
+    pub leaf_size: u16,
 }
 
 /// `--offset X,Z`: two comma-separated numbers, either may be negative.
@@ -327,6 +336,7 @@ pub fn run_sim(
     let (dlo, dhi) = dropped.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
     let (blo, bhi) = base.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
     let statue_size = (0..3).map(|k| dhi[k] - dlo[k]).fold(0.0f32, f32::max);
+    let leaf_size = usize::from(args.leaf_size);
     let scene = DropScene {
         dropped,
         base,
@@ -338,12 +348,26 @@ pub fn run_sim(
                 cluster_nodes: args.cluster_nodes,
                 ..Default::default()
             },
+            // As `cbvh build --leaf-size`: CLBVH's leaves hold at least the
+            // canonical tree's.
+            clbvh: ClOptions {
+                leaf_size: ClOptions::default().leaf_size.max(leaf_size),
+                ..Default::default()
+            },
+            clbvh_compact: CompactOptions {
+                leaf_size: CompactOptions::default().leaf_size.max(leaf_size),
+                ..Default::default()
+            },
+            ..Default::default()
+        },
+        build_options: BuildOptions {
+            max_leaf_triangles: leaf_size,
             ..Default::default()
         },
     };
     let threads = rayon::current_num_threads();
     eprintln!(
-        "{title}: dropping {} ({} triangles, scaled ×{scale:.4}) onto {} ({} triangles), {} steps at 60 Hz",
+        "{title}: dropping {} ({} triangles, scaled ×{scale:.4}) onto {} ({} triangles), {} steps at 60 Hz, cbvh trees of up to {leaf_size} triangle(s) a leaf",
         names.0,
         scene.dropped.triangle_count(),
         names.1,
@@ -390,6 +414,7 @@ pub fn run_sim(
         "steps": scene.steps,
         "dt": scene.dt,
         "racbvh_cluster_nodes": scene.codec_options.racbvh.cluster_nodes,
+        "leaf_size": leaf_size,
         "threads": threads,
         "machine": machine(),
     });

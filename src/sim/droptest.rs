@@ -94,6 +94,10 @@ pub struct DropScene {
     /// Each codec's options for the cbvh shapes (the runs set the cache
     /// budgets themselves).
     pub codec_options: AnyOptions,
+    /// How the cbvh shapes' canonical trees are built (one triangle a leaf
+    /// by default, as in the papers; CLBVH's leaves are its own, collapsed
+    /// from that tree up to its `leaf_size`).
+    pub build_options: BuildOptions,
 }
 
 /// How to place a dropped mesh over a base mesh.
@@ -489,7 +493,7 @@ fn make_shapes(kind: ShapeKind, scene: &DropScene) -> Result<Shapes, String> {
     // Caches start out holding the whole tree.
     let options = scene.codec_options.clone().with_cache_budget(usize::MAX);
     let make = |m: &Mesh| -> Result<CbvhShape, String> {
-        let shape = CbvhShape::build(m, &BuildOptions::default(), codec, &options)
+        let shape = CbvhShape::build(m, &scene.build_options, codec, &options)
             .map_err(|e| e.to_string())?;
         if !small_cache {
             return Ok(shape);
