@@ -94,9 +94,10 @@ pub struct DropScene {
     /// Each codec's options for the cbvh shapes (the runs set the cache
     /// budgets themselves).
     pub codec_options: AnyOptions,
-    /// How the cbvh shapes' canonical trees are built (one triangle a leaf
-    /// by default, as in the papers; CLBVH's leaves are its own, collapsed
-    /// from that tree up to its `leaf_size`).
+    /// How the cbvh shapes' canonical trees are built (the sims use one
+    /// triangle a leaf, as in the papers, unless `--leaf-size` says
+    /// otherwise; CLBVH's leaves are its own, collapsed from that tree up to
+    /// its `leaf_size`).
     pub build_options: BuildOptions,
 }
 
