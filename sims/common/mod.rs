@@ -350,14 +350,8 @@ pub fn run_sim(
             },
             // As `cbvh build --leaf-size`: CLBVH's leaves hold at least the
             // canonical tree's.
-            clbvh: ClOptions {
-                leaf_size: ClOptions::default().leaf_size.max(leaf_size),
-                ..Default::default()
-            },
-            clbvh_compact: CompactOptions {
-                leaf_size: CompactOptions::default().leaf_size.max(leaf_size),
-                ..Default::default()
-            },
+            clbvh: ClOptions::default().holding(leaf_size),
+            clbvh_compact: CompactOptions::default().holding(leaf_size),
             ..Default::default()
         },
         build_options: BuildOptions {

@@ -119,7 +119,7 @@ pub fn run(a: BuildArgs) -> CliResult {
                 Some(0) => None,
                 Some(b) => Some(b),
             };
-            let clbvh_m = |default: usize| a.clbvh_leaf_size.unwrap_or(default.max(a.leaf_size));
+            let clbvh_m = |held: usize| a.clbvh_leaf_size.unwrap_or(held);
             let options = AnyOptions {
                 racbvh: RacOptions {
                     cluster_nodes: a.cluster_nodes,
@@ -138,12 +138,12 @@ pub fn run(a: BuildArgs) -> CliResult {
                     ..Default::default()
                 },
                 clbvh: ClOptions {
-                    leaf_size: clbvh_m(ClOptions::default().leaf_size),
+                    leaf_size: clbvh_m(ClOptions::default().holding(a.leaf_size).leaf_size),
                     multi_leaf: !a.clbvh_uncompressed,
                     ..Default::default()
                 },
                 clbvh_compact: CompactOptions {
-                    leaf_size: clbvh_m(CompactOptions::default().leaf_size),
+                    leaf_size: clbvh_m(CompactOptions::default().holding(a.leaf_size).leaf_size),
                     multi_leaf: !a.clbvh_uncompressed,
                 },
                 ..Default::default()

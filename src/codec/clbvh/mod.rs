@@ -143,6 +143,16 @@ impl Default for ClOptions {
 pub const COMPACT_LEAF_SIZE: usize = 6;
 
 impl ClOptions {
+    /// These settings with `M` raised, if need be, to hold the leaves of a
+    /// canonical tree built with up to `leaf` triangles a leaf (the encoder
+    /// rejects a tree whose leaves exceed `M`).
+    pub fn holding(self, leaf: usize) -> Self {
+        Self {
+            leaf_size: self.leaf_size.max(leaf),
+            ..self
+        }
+    }
+
     /// The compact variant with its default leaf size
     /// ([`COMPACT_LEAF_SIZE`]) and otherwise default settings.
     pub fn compact() -> Self {
@@ -181,6 +191,16 @@ pub struct CompactOptions {
     pub leaf_size: usize,
     /// As [`ClOptions::multi_leaf`].
     pub multi_leaf: bool,
+}
+
+impl CompactOptions {
+    /// As [`ClOptions::holding`].
+    pub fn holding(self, leaf: usize) -> Self {
+        Self {
+            leaf_size: self.leaf_size.max(leaf),
+            ..self
+        }
+    }
 }
 
 impl Default for CompactOptions {
