@@ -550,6 +550,36 @@ mod x86 {
         false
     }
 
+    /// Cache lines asked for from the start of a multi-leaf node when a ray
+    /// enters it: the node's own (loaded anyway) and the next 15, a
+    /// kilobyte of its leaf block.
+    ///
+    /// The leaf block lies right behind the node, but which lanes' triangles
+    /// a ray needs is known only once the node's boxes have been tested, and
+    /// they may lie a kilobyte further on (a block of the default `M = 4`
+    /// holds up to 32 triangles, 40 bytes each). Read when needed, they
+    /// were a second cache miss after the node's, waited for in turn; asked
+    /// for with the node, they arrive while its boxes are tested. The count
+    /// cannot follow the block's size, which is read from the block itself.
+    /// Camera rays on the 1 M statue, one thread, in one process against no
+    /// prefetch: 6 lines +9 %, 12 lines +12 %, 16 to 24 lines +14 % (32:
+    /// +13 %); on the 10 M statue 12 to 20 lines +19 %. Prefetching a pushed
+    /// child's node, or the hit lanes' lines once the node is tested, gained
+    /// nothing.
+    const BLOCK_LINES: usize = 16;
+
+    /// Asks for the first [`BLOCK_LINES`] cache lines of the multi-leaf node
+    /// at word `at` (see there).
+    #[inline(always)]
+    fn prefetch_block(bvh: &ClBvh, at: usize) {
+        let p = bvh.arena.as_ptr().wrapping_add(at).cast::<i8>();
+        for line in 1..BLOCK_LINES {
+            // SAFETY: a prefetch is a hint that never faults, even past the
+            // arena's end; nothing is read through the pointer.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(64 * line)) };
+        }
+    }
+
     /// The closest hit (see the module docs).
     ///
     /// # Safety
@@ -590,6 +620,7 @@ mod x86 {
                     }
                 }
                 TAG_MULTI => {
+                    prefetch_block(bvh, at);
                     // SAFETY: this function runs with AVX2.
                     let (hit, enter, t, used, ends) = unsafe { test_multi(bvh, at, &f, best_t) };
                     stats.nodes_visited += u64::from(used.count_ones());
@@ -674,6 +705,7 @@ mod x86 {
                     }
                 }
                 TAG_MULTI => {
+                    prefetch_block(bvh, at);
                     // SAFETY: this function runs with AVX2.
                     let (hit, _, _, used, ends) = unsafe { test_multi(bvh, at, &f, t_max) };
                     stats.nodes_visited += u64::from(used.count_ones());
