@@ -73,6 +73,11 @@ fn check_parity_with_plain(cl: &ClBvh, plain: &PlainBvh, mesh: &Mesh, seed: u64)
     query::closest_hits(cl, &rays, f32::INFINITY, &mut a, &mut s);
     query::closest_hits(plain, &rays, f32::INFINITY, &mut b, &mut s);
     assert_eq!(a, b, "packet hits differ");
+    // CLBVH casts packets ray by ray; the generic packet walk over its
+    // batches must agree too.
+    let limits = [f32::INFINITY; 64];
+    query::packet::closest_hits_generic(cl, &rays, &limits, &mut a, &mut s);
+    assert_eq!(a, b, "generic packet hits differ");
     let mut rng = Rng(seed);
     let (lo, hi) = mesh.bounds().unwrap_or(([0.0; 3], [1.0; 3]));
     let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));

@@ -190,6 +190,11 @@ pub fn closest_hits<C: NodeCursor>(
 /// [`closest_hits`] with a distance limit per ray (`t_max[i]` for
 /// `rays[i]`), as a scene of several meshes needs.
 ///
+/// Runs the cursor's
+/// [`closest_hits_within`](NodeCursor::closest_hits_within): the generic
+/// packet traversal ([`closest_hits_generic`]) unless the codec has a
+/// faster way (CLBVH casts the rays one by one through its own traversal).
+///
 /// # Panics
 /// If `rays` has more than [`MAX_PACKET`] rays or `t_max` or `out` another
 /// length.
@@ -200,10 +205,34 @@ pub fn closest_hits_within<C: NodeCursor>(
     out: &mut [Option<RayHit>],
     stats: &mut TraversalStats,
 ) {
+    check_packet(rays, t_max, out);
+    c.closest_hits_within(rays, t_max, out, stats);
+}
+
+/// The lengths [`closest_hits_within`] accepts.
+fn check_packet(rays: &[Ray], t_max: &[f32], out: &[Option<RayHit>]) {
     let n = rays.len();
     assert!(n <= MAX_PACKET, "a packet holds at most {MAX_PACKET} rays");
     assert_eq!(out.len(), n, "one output slot per ray");
     assert_eq!(t_max.len(), n, "one distance limit per ray");
+}
+
+/// [`closest_hits_within`] through the generic packet traversal, one walk
+/// of the tree for the whole packet, whatever the codec: the default of
+/// [`NodeCursor::closest_hits_within`], and the reference a codec's own
+/// packet path is tested against.
+///
+/// # Panics
+/// As [`closest_hits_within`].
+pub fn closest_hits_generic<C: NodeCursor>(
+    c: &C,
+    rays: &[Ray],
+    t_max: &[f32],
+    out: &mut [Option<RayHit>],
+    stats: &mut TraversalStats,
+) {
+    check_packet(rays, t_max, out);
+    let n = rays.len();
     out.fill(None);
     if n == 0 {
         return;

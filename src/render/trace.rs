@@ -5,7 +5,10 @@
 //! counters are the same whatever the number of threads. Primary rays are
 //! cast in packets of 8×8 pixels ([`Scene::closest_packet`]), which give
 //! the hits of single rays exactly; node visits of a packet count once in
-//! the traversal counters, not once per ray.
+//! the traversal counters, not once per ray. (A codec whose own single-ray
+//! traversal is faster casts a packet's rays one by one, and counts them
+//! so: CLBVH, see
+//! [`NodeCursor::closest_hits_within`](crate::cursor::NodeCursor::closest_hits_within).)
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};

@@ -217,6 +217,17 @@ impl NodeCursor for ClBvhCompact {
     ) -> bool {
         self.0.any_hit(ray, t_max, stats)
     }
+
+    #[inline]
+    fn closest_hits_within(
+        &self,
+        rays: &[crate::geom::Ray],
+        t_max: &[f32],
+        out: &mut [Option<crate::query::RayHit>],
+        stats: &mut crate::cursor::TraversalStats,
+    ) {
+        self.0.closest_hits_within(rays, t_max, out, stats)
+    }
 }
 
 impl crate::codec::ByteSize for ClBvhCompact {

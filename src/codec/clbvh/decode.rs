@@ -234,6 +234,22 @@ impl NodeCursor for ClBvh {
     fn any_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> bool {
         super::trace::any_hit(self, ray, t_max, stats)
     }
+
+    /// Ray by ray through CLBVH's own traversal, which is faster than the
+    /// generic packet walk over this tree's batches (see
+    /// [`NodeCursor::closest_hits_within`]).
+    #[inline]
+    fn closest_hits_within(
+        &self,
+        rays: &[Ray],
+        t_max: &[f32],
+        out: &mut [Option<RayHit>],
+        stats: &mut TraversalStats,
+    ) {
+        for ((ray, &t), hit) in rays.iter().zip(t_max).zip(out) {
+            *hit = super::trace::closest_hit(self, ray, t, stats);
+        }
+    }
 }
 
 /// [`NodeCursor::children`] of a multi-leaf node whose used lanes are not
