@@ -18,6 +18,13 @@
 //! the primitive test passed in as a closure, and monomorphized per codec.
 //! Which child a query descends into first is the query's choice (nearest
 //! first for closest hits, lane order elsewhere), never the cursor's.
+//!
+//! Three ray queries have a default over the batches that a codec may
+//! replace with a traversal of its own when its layout allows a faster
+//! one, giving the same hits bit for bit: [`NodeCursor::closest_hit`],
+//! [`NodeCursor::any_hit`] and, for packets,
+//! [`NodeCursor::closest_hits_within`] (CLBVH and i-HCCMesh replace the
+//! first two; CLBVH casts a packet's rays one by one).
 
 mod batch;
 
