@@ -98,7 +98,7 @@ mod x86 {
         ChildRef, ENDS_WORDS, MULTI_WORDS, TAG_INNER, TAG_LEAF, TAG_MULTI, ref_index, ref_tag,
     };
     use super::super::{ClBvh, LeafKind};
-    use crate::cursor::TraversalStats;
+    use crate::cursor::{TraversalStats, prefetch};
     use crate::geom::{Ray, SLAB_EXIT_SCALE, TriHit, ray_triangle};
     use crate::query::Stack;
     use crate::query::ray::{RayHit, keep_closer};
@@ -591,21 +591,13 @@ mod x86 {
     /// with few isolated leaves, the same.
     const LEAF_LINES: usize = 4;
 
-    /// Asks for the first [`BLOCK_LINES`] cache lines of the multi-leaf node
-    /// at word `at` (see there).
-    #[inline(always)]
-    fn prefetch_block(bvh: &ClBvh, at: usize) {
-        prefetch_lines(bvh, at, BLOCK_LINES);
-    }
-
-    /// Asks for cache lines `1..lines` from arena word `at` on.
+    /// Asks for cache lines `1..lines` from arena word `at` on (line 0 is
+    /// read at once anyway).
     #[inline(always)]
     fn prefetch_lines(bvh: &ClBvh, at: usize, lines: usize) {
-        let p = bvh.arena.as_ptr().wrapping_add(at).cast::<i8>();
+        let p = bvh.arena.as_ptr().wrapping_add(at).cast::<u8>();
         for line in 1..lines {
-            // SAFETY: a prefetch is a hint that never faults, even past the
-            // arena's end; nothing is read through the pointer.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(64 * line)) };
+            prefetch(p.wrapping_add(64 * line));
         }
     }
 
@@ -649,7 +641,7 @@ mod x86 {
                     }
                 }
                 TAG_MULTI => {
-                    prefetch_block(bvh, at);
+                    prefetch_lines(bvh, at, BLOCK_LINES);
                     // SAFETY: this function runs with AVX2.
                     let (hit, enter, t, used, ends) = unsafe { test_multi(bvh, at, &f, best_t) };
                     stats.nodes_visited += u64::from(used.count_ones());
@@ -735,7 +727,7 @@ mod x86 {
                     }
                 }
                 TAG_MULTI => {
-                    prefetch_block(bvh, at);
+                    prefetch_lines(bvh, at, BLOCK_LINES);
                     // SAFETY: this function runs with AVX2.
                     let (hit, _, _, used, ends) = unsafe { test_multi(bvh, at, &f, t_max) };
                     stats.nodes_visited += u64::from(used.count_ones());
