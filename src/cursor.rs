@@ -98,6 +98,25 @@ pub trait NodeCursor: Sync {
     /// `node`. Must not be called on an inner node.
     fn for_each_triangle(&self, node: &Self::Node, f: impl FnMut(u32, &Triangle));
 
+    /// [`for_each_triangle`](Self::for_each_triangle) with a *key* in
+    /// place of each id: [`id_of_key`](Self::id_of_key) turns it into the
+    /// id. A codec whose ids cost a look-up of their own (i-HCCMesh maps
+    /// its storage order to the input's ids) passes its storage rank, so
+    /// that a traversal that tests many triangles and reports few (the
+    /// two-tree traversal) looks up only the ids it reports. The default
+    /// passes the id itself.
+    #[inline(always)]
+    fn for_each_triangle_keyed(&self, node: &Self::Node, f: impl FnMut(u32, &Triangle)) {
+        self.for_each_triangle(node, f)
+    }
+
+    /// The id of the triangle that [`for_each_triangle_keyed`](Self::for_each_triangle_keyed)
+    /// named `key`. The default is `key` itself.
+    #[inline(always)]
+    fn id_of_key(&self, key: u32) -> u32 {
+        key
+    }
+
     /// The corners of the triangle with the original mesh's id `id`.
     ///
     /// Defined for every `id < triangle_count()`, not only for ids a leaf
@@ -126,7 +145,7 @@ pub trait NodeCursor: Sync {
     /// A codec whose layout allows a faster traversal overrides it (CLBVH
     /// tests eight stored boxes per AVX2 instruction without building
     /// batches; i-HCCMesh descends into the nearer of a decoded pair
-    /// without copying its 48-byte handles through a batch and the stack);
+    /// without copying its 32-byte handles through a batch and the stack);
     /// the override must give the same hit, bit for bit, and is tested
     /// against the default.
     #[inline]

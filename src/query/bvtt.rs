@@ -93,7 +93,8 @@ impl<NA: Copy, NB: Copy> Scratch<NA, NB> {
 /// contact patches built from them) is unchanged.
 ///
 /// Always inlined: as a call, the node pair (160 bytes with HCCMesh's
-/// handles, which carry their box) went through a `memcpy` at every step;
+/// handles as they were, 48 bytes with their box; 128 bytes now) went
+/// through a `memcpy` at every step;
 /// inlined, HCCMesh's pair enumeration takes 28 % less time
 /// (`CURSOR_BENCH_ONLY=hcc:bvtt cargo run --release --example cursor_bench
 /// -- 200000 15`: 18.5 → 13.3 ms; plain unchanged at 7.3–7.7).
@@ -204,19 +205,23 @@ fn traverse<A: NodeCursor, B: NodeCursor>(
         let leaf_b = b.is_leaf(&nb);
         if leaf_a && leaf_b {
             b_tris.clear();
-            b.for_each_triangle(&nb, |j, tj| {
+            // Keys, not ids: most pairs tested here are not reported, and
+            // a codec may pay for each id (see `for_each_triangle_keyed`).
+            b.for_each_triangle_keyed(&nb, |j, tj| {
                 let moved = tj.map(|p| b_to_a.transform_point(p));
                 b_tris.push((j, *tj, moved, Aabb::of_triangle(&moved)));
             });
             let mut stop = false;
-            a.for_each_triangle(&na, |i, ti| {
+            a.for_each_triangle_keyed(&na, |i, ti| {
                 if stop {
                     return;
                 }
                 let bi = Aabb::of_triangle(ti).loosened(prediction);
                 for (j, tj, moved, bj) in &b_tris {
                     stats.primitive_tests += 1;
-                    if bi.intersects(bj) && f(i, ti, *j, tj, moved, prediction).is_break() {
+                    if bi.intersects(bj)
+                        && f(a.id_of_key(i), ti, b.id_of_key(*j), tj, moved, prediction).is_break()
+                    {
                         stop = true;
                         return;
                     }

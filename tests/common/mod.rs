@@ -98,6 +98,13 @@ pub fn check_structure<C: NodeCursor>(c: &C, mesh: &Mesh) {
     let mut stack = vec![(root, vec![root_box])];
     while let Some((n, boxes)) = stack.pop() {
         if c.is_leaf(&n) {
+            // The keyed walk names the same triangles, in the same order,
+            // and its keys turn into their ids.
+            let mut by_id = Vec::new();
+            c.for_each_triangle(&n, |id, t| by_id.push((id, *t)));
+            let mut by_key = Vec::new();
+            c.for_each_triangle_keyed(&n, |key, t| by_key.push((c.id_of_key(key), *t)));
+            assert_eq!(by_key, by_id, "keyed triangles differ from the leaf's");
             c.for_each_triangle(&n, |id, t| {
                 seen[id as usize] += 1;
                 assert_eq!(*t, tri(mesh, id), "triangle {id} differs from the mesh");

@@ -425,8 +425,20 @@ impl HccBvh {
         node: &HccNode,
         f: &mut impl FnMut(u32, &Triangle),
     ) {
+        self.ranked_triangles_with(v, node, &mut |rank, t| f(self.id_of(rank), t));
+    }
+
+    /// [`triangles_with`](Self::triangles_with) with storage ranks in
+    /// place of ids (the keys of [`NodeCursor::for_each_triangle_keyed`]).
+    #[inline(always)]
+    fn ranked_triangles_with<V: TreeVerts>(
+        &self,
+        v: &V,
+        node: &HccNode,
+        f: &mut impl FnMut(u32, &Triangle),
+    ) {
         self.leaf_triangles(node.tree, node.pos, |rank, [c0, c1, c2]| {
-            f(self.id_of(rank), &[v.point(c0), v.point(c1), v.point(c2)]);
+            f(rank, &[v.point(c0), v.point(c1), v.point(c2)]);
         });
     }
 }
@@ -551,6 +563,28 @@ impl NodeCursor for HccBvh {
             }
             Vertices::Packed(q) => self.triangles_with(&q.tree(node.tree as usize), node, &mut f),
         }
+    }
+
+    /// Keys are storage ranks: the id map is read only for the triangles
+    /// a traversal reports.
+    #[inline]
+    fn for_each_triangle_keyed(&self, node: &HccNode, mut f: impl FnMut(u32, &Triangle)) {
+        if node.kind == KIND_EMPTY {
+            return;
+        }
+        match &self.vertices {
+            Vertices::F32(all) => {
+                self.ranked_triangles_with(&self.f32_verts(all, node.tree), node, &mut f)
+            }
+            Vertices::Packed(q) => {
+                self.ranked_triangles_with(&q.tree(node.tree as usize), node, &mut f)
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn id_of_key(&self, key: u32) -> u32 {
+        self.id_of(key)
     }
 
     fn triangle(&self, id: u32) -> Triangle {

@@ -61,6 +61,23 @@ impl NodeCursor for HccOocBvh {
         }
     }
 
+    /// Keys are storage ranks, as the pre-loaded i-HCCMesh's.
+    #[inline]
+    fn for_each_triangle_keyed(&self, node: &HccNode, mut f: impl FnMut(u32, &Triangle)) {
+        match &self.mode {
+            Mode::Whole { hcc, .. } => hcc.for_each_triangle_keyed(node, f),
+            Mode::Paged(p) => p.for_each_ranked_triangle(node, &mut f),
+        }
+    }
+
+    #[inline(always)]
+    fn id_of_key(&self, key: u32) -> u32 {
+        match &self.mode {
+            Mode::Whole { hcc, .. } => hcc.id_of_key(key),
+            Mode::Paged(p) => p.id_of(key),
+        }
+    }
+
     fn triangle(&self, id: u32) -> Triangle {
         match &self.mode {
             Mode::Whole { hcc, .. } => hcc.triangle(id),

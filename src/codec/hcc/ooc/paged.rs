@@ -241,7 +241,7 @@ impl Paged {
 
     /// The triangle id of storage rank `rank`.
     #[inline]
-    fn id_of(&self, rank: u32) -> u32 {
+    pub(super) fn id_of(&self, rank: u32) -> u32 {
         match &self.ids {
             Some(m) => m.id(rank),
             None => rank,
@@ -251,6 +251,17 @@ impl Paged {
     /// Calls `f` with each triangle of the leaf `node`.
     #[inline]
     pub(super) fn for_each_triangle(&self, node: &HccNode, f: &mut impl FnMut(u32, &Triangle)) {
+        self.for_each_ranked_triangle(node, &mut |rank, tri| f(self.id_of(rank), tri));
+    }
+
+    /// Calls `f` with the storage rank and corners of each triangle of the
+    /// leaf `node`.
+    #[inline]
+    pub(super) fn for_each_ranked_triangle(
+        &self,
+        node: &HccNode,
+        f: &mut impl FnMut(u32, &Triangle),
+    ) {
         if node.is_empty() {
             return;
         }
@@ -261,7 +272,7 @@ impl Paged {
         self.with_page(t, |p| {
             use crate::cursor::NodeCursor;
             p.hcc
-                .for_each_triangle(&local, |id, tri| f(self.id_of(first + id), tri))
+                .for_each_triangle_keyed(&local, |rank, tri| f(first + rank, tri))
         })
     }
 
