@@ -409,6 +409,24 @@ fn files_round_trip_and_reject_damage() {
     }
 }
 
+/// A header that claims more low-level trees than a node handle numbers
+/// (its checksum rewritten) is refused by name.
+#[test]
+fn more_trees_than_handles_number_is_refused() {
+    use cbvh::codec::hcc::node::MAX_TREES;
+    use xxhash_rust::xxh3::xxh3_64;
+    let mesh = cbvh::scene::generate(cbvh::scene::Kind::Turbine, 1000, 5, &mut |_, _| {}).unwrap();
+    let (_, h) = hcc(&mesh, 1);
+    let mut bytes = h.to_bytes();
+    // The header's counts start at byte 16: high-level nodes, then trees;
+    // the header (384 bytes) ends with its checksum.
+    bytes[20..24].copy_from_slice(&(MAX_TREES as u32 + 1).to_le_bytes());
+    let sum = xxh3_64(&bytes[..376]);
+    bytes[376..384].copy_from_slice(&sum.to_le_bytes());
+    let e = HccBvh::from_bytes(&bytes).expect_err("a file with too many trees was accepted");
+    assert!(e.to_string().contains("low-level trees"), "{e}");
+}
+
 /// Regression: `verify` read an inner root's template id as vertex
 /// indices and rejected trees with fewer vertices than the id (40 copies
 /// of one triangle: 3 vertices, root template id above 3).

@@ -548,3 +548,29 @@ fn forged_high_level_boxes_and_tree_tables_give_errors_not_panics() {
         );
     }
 }
+
+/// A header that claims more low-level trees than a node handle numbers
+/// (its checksum rewritten) is refused when the file is opened, whole or
+/// out of core, before any tree is read.
+#[test]
+fn more_trees_than_handles_number_is_refused() {
+    use cbvh::codec::hcc::node::MAX_TREES;
+    let mesh = mesh_of(Kind::Statue, 2_000);
+    let bvh = tree(&mesh, Layout::DepthFirst, 1);
+    let (mut bytes, _) = HccBvh::encode_with(&bvh, &mesh, &OocOptions::default().hcc())
+        .unwrap()
+        .to_ooc()
+        .unwrap();
+    // The header's counts start at byte 16: high-level nodes, then trees.
+    bytes[20..24].copy_from_slice(&(MAX_TREES as u32 + 1).to_le_bytes());
+    reframe(&mut bytes);
+    for e in [
+        HccBvh::from_ooc(&bytes).err().map(|e| e.to_string()),
+        HccOocBvh::from_bytes_with_budget(&bytes, 1)
+            .err()
+            .map(|e| e.to_string()),
+    ] {
+        let e = e.expect("a file with too many trees was accepted");
+        assert!(e.contains("low-level trees"), "{e}");
+    }
+}

@@ -50,9 +50,9 @@ pub(crate) fn far_first<T>(kids: &mut [(f32, T)]) {
 /// A traversal stack that lives on the call stack for the usual depths and
 /// spills to the heap only for very deep trees: per-query allocations cost
 /// more than a ray's traversal on small trees. The inline slots are left
-/// uninitialised: filling 96 of a codec's handles (48 bytes each for hcc,
-/// with the parent box) cost every query a 4–6 KB copy before its first
-/// node.
+/// uninitialised: filling 96 of a codec's handles (48 bytes each for hcc
+/// then, with the parent box; 32 now) cost every query a 4–6 KB copy
+/// before its first node.
 pub(crate) struct Stack<T: Copy> {
     inline: [MaybeUninit<T>; 96],
     len: usize,

@@ -6,10 +6,10 @@ use glam::Vec3A;
 use super::HccBvh;
 use super::block::{Block, slot_bits};
 use super::node::{
-    HighNode, INDEX_MASK, Interconnection, TYPE_LEAF, TYPE_TEMPLATE_LEAF, TreeHeader, field,
-    mask_half, multi_leaf, node_type,
+    HighNode, INDEX_MASK, Interconnection, TREE_INDEX_BITS, TYPE_LEAF, TYPE_TEMPLATE_LEAF,
+    TreeHeader, field, mask_half, multi_leaf, node_type,
 };
-use super::template::TEMPLATES;
+use super::template::{MAX_TEMPLATE_NODES, TEMPLATE_COUNT, TEMPLATES};
 use super::vertices::{F32Verts, TreeVerts, Vertices};
 use crate::cursor::{Children, NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Ray, Triangle};
@@ -22,77 +22,98 @@ const KIND_EMPTY: u8 = 4;
 const KIND_UNOPENED: u8 = 5;
 
 /// A node handle: the node's decoded box (the parent box its children are
-/// decoded against), where it is, and which template it sits in.
+/// decoded against), where it is, and which template it sits in. 32 bytes,
+/// two 16-byte rows, so that the two-tree traversal's node pairs (two
+/// handles and two boxes) stay small.
 #[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
 pub struct HccNode {
-    bounds: Aabb,
-    /// Low-level tree (unused for high-level nodes).
-    tree: u32,
+    min: [f32; 3],
     /// Node word index, or high-level node index.
     pos: u32,
-    /// Node word index of the first node of the node's template.
-    block: u32,
-    /// The template's id.
-    template: u8,
-    /// Node type (`TYPE_*`), [`KIND_HIGH`] or [`KIND_EMPTY`].
-    kind: u8,
+    max: [f32; 3],
+    /// The low-level tree (unused for high-level nodes) above
+    /// [`META_TREE_SHIFT`], the node's offset from its template's first
+    /// word (4 bits), the template's id (5 bits) and the node type
+    /// (`TYPE_*`, [`KIND_HIGH`], [`KIND_EMPTY`], [`KIND_UNOPENED`]; 3 bits).
+    meta: u32,
 }
 
+/// Where the tree index starts in [`HccNode`]'s meta word.
+const META_TREE_SHIFT: u32 = 32 - TREE_INDEX_BITS;
+// The type, the template and the place in it below the tree index.
+const _: () = assert!(META_TREE_SHIFT >= 3 + 5 + 4);
+const _: () = assert!(MAX_TEMPLATE_NODES <= 16 && TEMPLATE_COUNT <= 32);
+const _: () = assert!(std::mem::size_of::<HccNode>() == 32);
+
 impl HccNode {
+    #[inline(always)]
+    fn new(bounds: Aabb, tree: u32, pos: u32, block: u32, template: u8, kind: u8) -> Self {
+        debug_assert!(tree >> TREE_INDEX_BITS == 0 && pos - block < 16);
+        Self {
+            min: bounds.min.to_array(),
+            pos,
+            max: bounds.max.to_array(),
+            meta: tree << META_TREE_SHIFT
+                | (pos - block) << 8
+                | u32::from(template) << 3
+                | u32::from(kind),
+        }
+    }
+
     /// The node's decoded box.
+    #[inline(always)]
     pub fn bounds(&self) -> Aabb {
-        self.bounds
+        Aabb::from_arrays(self.min, self.max)
     }
 
     /// The node word index (low-level nodes).
+    #[inline(always)]
     pub(super) fn pos(&self) -> u32 {
         self.pos
     }
 
     /// The node word index of the first node of the node's template.
+    #[inline(always)]
     pub(super) fn block(&self) -> u32 {
-        self.block
+        self.pos - (self.meta >> 8 & 15)
+    }
+
+    #[inline(always)]
+    fn kind(&self) -> u8 {
+        (self.meta & 7) as u8
+    }
+
+    #[inline(always)]
+    fn template_id(&self) -> u8 {
+        (self.meta >> 3 & 31) as u8
     }
 
     /// The low-level tree the node is in (low-level nodes).
     #[inline(always)]
     pub(super) fn tree(&self) -> u32 {
-        self.tree
+        self.meta >> META_TREE_SHIFT
     }
 
     /// The same node, said to be in low-level tree `tree` (a one-tree
     /// i-HCCMesh's node as a node of the whole model, and back).
     #[inline(always)]
     pub(super) fn in_tree(mut self, tree: u32) -> Self {
-        self.tree = tree;
+        self.meta = self.meta & ((1 << META_TREE_SHIFT) - 1) | tree << META_TREE_SHIFT;
         self
     }
 
     /// The high-level node `i` with box `bounds`.
     #[inline(always)]
     pub(super) fn high(i: u32, bounds: Aabb) -> Self {
-        Self {
-            bounds,
-            tree: 0,
-            pos: i,
-            block: 0,
-            template: 0,
-            kind: KIND_HIGH,
-        }
+        Self::new(bounds, 0, i, i, 0, KIND_HIGH)
     }
 
     /// The root of low-level tree `tree`, box `bounds`, before the tree is
     /// read (see [`HccNode::is_unopened`]).
     #[inline(always)]
     pub(super) fn unopened(tree: u32, bounds: Aabb) -> Self {
-        Self {
-            bounds,
-            tree,
-            pos: 0,
-            block: 0,
-            template: 0,
-            kind: KIND_UNOPENED,
-        }
+        Self::new(bounds, tree, 0, 0, 0, KIND_UNOPENED)
     }
 
     /// Whether this is a low-level tree's root not yet read: only the
@@ -100,45 +121,38 @@ impl HccNode {
     /// when it enters the tree's box, not when it meets the box.
     #[inline(always)]
     pub(super) fn is_unopened(&self) -> bool {
-        self.kind == KIND_UNOPENED
+        self.kind() == KIND_UNOPENED
     }
 
     /// The root of an empty model.
     pub(super) fn empty() -> Self {
-        Self {
-            bounds: Aabb::EMPTY,
-            tree: 0,
-            pos: 0,
-            block: 0,
-            template: 0,
-            kind: KIND_EMPTY,
-        }
+        Self::new(Aabb::EMPTY, 0, 0, 0, 0, KIND_EMPTY)
     }
 
     /// Whether this is a high-level node (a high-level leaf is the root of
     /// its low-level tree, not a high-level node).
     #[inline(always)]
     pub(super) fn is_high(&self) -> bool {
-        self.kind == KIND_HIGH
+        self.kind() == KIND_HIGH
     }
 
     /// Whether this is a leaf of a low-level tree, or an empty model's
     /// root.
     #[inline(always)]
     pub(super) fn is_leaf(&self) -> bool {
-        self.kind == TYPE_LEAF as u8 || self.kind == KIND_EMPTY
+        self.kind() == TYPE_LEAF as u8 || self.kind() == KIND_EMPTY
     }
 
     /// Whether this is an empty model's root.
     #[inline(always)]
     pub(super) fn is_empty(&self) -> bool {
-        self.kind == KIND_EMPTY
+        self.kind() == KIND_EMPTY
     }
 
     /// The template id of the template the node sits in (low-level nodes;
     /// `None` for high-level nodes).
     pub fn template(&self) -> Option<u8> {
-        (self.kind <= TYPE_LEAF as u8).then_some(self.template)
+        (self.kind() <= TYPE_LEAF as u8).then_some(self.template_id())
     }
 }
 
@@ -158,14 +172,14 @@ impl HccBvh {
         let start = self.headers[tree as usize].node_start;
         let w = self.nodes[start as usize];
         let ty = node_type(w);
-        HccNode {
+        HccNode::new(
             bounds,
             tree,
-            pos: start,
-            block: start,
-            template: if ty == TYPE_LEAF { 0 } else { (w & 31) as u8 },
-            kind: ty as u8,
-        }
+            start,
+            start,
+            if ty == TYPE_LEAF { 0 } else { (w & 31) as u8 },
+            ty as u8,
+        )
     }
 
     #[inline(always)]
@@ -270,11 +284,11 @@ impl HccBvh {
         l: u32,
         r: u32,
     ) -> (Aabb, Aabb, u32, u32) {
-        let tree = parent.tree;
+        let tree = parent.tree();
         let h = &self.headers[tree as usize];
         let (wl, wr) = (self.nodes[l as usize], self.nodes[r as usize]);
         let (tl, tr) = (node_type(wl), node_type(wr));
-        let d = parent.bounds;
+        let d = parent.bounds();
         let mask = mask_half(wl) | mask_half(wr) << 3;
         let (bl, br) = match (tl == TYPE_LEAF, tr == TYPE_LEAF) {
             (false, false) => {
@@ -437,7 +451,7 @@ impl HccBvh {
         node: &HccNode,
         f: &mut impl FnMut(u32, &Triangle),
     ) {
-        self.leaf_triangles(node.tree, node.pos, |rank, [c0, c1, c2]| {
+        self.leaf_triangles(node.tree(), node.pos(), |rank, [c0, c1, c2]| {
             f(rank, &[v.point(c0), v.point(c1), v.point(c2)]);
         });
     }
@@ -469,44 +483,40 @@ impl HccBvh {
     // would return the pair through memory.
     #[inline(always)]
     pub(super) fn children_of(&self, node: &HccNode) -> [(HccNode, Aabb); 2] {
-        if node.kind == KIND_HIGH {
-            let h = &self.high[node.pos as usize];
+        if node.kind() == KIND_HIGH {
+            let h = &self.high[node.pos() as usize];
             return [h.a, h.b].map(|c| {
                 let n = self.high_child(c);
-                (n, n.bounds)
+                (n, n.bounds())
             });
         }
-        let (l, r, bl, br, tl, tr) = if node.kind == TYPE_TEMPLATE_LEAF as u8 {
-            let h = &self.headers[node.tree as usize];
-            let w = self.nodes[node.pos as usize];
+        let (l, r, bl, br, tl, tr) = if node.kind() == TYPE_TEMPLATE_LEAF as u8 {
+            let h = &self.headers[node.tree() as usize];
+            let w = self.nodes[node.pos() as usize];
             let ic = Interconnection::unpack(self.ics[(h.ic_start + field(w, 2)) as usize]);
             let l = h.node_start + ic.left_start;
             let r = l + TEMPLATES[ic.left_template as usize].nodes as u32;
             (l, r, l, r, ic.left_template, ic.right_template)
         } else {
-            let t = &TEMPLATES[node.template as usize];
-            let l = node.block + t.children(node.pos - node.block);
+            let t = &TEMPLATES[node.template_id() as usize];
+            let l = node.block() + t.children(node.pos() - node.block());
             (
                 l,
                 l + 1,
-                node.block,
-                node.block,
-                node.template,
-                node.template,
+                node.block(),
+                node.block(),
+                node.template_id(),
+                node.template_id(),
             )
         };
         // One branch on the vertex format per expansion.
         let (bxl, bxr, kl, kr) = match &self.vertices {
-            Vertices::F32(all) => self.child_pair(&self.f32_verts(all, node.tree), node, l, r),
-            Vertices::Packed(q) => self.child_pair(&q.tree(node.tree as usize), node, l, r),
+            Vertices::F32(all) => self.child_pair(&self.f32_verts(all, node.tree()), node, l, r),
+            Vertices::Packed(q) => self.child_pair(&q.tree(node.tree() as usize), node, l, r),
         };
-        let child = |pos, block, template, kind: u32, bounds| HccNode {
-            bounds,
-            tree: node.tree,
-            pos,
-            block,
-            template,
-            kind: kind as u8,
+        let tree = node.tree();
+        let child = |pos, block, template, kind: u32, bounds| {
+            HccNode::new(bounds, tree, pos, block, template, kind as u8)
         };
         [
             (child(l, bl, tl, kl, bxl), bxl),
@@ -530,7 +540,7 @@ impl NodeCursor for HccBvh {
             return (HccNode::empty(), Aabb::EMPTY);
         }
         let n = self.high_child(0);
-        (n, n.bounds)
+        (n, n.bounds())
     }
 
     #[inline(always)]
@@ -554,14 +564,14 @@ impl NodeCursor for HccBvh {
 
     #[inline]
     fn for_each_triangle(&self, node: &HccNode, mut f: impl FnMut(u32, &Triangle)) {
-        if node.kind == KIND_EMPTY {
+        if node.kind() == KIND_EMPTY {
             return;
         }
         match &self.vertices {
             Vertices::F32(all) => {
-                self.triangles_with(&self.f32_verts(all, node.tree), node, &mut f)
+                self.triangles_with(&self.f32_verts(all, node.tree()), node, &mut f)
             }
-            Vertices::Packed(q) => self.triangles_with(&q.tree(node.tree as usize), node, &mut f),
+            Vertices::Packed(q) => self.triangles_with(&q.tree(node.tree() as usize), node, &mut f),
         }
     }
 
@@ -569,15 +579,15 @@ impl NodeCursor for HccBvh {
     /// a traversal reports.
     #[inline]
     fn for_each_triangle_keyed(&self, node: &HccNode, mut f: impl FnMut(u32, &Triangle)) {
-        if node.kind == KIND_EMPTY {
+        if node.kind() == KIND_EMPTY {
             return;
         }
         match &self.vertices {
             Vertices::F32(all) => {
-                self.ranked_triangles_with(&self.f32_verts(all, node.tree), node, &mut f)
+                self.ranked_triangles_with(&self.f32_verts(all, node.tree()), node, &mut f)
             }
             Vertices::Packed(q) => {
-                self.ranked_triangles_with(&q.tree(node.tree as usize), node, &mut f)
+                self.ranked_triangles_with(&q.tree(node.tree() as usize), node, &mut f)
             }
         }
     }

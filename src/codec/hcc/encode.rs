@@ -6,8 +6,8 @@ use super::error::HccError;
 use super::ids::{IdMap, VertexIds};
 use super::node::{
     HIGH_LEAF, HighNode, INDEX_BITS, Interconnection, MAX_TREE_INTERCONNECTIONS, MAX_TREE_NODES,
-    MULTI_COUNT_SHIFT, MULTI_OFFSET_BITS, TYPE_INNER, TYPE_LEAF, TYPE_SHIFT, TYPE_TEMPLATE_LEAF,
-    TreeHeader, pack_node,
+    MAX_TREES, MULTI_COUNT_SHIFT, MULTI_OFFSET_BITS, TYPE_INNER, TYPE_LEAF, TYPE_SHIFT,
+    TYPE_TEMPLATE_LEAF, TreeHeader, pack_node,
 };
 use super::pair::{Extents, code_pair, outer};
 use super::template::{MAX_HEIGHT, MAX_TEMPLATE_NODES, TEMPLATES, id_of_mask};
@@ -323,6 +323,12 @@ impl HccBvh {
             node: e.node,
             vertices: e.vertices,
         })?;
+        if dec.roots.len() > MAX_TREES {
+            return Err(HccError::TooManyTrees {
+                trees: dec.roots.len(),
+                limit: MAX_TREES,
+            });
+        }
         let mut is_root = vec![false; s.bvh.nodes.len()];
         for &r in &dec.roots {
             is_root[r as usize] = true;

@@ -47,6 +47,16 @@ pub enum HccError {
         /// Its inter-connections.
         interconnections: usize,
     },
+    /// More low-level trees than a node handle numbers.
+    #[error(
+        "the mesh decomposes into {trees} low-level trees, more than hcc numbers ({limit}, about 600 M triangles); build with larger leaves or split the mesh"
+    )]
+    TooManyTrees {
+        /// The low-level trees of the decomposition.
+        trees: usize,
+        /// The most supported.
+        limit: usize,
+    },
     /// Quantized vertices with a bit count the packing does not take.
     #[error(
         "{got} bits per quantized vertex coordinate: hcc takes 1 to {limit} (16 is the usual choice)"

@@ -41,7 +41,7 @@ use std::path::Path;
 use xxhash_rust::xxh3::xxh3_64;
 
 use super::ids::{IdMap, VertexIds};
-use super::node::{HighNode, TreeHeader};
+use super::node::{HighNode, MAX_TREES, TreeHeader};
 use super::vertices::{Quantized, VertexTree, Vertices};
 use super::{HccBvh, HccError, HccStats};
 use crate::codec::common::container;
@@ -215,6 +215,12 @@ impl HccBvh {
                 "a value is not finite or the mass is negative",
             )
         })?;
+        if n_trees as usize > MAX_TREES {
+            return Err(header_err(
+                "low-level trees",
+                format!("{n_trees} is more than {MAX_TREES}"),
+            ));
+        }
         let (trees, verts) = (u64::from(n_trees), u64::from(n_verts));
         // Each section's length: exact, or `None` for a variable one.
         let fixed = |on: bool, n: u64| Some(if on { n } else { 0 });

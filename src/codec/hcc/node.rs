@@ -40,6 +40,12 @@ pub const INDEX_MASK: u32 = (1 << INDEX_BITS) - 1;
 pub const POSITION_BITS: u32 = 13;
 /// Nodes a low-level tree may hold.
 pub const MAX_TREE_NODES: usize = 1 << POSITION_BITS;
+/// Bits of a low-level tree's index in a node handle (the rest of its
+/// word holds the node's type, template and place in the template).
+pub const TREE_INDEX_BITS: u32 = 20;
+/// Low-level trees a model may hold: about 600 M triangles at the
+/// 500–700 triangles a tree the decomposition makes.
+pub const MAX_TREES: usize = 1 << TREE_INDEX_BITS;
 /// Inter-connections a low-level tree may hold (a 9-bit index).
 pub const MAX_TREE_INTERCONNECTIONS: usize = 1 << INDEX_BITS;
 

@@ -3,6 +3,7 @@
 
 use xxhash_rust::xxh3::xxh3_64;
 
+use super::super::node::MAX_TREES;
 use super::OocError;
 use crate::codec::common::le::{f32x3_at, u32_at};
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps, container};
@@ -163,6 +164,12 @@ pub fn parse_with(b: &[u8], streams: bool) -> Result<(Header, [&[u8]; SECTIONS])
         grid: [f32x3_at(b, 52), f32x3_at(b, 64), f32x3_at(b, 76)],
         mass,
     };
+    if h.trees as usize > MAX_TREES {
+        return Err(header_err(
+            "low-level trees",
+            format!("{} is more than {MAX_TREES}", h.trees),
+        ));
+    }
     let mut at = HEADER_LEN as u64;
     let mut out: [&[u8]; SECTIONS] = [&[]; SECTIONS];
     for (k, slot) in out.iter_mut().enumerate() {
