@@ -12,7 +12,11 @@
 //!   ([`ChildBoxes`]), so that a traversal tests all of them at once (binary
 //!   trees give two, 8-wide trees up to [`MAX_CHILDREN`]);
 //! - a leaf's triangles, as stable triangle ids (the original mesh's ids)
-//!   with their corners.
+//!   with their corners; or, for a traversal that tests many triangles and
+//!   reports few, as *keys* that the cursor turns into ids on request
+//!   ([`NodeCursor::for_each_triangle_keyed`], [`NodeCursor::id_of_key`]),
+//!   so that a codec whose ids cost a look-up (i-HCCMesh's rank-to-id map)
+//!   pays only for the ids reported.
 //!
 //! The queries in [`crate::query`] are written once over this trait, with
 //! the primitive test passed in as a closure, and monomorphized per codec.

@@ -5,7 +5,8 @@
 //! writes every expanded pair into a batch, copies the hit children into a
 //! list, sorts it and pushes both onto the stack, to pop the nearer one
 //! right away. An i-HCCMesh node handle carries its decoded box (48
-//! bytes), so those copies cost more here than the box tests. This
+//! bytes when this was written, 32 now), so those copies cost more here
+//! than the box tests. This
 //! traversal decodes a pair ([`HccBvh::children_of`]), tests both boxes
 //! and descends into the nearer child directly; only the farther one goes
 //! onto the stack. The box test ([`Ray::intersect_aabb`]), the culling
