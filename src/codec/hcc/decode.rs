@@ -431,19 +431,9 @@ impl HccBvh {
 }
 
 impl HccBvh {
-    /// [`NodeCursor::for_each_triangle`] with the tree's vertices `v`.
-    #[inline(always)]
-    fn triangles_with<V: TreeVerts>(
-        &self,
-        v: &V,
-        node: &HccNode,
-        f: &mut impl FnMut(u32, &Triangle),
-    ) {
-        self.ranked_triangles_with(v, node, &mut |rank, t| f(self.id_of(rank), t));
-    }
-
-    /// [`triangles_with`](Self::triangles_with) with storage ranks in
-    /// place of ids (the keys of [`NodeCursor::for_each_triangle_keyed`]).
+    /// The storage rank and corners of each triangle of the leaf `node`,
+    /// over the tree's vertices `v` (the keys of
+    /// [`NodeCursor::for_each_triangle_keyed`]).
     #[inline(always)]
     fn ranked_triangles_with<V: TreeVerts>(
         &self,
@@ -564,15 +554,7 @@ impl NodeCursor for HccBvh {
 
     #[inline]
     fn for_each_triangle(&self, node: &HccNode, mut f: impl FnMut(u32, &Triangle)) {
-        if node.kind() == KIND_EMPTY {
-            return;
-        }
-        match &self.vertices {
-            Vertices::F32(all) => {
-                self.triangles_with(&self.f32_verts(all, node.tree()), node, &mut f)
-            }
-            Vertices::Packed(q) => self.triangles_with(&q.tree(node.tree() as usize), node, &mut f),
-        }
+        self.for_each_triangle_keyed(node, |rank, t| f(self.id_of(rank), t));
     }
 
     /// Keys are storage ranks: the id map is read only for the triangles
