@@ -180,7 +180,7 @@ impl DictDecoder {
             });
         }
         let m = b.saturating_sub(1);
-        let mant = if total + m <= 57 {
+        let mant = if total + m <= 56 {
             r.skip(total + m);
             (w >> total) & ((1u64 << m) - 1)
         } else {

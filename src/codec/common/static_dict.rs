@@ -278,8 +278,26 @@ impl StaticDict {
             })
             .collect();
         table.insert(self.esc as usize, Entry { base: 0, extra: 0 });
+        // Every code of at most FAST_BITS bits, under every value of the
+        // bits that follow it (codes are read least-significant bit
+        // first: 0^n 1, then the n + k low bits of rank + 2^k).
+        let mut fast = vec![0u64; 1 << FAST_BITS];
+        for (rank, e) in table.iter().enumerate() {
+            let x = rank as u64 + (1 << self.k);
+            let n = 63 - x.leading_zeros() - self.k;
+            let len = 2 * n + 1 + self.k;
+            if rank as u32 == self.esc || len > FAST_BITS {
+                continue;
+            }
+            let code = 1 << n | (x & ((1 << (n + self.k)) - 1)) << (n + 1);
+            let entry = u64::from(e.base) << 32 | u64::from(len) << 8 | u64::from(e.extra);
+            for fill in 0..1u64 << (FAST_BITS - len) {
+                fast[(code | fill << len) as usize] = entry;
+            }
+        }
         StaticDecoder {
             whole: table.iter().all(|e| e.extra == 0),
+            fast,
             table,
             esc: self.esc,
             k: self.k,
@@ -289,6 +307,9 @@ impl StaticDict {
         }
     }
 }
+
+/// Bits of the stream [`StaticDecoder`] looks codes up by.
+const FAST_BITS: u32 = 8;
 
 /// Codes values with a [`StaticDict`].
 pub struct StaticEncoder {
@@ -328,6 +349,11 @@ struct Entry {
 pub struct StaticDecoder {
     /// Values by rank (the escape's slot unused).
     table: Vec<Entry>,
+    /// By the next [`FAST_BITS`] bits of the stream, when they start a
+    /// code of a rank other than the escape's: its value's base (bits
+    /// 32–63), the code's length (bits 8–15, never 0) and the extra bits'
+    /// count (bits 0–7); 0 otherwise (the code is read bit by bit).
+    fast: Vec<u64>,
     esc: u32,
     k: u32,
     raw_bits: u32,
@@ -343,9 +369,18 @@ impl StaticDecoder {
     /// Reads one value.
     #[inline(always)]
     pub fn get(&self, r: &mut BitReader<'_>) -> Result<u32, FormatError> {
+        let w = r.peek();
+        // Short codes (most of them: ranks are sorted by frequency) by one
+        // look-up; the extra bits, at most 32, fit the peek's 56 bits
+        // after them.
+        let e = self.fast[(w & ((1 << FAST_BITS) - 1)) as usize];
+        if e != 0 {
+            let (len, extra) = ((e >> 8) as u8 as u32, e as u8 as u32);
+            r.skip(len + extra);
+            return Ok((e >> 32) as u32 | ((w >> len) & ((1u64 << extra) - 1)) as u32);
+        }
         // The rank's Exp-Golomb code and the extra bits after it from one
         // look at the stream when they fit in it (as `get_golomb`).
-        let w = r.peek();
         let (rank, total) = golomb_at(w, self.k)?;
         if rank == self.esc {
             r.skip(total);
@@ -360,8 +395,8 @@ impl StaticDecoder {
             r.skip(total);
             return Ok(e.base);
         }
-        // `peek` gives at least 57 bits.
-        if total + e.extra <= 57 {
+        // `peek` gives at least 56 bits.
+        if total + e.extra <= 56 {
             r.skip(total + e.extra);
             return Ok(e.base | ((w >> total) & ((1u64 << e.extra) - 1)) as u32);
         }
