@@ -9,7 +9,7 @@ use super::node::{
     MAX_TREES, MULTI_COUNT_SHIFT, MULTI_OFFSET_BITS, TYPE_INNER, TYPE_LEAF, TYPE_SHIFT,
     TYPE_TEMPLATE_LEAF, TreeHeader, pack_node,
 };
-use super::pair::{Extents, code_pair, outer};
+use super::pair::{Extents, code_pair, outer, to_lanes};
 use super::template::{MAX_HEIGHT, MAX_TEMPLATE_NODES, TEMPLATES, id_of_mask};
 use super::vertices::{MAX_VERTEX_BITS, Quantized, Vertices};
 use super::{HccOptions, HccStats, MAX_LEAF_TRIANGLES};
@@ -489,7 +489,14 @@ impl HccBvh {
     fn encode_boxes(&mut self, s: &Scratch<'_>, t: &mut TreeBuild, root: u32) {
         let (bvh, tight) = (s.bvh, &s.tight);
         let local = |v: u32| s.local_of[v as usize];
-        let mut stack = vec![(root, tight.boxes[root as usize])];
+        let lanes = |i: u32| {
+            let v = tight.verts[i as usize];
+            (
+                to_lanes(&tight.boxes[i as usize]),
+                [v[0], v[1], v[2], v[3], v[4], v[5], 0, 0],
+            )
+        };
+        let mut stack = vec![(root, lanes(root).0)];
         while let Some((p, d)) = stack.pop() {
             let node = &bvh.nodes[p as usize];
             if node.is_leaf() {
@@ -501,11 +508,8 @@ impl HccBvh {
                 t.types[pl as usize] == TYPE_LEAF,
                 t.types[pr as usize] == TYPE_LEAF,
             );
-            let pc = code_pair(
-                &d,
-                (&tight.boxes[l as usize], &tight.verts[l as usize], ll),
-                (&tight.boxes[r as usize], &tight.verts[r as usize], rl),
-            );
+            let ((bl, vl), (br, vr)) = (lanes(l), lanes(r));
+            let pc = code_pair(&d, (&bl, &vl, ll), (&br, &vr, rl));
             for (side, pos) in [pl, pr].into_iter().enumerate() {
                 for j in 0..pc.used[side] {
                     t.set_field(pos, j, local(pc.fields[side][j]));

@@ -4,7 +4,7 @@
 use super::super::MAX_LEAF_TRIANGLES;
 use super::super::ids::{IdMap, VertexIds};
 use super::super::node::{HIGH_LEAF, HighNode, MAX_TREE_TRIANGLES, MAX_TREE_VERTICES, TreeHeader};
-use super::super::pair::{Extents, outer};
+use super::super::pair::{Extents, Lanes, outer, to_lanes};
 use super::super::vertices::{MAX_VERTEX_BITS, Quantized, Vertices};
 use super::super::{HccBvh, HccStats};
 use super::OocError;
@@ -14,8 +14,8 @@ use super::file::{
     SEC_VIDS, SECTIONS,
 };
 use super::model::{
-    Adjacency, CONTEXTS, CTX_CORNER, CTX_LEAF, CTX_TEMPLATE, CornerCache, Layout, MAX_CORNER_SYM,
-    MAX_TEMPLATE_SYM, predict,
+    Adjacency, CONTEXTS, CTX_CORNER, CTX_LEAF, CTX_TEMPLATE, Layout, MAX_CORNER_SYM,
+    MAX_TEMPLATE_SYM, RankCache, SYM_NEW, centre, plan, predicted,
 };
 use super::rebuild::Rebuild;
 use crate::codec::common::FormatError;
@@ -26,15 +26,20 @@ use crate::codec::common::static_dict::{StaticDecoder, StaticDict};
 #[derive(Default)]
 struct Scratch {
     lay: Layout,
-    cache: CornerCache,
     adj: Adjacency,
     /// Per leaf (in `lay.leaves`), its first triangle in `tris` and its
     /// count; empty without multi-triangle leaves (leaf `i` holds triangle
     /// `i`).
     spans: Vec<(u32, u32)>,
     tris: Vec<[u32; 3]>,
+    /// Per vertex, its first triangle (times 4) and corner slot.
+    first_use: Vec<u32>,
+    /// Per vertex, its residuals' contexts and prediction (see `plan`).
+    plans: Vec<(usize, [u32; 3])>,
+    /// The grid slots of `plan`: the centre, then the vertices.
     grid: Vec<[u32; 3]>,
-    pts: Vec<[f32; 3]>,
+    /// The vertices' positions as boxes (see `Lanes`).
+    pts: Vec<Lanes>,
     rebuild: Rebuild,
 }
 
@@ -557,15 +562,14 @@ fn decode_tree(
     if out.nodes.len() + n > h.node_words as usize {
         return Err(bad("the trees hold more node words than the header says"));
     }
-    // Leaves: each triangle's corners, then its new vertices' residuals.
-    s.cache.clear();
-    s.adj.clear();
-    s.grid.clear();
-    s.pts.clear();
+    // Pass 1, the corners: each leaf's triangles, and where each vertex
+    // is first used (`first_use[v]`: its triangle, times 4, plus its
+    // corner slot).
+    // A local, so that it stays in registers.
+    let mut cache = RankCache::default();
     s.tris.clear();
     s.spans.clear();
-    let max_q = out.q.max_q();
-    let mut last = [max_q / 2; 3];
+    s.first_use.resize(MAX_TREE_VERTICES + 3, 0);
     let mut next = 0u32;
     for _ in 0..s.lay.leaves.len() {
         let count = if h.multi {
@@ -583,52 +587,61 @@ fn decode_tree(
             s.spans.push((s.tris.len() as u32, count));
         }
         for _ in 0..count {
-            let first_new = next;
+            let t = (s.tris.len() as u32) << 2;
             let mut c = [0u32; 3];
             for (slot, cs) in c.iter_mut().enumerate() {
                 let sym = read_symbol(decs, CTX_CORNER + slot, &mut r, k)?;
-                let v = s.cache.decode(sym, next).map_err(bad)?;
-                // Cleared whether or not `next` is used here: no branch
-                // on the symbol's kind (see `Adjacency`'s heads).
-                s.adj.new_vertex(next);
-                next += u32::from(v == next);
+                let v = cache.decode(sym, next).map_err(bad)?;
+                // Written whether or not `next` is used here (no branch
+                // on the symbol's kind): the entry stays once it is.
+                s.first_use[next as usize] = t | slot as u32;
+                // The symbol, not the vertex, says a vertex is new: the
+                // count then does not wait for the cache.
+                next += u32::from(sym == SYM_NEW);
                 *cs = v;
             }
             if next as usize > MAX_TREE_VERTICES {
                 return Err(bad("the tree has more vertices than 9-bit indices address"));
             }
-            if next == first_new {
-                s.adj.add(c);
-                s.tris.push(c);
-                continue;
-            }
-            let mut known = c.map(|v| v < first_new);
-            for slot in 0..3 {
-                if known[slot] {
-                    continue;
-                }
-                let v = c[slot];
-                debug_assert_eq!(v as usize, s.grid.len());
-                let (pred, ctx) = predict(c, slot, known, &s.grid, &s.adj, last, max_q);
-                let mut g = [0u32; 3];
-                for x in 0..3 {
-                    let d = unzigzag(u64::from(read_symbol(decs, ctx + x, &mut r, k)?));
-                    let q = i64::from(pred[x]) + d;
-                    if !(0..=i64::from(max_q)).contains(&q) {
-                        return Err(bad("a vertex decodes outside the grid"));
-                    }
-                    g[x] = q as u32;
-                }
-                s.grid.push(g);
-                s.pts.push(std::array::from_fn(|a| out.q.value(a, g[a])));
-                last = g;
-                for j in 0..3 {
-                    known[j] |= c[j] == v;
-                }
-            }
-            s.adj.add(c);
             s.tris.push(c);
         }
+    }
+    // Pass 2, the plans: how each vertex is predicted, from the adjacency
+    // of the triangles before the one that first uses it.
+    s.adj.start(next as usize);
+    s.plans.clear();
+    let mut added = 0;
+    for v in 0..next {
+        let at = s.first_use[v as usize];
+        let t = (at >> 2) as usize;
+        while added < t {
+            s.adj.add(s.tris[added]);
+            added += 1;
+        }
+        s.plans.push(plan(s.tris[t], (at & 3) as usize, v, &s.adj));
+    }
+    // Pass 3, the vertices: their residuals, in the order of their
+    // indices, against their plans' predictions.
+    let max_q = out.q.max_q();
+    s.grid.clear();
+    s.grid.push(centre(max_q));
+    s.pts.clear();
+    let mut outside = false;
+    for &(ctx, slots) in &s.plans {
+        let mut d = [0i64; 3];
+        for (x, dx) in d.iter_mut().enumerate() {
+            *dx = unzigzag(u64::from(read_symbol(decs, ctx + x, &mut r, k)?));
+        }
+        let pred = predicted(ctx, slots, &s.grid, max_q);
+        let g: [i64; 3] = std::array::from_fn(|x| i64::from(pred[x]) + d[x]);
+        outside |= g.iter().any(|&q| !(0..=i64::from(max_q)).contains(&q));
+        let g = g.map(|q| q as u32);
+        s.grid.push(g);
+        let p: [f32; 3] = std::array::from_fn(|a| out.q.value(a, g[a]));
+        s.pts.push(to_lanes(&[p[0], p[1], p[2], p[0], p[1], p[2]]));
+    }
+    if outside {
+        return Err(bad("a vertex decodes outside the grid"));
     }
     let triangles = s.tris.len() as u32;
     if r.overran() {
@@ -658,7 +671,7 @@ fn decode_tree(
         let p = base + p as usize;
         out.leaf_bits[p / 64] |= 1 << (p % 64);
     }
-    out.q.push_tree(&s.grid);
+    out.q.push_tree(&s.grid[1..]);
     out.stored = out
         .stored
         .checked_add(next)

@@ -10,8 +10,8 @@ use super::super::vertices::Quantized;
 use super::OocError;
 use super::file::{self, Header, SECTIONS};
 use super::model::{
-    Adjacency, CONTEXTS, CTX_CORNER, CTX_LEAF, CTX_TEMPLATE, CornerCache, Layout, part_of, predict,
-    template_symbol,
+    Adjacency, CONTEXTS, CTX_CORNER, CTX_LEAF, CTX_TEMPLATE, CornerCache, Layout, PART_VERTICES,
+    centre, part_of, plan, predicted, template_symbol,
 };
 use crate::codec::common::bits::{BitWriter, zigzag};
 use crate::codec::common::static_dict::{StaticDict, StaticEncoder};
@@ -81,14 +81,15 @@ struct Model {
 /// The coding of one tree's triangles.
 struct TreeCoder {
     max_q: u32,
-    last: [u32; 3],
     next: u32,
     n_verts: u32,
 }
 
 impl TreeCoder {
     /// Codes triangle `c` (local corners) of tree `k`: its corner symbols,
-    /// then each new vertex's residuals.
+    /// then each new vertex's residuals, in the order of their indices
+    /// (the encoder's pass 2 moves the residuals behind every corner of
+    /// the tree; see the module docs).
     fn triangle(
         &mut self,
         c: [u32; 3],
@@ -112,22 +113,21 @@ impl TreeCoder {
             }
             m.cache.touch(v);
         }
-        let mut known = c.map(|v| v < first_new);
+        // New vertices take increasing indices in corner order; a corner
+        // repeating one already coded here is below `v`.
+        let mut v = first_new;
         for slot in 0..3 {
-            if known[slot] {
+            if c[slot] != v {
                 continue;
             }
-            let v = c[slot];
-            let (pred, ctx) = predict(c, slot, known, &m.grid, &m.adj, self.last, self.max_q);
+            let (ctx, slots) = plan(c, slot, v, &m.adj);
+            let pred = predicted(ctx, slots, &m.grid, self.max_q);
             let g = q.grid_point(k, v);
             for x in 0..3 {
                 emit(ctx + x, zigzag(i64::from(g[x]) - i64::from(pred[x])) as u32);
             }
             m.grid.push(g);
-            self.last = g;
-            for j in 0..3 {
-                known[j] |= c[j] == v;
-            }
+            v += 1;
         }
         m.adj.add(c);
         Ok(())
@@ -201,9 +201,10 @@ fn model_tree(
     m.cache.clear();
     m.adj.clear();
     m.grid.clear();
+    // Grid slot 0 (see `plan`).
+    m.grid.push(centre(q.max_q()));
     let mut t = TreeCoder {
         max_q: q.max_q(),
-        last: [q.max_q() / 2; 3],
         next: 0,
         n_verts,
     };
@@ -391,6 +392,7 @@ pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
     let mut streams = Vec::new();
     let mut starts = Vec::with_capacity(hcc.headers.len() + 1);
     let mut part_bits = [0u64; 3];
+    let mut residuals = Vec::new();
     for k in 0..hcc.headers.len() {
         let start = u32::try_from(streams.len()).map_err(|_| OocError::Corrupt {
             tree: k as u32,
@@ -398,11 +400,24 @@ pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
         })?;
         starts.push(start);
         let mut w = BitWriter::default();
-        model_tree(hcc, q, k, &mut m, &mut |ctx, sym| {
+        let mut put = |ctx: usize, sym: u32| {
             let before = w.bit_len();
             encs[ctx].put(&mut w, sym);
             part_bits[part_of(ctx)] += w.bit_len() - before;
+        };
+        // The templates and the corners as the model gives them, the
+        // residuals after them (see the module docs).
+        residuals.clear();
+        model_tree(hcc, q, k, &mut m, &mut |ctx, sym| {
+            if part_of(ctx) == PART_VERTICES {
+                residuals.push((ctx, sym));
+            } else {
+                put(ctx, sym);
+            }
         })?;
+        for &(ctx, sym) in &residuals {
+            put(ctx, sym);
+        }
         streams.extend_from_slice(&w.finish());
     }
     starts.push(u32::try_from(streams.len()).map_err(|_| OocError::Corrupt {

@@ -9,7 +9,7 @@ use crate::codec::common::le::{f32x3_at, u32_at};
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps, container};
 
 /// The file version this build writes and reads.
-pub const VERSION: u32 = 5;
+pub const VERSION: u32 = 6;
 /// The o-HCCMesh file's magic.
 pub const MAGIC: [u8; 8] = *b"CBVHHCO\0";
 const MASS_AT: usize = 88;

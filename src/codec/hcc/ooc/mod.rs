@@ -48,7 +48,7 @@
 //! # What is coded, and in which order
 //!
 //! Per low-level tree, one bit stream starting on a byte, in three parts
-//! interleaved as the decoder needs them:
+//! one after the other:
 //!
 //! 1. **Templates** (structure and inter-connections, §4.3): the template
 //!    symbols in the order the i-HCCMesh allocates templates, which is a
@@ -67,15 +67,25 @@
 //!    which is how the i-HCCMesh numbers a tree's vertices: by first use),
 //!    `1 + r` for the vertex at rank `r` of a cache of the 16 most recently
 //!    used ones, else `17 + d` for the vertex `d + 1` below the next index.
-//! 3. **Vertices**: each new vertex right after its triangle's corners, as
-//!    grid coordinates on the i-HCCMesh's mesh-wide quantization grid
-//!    (16 bits by default, §5.1), predicted and sent as zig-zagged
-//!    residuals, one context per axis and kind of prediction: the
-//!    parallelogram `a + b − c` [AG04] when the other two corners are known
-//!    and an earlier triangle of the tree shares their edge (`c` its third
-//!    corner; found through each vertex's last 16 triangles); their
-//!    midpoint or the one known corner otherwise; the tree's last decoded
-//!    vertex when no corner is known.
+//! 3. **Vertices**, in the order of their local indices (the order of
+//!    first use), as grid coordinates on the i-HCCMesh's mesh-wide
+//!    quantization grid (16 bits by default, §5.1), predicted and sent as
+//!    zig-zagged residuals, one context per axis and kind of prediction,
+//!    from the corners of the vertex's first triangle that have smaller
+//!    indices and the triangles before it: the parallelogram `a + b − c`
+//!    [AG04] when the other two corners are known and an earlier triangle
+//!    of the tree shares their edge (`c` its third corner; found through
+//!    each vertex's last 16 triangles); their midpoint or the one known
+//!    corner otherwise; the tree's last decoded vertex when no corner is
+//!    known.
+//!
+//! The order is the decoder's (version 6; version 5 sent each new vertex
+//! right after its triangle's corners, the same symbols interleaved): it
+//! reads every corner first, in a loop that only reads symbols and keeps
+//! the corner cache, then plans every vertex's prediction from the
+//! connectivity alone, then reads the residuals, whose contexts are known
+//! by then, so that no symbol read waits for the modelling of another
+//! part. The file's size is the same.
 //!
 //! Every context has its own static dictionary, one for the whole file
 //! (so that a tree decodes alone, for on-demand decoding), sized by §5.2's
@@ -112,7 +122,7 @@
 //! | bytes | field |
 //! |---|---|
 //! | 0–7 | magic `CBVHHCO\0` |
-//! | 8–11 | version (5: version 4 stored the trees' starts and firsts as `u32`, version 3 also the high-level boxes as `f32`, version 2's dictionaries had no split, version 1 had no high-level boxes nor tree firsts) |
+//! | 8–11 | version (6: version 5 interleaved each new vertex's residuals with its triangle's corners, version 4 stored the trees' starts and firsts as `u32`, version 3 also the high-level boxes as `f32`, version 2's dictionaries had no split, version 1 had no high-level boxes nor tree firsts) |
 //! | 12–15 | flags: bit 0 vertex ids kept, bit 1 tree order (no triangle id map), bit 2 multi-triangle leaves; others 0 |
 //! | 16–35 | counts of the i-HCCMesh: high-level nodes, low-level trees, node words, inter-connections, stored vertices |
 //! | 36–39 | triangle count |

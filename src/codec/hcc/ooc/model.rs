@@ -28,12 +28,18 @@ pub const CTX_FAR: usize = 10;
 pub const CTX_LEAF: usize = 13;
 /// Number of contexts.
 pub const CONTEXTS: usize = 14;
-/// Names of the contexts' groups, for the figures by part.
+/// The part (of the figures by part) of the templates and leaf sizes.
+pub const PART_TEMPLATES: usize = 0;
+/// The part of the corner symbols.
+pub const PART_CORNERS: usize = 1;
+/// The part of the vertex residuals.
+pub const PART_VERTICES: usize = 2;
+/// The part context `ctx` belongs to.
 pub const fn part_of(ctx: usize) -> usize {
     match ctx {
-        CTX_TEMPLATE | CTX_LEAF => 0,
-        1..=3 => 1,
-        _ => 2,
+        CTX_TEMPLATE | CTX_LEAF => PART_TEMPLATES,
+        1..=3 => PART_CORNERS,
+        _ => PART_VERTICES,
     }
 }
 
@@ -259,7 +265,7 @@ pub fn template_symbol(id: u8, start: usize, types: &[u32]) -> Option<u32> {
 /// lanes of 16 bits in four `u64` words (lanes 0–3, 4–7, 8–11, 12–15), so
 /// that reading an entry is one shift and moving an entry to the front is
 /// a few shifts and masks, not a loop.
-#[derive(Default)]
+#[derive(Clone, Copy, Default)]
 pub struct CornerCache {
     lanes: [u64; 4],
     len: usize,
@@ -288,41 +294,6 @@ impl CornerCache {
             Some(r) => 1 + r as u32,
             None => 1 + CACHE as u32 + (next - 1 - v),
         }
-    }
-
-    /// The vertex of corner symbol `sym` when `next` vertices are known
-    /// (decoder): `next` itself for a new one; moves it to the front as
-    /// [`touch`](Self::touch) does, without searching (the symbol says
-    /// where it is). Selects rather than branches on the kind of symbol,
-    /// which the stream does not make predictable.
-    #[inline(always)]
-    pub fn decode(&mut self, sym: u32, next: u32) -> Result<u32, Bad> {
-        let rank = sym.wrapping_sub(1);
-        let cached = rank < CACHE as u32;
-        if cached && rank as usize >= self.len {
-            return Err("a corner names an empty cache slot");
-        }
-        if sym > next + CACHE as u32 {
-            return Err("a corner names a vertex before the tree's first");
-        }
-        // A vertex outside the cache: `next` for a new one, else
-        // `next − 1 − (sym − 1 − CACHE)`.
-        let outside = if sym == SYM_NEW {
-            next
-        } else {
-            (next + CACHE as u32).wrapping_sub(sym)
-        };
-        // Both read, then one kept by a mask: a plain `if` here compiles
-        // to a branch, which the symbols make a coin toss.
-        let keep = u32::from(cached).wrapping_neg();
-        let v = self.slot(rank as usize % CACHE) & keep | outside & !keep;
-        // A vertex outside the cache takes the last slot in use (dropped
-        // when the cache is full) or a new one.
-        let keep = usize::from(cached).wrapping_neg();
-        let at = rank as usize & keep | self.len.min(CACHE - 1) & !keep;
-        self.len += usize::from(!cached & (self.len < CACHE));
-        self.move_front(at, v);
-        Ok(v)
     }
 
     /// Makes room for one more entry; returns the slot to move from (the
@@ -357,6 +328,167 @@ impl CornerCache {
         let m = FRONT_MASKS[at % CACHE];
         for h in 0..4 {
             self.lanes[h] = shifted[h] & m[h] | l[h] & !m[h];
+        }
+    }
+}
+
+/// The decoder's corner cache: the most-recently-used list of
+/// [`CornerCache`], kept as each entry's vertex and rank (0 the most
+/// recent) in 16 lanes each, so that a corner is read and moved to the
+/// front by the same compare, add and select on every lane (vector
+/// operations on x86-64, [`ranks`]), not by shifting the list: each
+/// corner's update depends on the last one's, and that chain is three
+/// instructions long. The vertex a hit reads is off that chain.
+#[derive(Clone, Copy, Default)]
+pub struct RankCache {
+    lanes: ranks::Lanes,
+    len: u32,
+}
+
+impl RankCache {
+    /// The vertex of corner symbol `sym` when `next` vertices are known:
+    /// `next` itself for a new one; moves it to the front as
+    /// [`CornerCache::touch`] does (a vertex outside the cache takes the
+    /// last rank in use, dropped when the cache is full, or a new one).
+    /// Selects rather than branches on the kind of symbol, which the
+    /// stream does not make predictable.
+    #[inline(always)]
+    pub fn decode(&mut self, sym: u32, next: u32) -> Result<u32, Bad> {
+        let rank = sym.wrapping_sub(1);
+        let cached = rank < CACHE as u32;
+        if cached && rank >= self.len {
+            return Err("a corner names an empty cache slot");
+        }
+        if sym > next + CACHE as u32 {
+            return Err("a corner names a vertex before the tree's first");
+        }
+        // A vertex outside the cache: `next` for a new one, else
+        // `next − 1 − (sym − 1 − CACHE)`.
+        let outside = if sym == SYM_NEW {
+            next
+        } else {
+            (next + CACHE as u32).wrapping_sub(sym)
+        };
+        let at = if cached {
+            rank
+        } else {
+            self.len.min(CACHE as u32 - 1)
+        };
+        let hit = self.lanes.front(at as u16, !cached, outside as u16);
+        self.len += u32::from(!cached & (self.len < CACHE as u32));
+        Ok(if cached { u32::from(hit) } else { outside })
+    }
+}
+
+/// [`RankCache`]'s lanes: every lane's rank (a permutation of 0..16; lanes
+/// ranked at or past the cache's length are empty) and vertex.
+pub mod ranks {
+    use super::CACHE;
+
+    /// The lanes as plain arrays, and the one update on them (on x86-64,
+    /// the reference the vector lanes are tested against).
+    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+    #[derive(Clone, Copy)]
+    pub struct Plain {
+        ranks: [u16; CACHE],
+        verts: [u16; CACHE],
+    }
+
+    impl Default for Plain {
+        fn default() -> Self {
+            Self {
+                ranks: std::array::from_fn(|i| i as u16),
+                verts: [0; CACHE],
+            }
+        }
+    }
+
+    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+    impl Plain {
+        /// Moves the lane ranked `at` to the front and returns its vertex
+        /// (as it was); with `put`, its vertex becomes `v`.
+        #[inline(always)]
+        pub fn front(&mut self, at: u16, put: bool, v: u16) -> u16 {
+            let mut hit = 0;
+            for i in 0..CACHE {
+                let r = self.ranks[i];
+                if r == at {
+                    hit = self.verts[i];
+                    self.ranks[i] = 0;
+                    if put {
+                        self.verts[i] = v;
+                    }
+                } else {
+                    self.ranks[i] = r + u16::from(r < at);
+                }
+            }
+            hit
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    pub use x86::Sse2 as Lanes;
+
+    #[cfg(not(target_arch = "x86_64"))]
+    pub use Plain as Lanes;
+
+    #[cfg(target_arch = "x86_64")]
+    mod x86 {
+        use std::arch::x86_64::*;
+
+        /// [`Plain`](super::Plain) in four SSE2 registers (eight 16-bit
+        /// lanes each).
+        #[derive(Clone, Copy)]
+        pub struct Sse2 {
+            ranks: [__m128i; 2],
+            verts: [__m128i; 2],
+        }
+
+        impl Default for Sse2 {
+            fn default() -> Self {
+                let ranks: [u16; 16] = std::array::from_fn(|i| i as u16);
+                Self {
+                    ranks: bytemuck::cast(ranks),
+                    verts: [bytemuck::cast([0u16; 8]); 2],
+                }
+            }
+        }
+
+        impl Sse2 {
+            /// As [`Plain::front`](super::Plain::front).
+            #[inline(always)]
+            pub fn front(&mut self, at: u16, put: bool, v: u16) -> u16 {
+                // SAFETY: SSE2 is part of the x86-64 baseline: every CPU
+                // this target runs on has it.
+                unsafe { self.front_sse2(at, put, v) }
+            }
+
+            #[inline]
+            #[target_feature(enable = "sse2")]
+            fn front_sse2(&mut self, at: u16, put: bool, v: u16) -> u16 {
+                let a = _mm_set1_epi16(at as i16);
+                let put = _mm_set1_epi16(-i16::from(put));
+                let v = _mm_set1_epi16(v as i16);
+                let mut hit = _mm_setzero_si128();
+                for h in 0..2 {
+                    let r = self.ranks[h];
+                    let front = _mm_cmpeq_epi16(r, a);
+                    // All ones below `at`: subtracting adds one.
+                    let below = _mm_cmplt_epi16(r, a);
+                    hit = _mm_or_si128(hit, _mm_and_si128(front, self.verts[h]));
+                    self.ranks[h] = _mm_andnot_si128(front, _mm_sub_epi16(r, below));
+                    // Only a vertex from outside is written (a hit's lane
+                    // keeps its vertex), so the update does not wait for
+                    // the read.
+                    let new = _mm_and_si128(front, put);
+                    self.verts[h] =
+                        _mm_or_si128(_mm_and_si128(new, v), _mm_andnot_si128(new, self.verts[h]));
+                }
+                let x = _mm_or_si128(hit, _mm_srli_si128::<8>(hit));
+                let x = _mm_or_si128(x, _mm_srli_si128::<4>(x));
+                let x = _mm_or_si128(x, _mm_srli_si128::<2>(x));
+                _mm_cvtsi128_si32(x) as u16
+            }
         }
     }
 }
@@ -403,6 +535,13 @@ impl Adjacency {
         self.corners.clear();
     }
 
+    /// Empties it for a new tree of `vertices` vertices (at most
+    /// `MAX_TREE_VERTICES`), all without triangles.
+    pub fn start(&mut self, vertices: usize) {
+        self.clear();
+        self.head[..vertices].fill(NONE);
+    }
+
     /// Vertex `v` is new: no triangles yet (`v` ≤ `MAX_TREE_VERTICES` + 2).
     #[inline(always)]
     pub fn new_vertex(&mut self, v: u32) {
@@ -442,43 +581,53 @@ impl Adjacency {
     }
 }
 
-/// The prediction of corner `k` of triangle `c` (grid coordinates) and the
-/// residual contexts' base (`CTX_PARA`, `CTX_NEAR` or `CTX_FAR`), from the
-/// corners already known (`known`), the tree's vertices `pos`, the
-/// adjacency and the tree's last decoded vertex.
+/// How new vertex `v`, corner `k` of triangle `c` (local indices), is
+/// predicted: the base of its residual contexts (`CTX_PARA`, `CTX_NEAR` or
+/// `CTX_FAR`) and three grid slots (vertex `i` at slot `i + 1`, slot 0
+/// the grid's centre) that [`predicted`] combines, from the corners known
+/// before it (those below `v`: a tree numbers its vertices by first use)
+/// and the adjacency of the triangles before `c`:
+/// - both other corners known, and an earlier triangle across their edge
+///   (third corner `o`): the parallelogram `a + b − o` [AG04];
+/// - both known, no such triangle: their midpoint;
+/// - one known: that corner;
+/// - none: the tree's last decoded vertex (`v − 1`; the centre for the
+///   first).
+///
+/// It depends on connectivity alone, so a decoder plans every vertex of a
+/// tree before it reads any residual.
 #[inline(always)]
-pub fn predict(
-    c: [u32; 3],
-    k: usize,
-    known: [bool; 3],
-    pos: &[[u32; 3]],
-    adj: &Adjacency,
-    last: [u32; 3],
-    max_q: u32,
-) -> ([u32; 3], usize) {
-    let (a, b) = ((k + 1) % 3, (k + 2) % 3);
-    match (known[a], known[b]) {
-        (true, true) => {
-            let (pa, pb) = (pos[c[a] as usize], pos[c[b] as usize]);
-            match adj.opposite(c[a], c[b]) {
-                Some(o) => {
-                    let po = pos[o as usize];
-                    let p = std::array::from_fn(|x| {
-                        let v = i64::from(pa[x]) + i64::from(pb[x]) - i64::from(po[x]);
-                        v.clamp(0, i64::from(max_q)) as u32
-                    });
-                    (p, CTX_PARA)
-                }
-                None => (
-                    std::array::from_fn(|x| ((u64::from(pa[x]) + u64::from(pb[x])) / 2) as u32),
-                    CTX_NEAR,
-                ),
-            }
-        }
-        (true, false) => (pos[c[a] as usize], CTX_NEAR),
-        (false, true) => (pos[c[b] as usize], CTX_NEAR),
-        (false, false) => (last, CTX_FAR),
+pub fn plan(c: [u32; 3], k: usize, v: u32, adj: &Adjacency) -> (usize, [u32; 3]) {
+    let (a, b) = (c[(k + 1) % 3], c[(k + 2) % 3]);
+    match (a < v, b < v) {
+        (true, true) => match adj.opposite(a, b) {
+            Some(o) => (CTX_PARA, [a + 1, b + 1, o + 1]),
+            None => (CTX_NEAR, [a + 1, b + 1, 0]),
+        },
+        (true, false) => (CTX_NEAR, [a + 1, a + 1, 0]),
+        (false, true) => (CTX_NEAR, [b + 1, b + 1, 0]),
+        (false, false) => (CTX_FAR, [v, v, 0]),
     }
+}
+
+/// The prediction [`plan`] describes (`ctx`, `slots`), over the grid
+/// coordinates `pos` of its slots: `a + b − o` clamped to the grid for a
+/// parallelogram, `(a + b) / 2` otherwise (which is `a` when both slots
+/// are `a`).
+#[inline(always)]
+pub fn predicted(ctx: usize, [a, b, o]: [u32; 3], pos: &[[u32; 3]], max_q: u32) -> [u32; 3] {
+    let (pa, pb, po) = (pos[a as usize], pos[b as usize], pos[o as usize]);
+    let para = ctx == CTX_PARA;
+    std::array::from_fn(|x| {
+        let sum = i64::from(pa[x]) + i64::from(pb[x]);
+        let p = (sum - i64::from(po[x])).clamp(0, i64::from(max_q));
+        if para { p as u32 } else { (sum >> 1) as u32 }
+    })
+}
+
+/// The grid slot 0 of [`plan`]: the centre of a grid of `max_q` + 1 steps.
+pub fn centre(max_q: u32) -> [u32; 3] {
+    [max_q / 2; 3]
 }
 
 // A local vertex index fits the 9-bit fields.
@@ -493,7 +642,7 @@ mod tests {
     /// vertices back.
     #[test]
     fn corner_cache_is_a_most_recently_used_list() {
-        let (mut enc, mut dec) = (CornerCache::default(), CornerCache::default());
+        let (mut enc, mut dec) = (CornerCache::default(), RankCache::default());
         let mut list: Vec<u32> = Vec::new();
         let mut next = 0u32;
         let mut x = 12345u64;
@@ -529,8 +678,24 @@ mod tests {
             }
         }
         assert!(dec.decode(1 + CACHE as u32 + next, next).is_err());
-        dec.clear();
+        let mut dec = RankCache::default();
         assert!(dec.decode(1, 0).is_err(), "an empty cache has no rank 0");
+    }
+
+    /// The vector lanes and the plain ones agree, hit for hit.
+    #[test]
+    fn rank_lanes_match_the_plain_ones() {
+        let (mut plain, mut lanes) = (ranks::Plain::default(), ranks::Lanes::default());
+        let mut x = 99u64;
+        for i in 0..20_000u32 {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let at = (x >> 40) as u16 % 16;
+            let put = x >> 33 & 1 != 0;
+            let v = (i % 600) as u16;
+            assert_eq!(plain.front(at, put, v), lanes.front(at, put, v), "step {i}");
+        }
     }
 
     #[test]

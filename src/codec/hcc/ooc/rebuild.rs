@@ -7,62 +7,50 @@
 //! Linear in the tree's nodes, no recursion (children always sit at larger
 //! positions than their parent, so one reverse and one forward sweep over
 //! the nodes with children do, after one sweep over the leaves; the
-//! layout lists both kinds, so no sweep branches on node types).
+//! layout lists both kinds, so no sweep branches on node types). Boxes are
+//! kept as the pair coding's eight lanes (minima and negated maxima), so
+//! that a union or a pair is a few vector operations.
 
 use super::super::HccStats;
 use super::super::block;
 use super::super::node::{
-    INDEX_BITS, Interconnection, MASK_SHIFT, MULTI_COUNT_SHIFT, MULTI_OFFSET_BITS, TYPE_INNER,
-    TYPE_LEAF, TYPE_SHIFT, TYPE_TEMPLATE_LEAF, pack_node,
+    INDEX_BITS, INDEX_MASK, Interconnection, MASK_SHIFT, MULTI_COUNT_SHIFT, MULTI_OFFSET_BITS,
+    TYPE_INNER, TYPE_LEAF, TYPE_SHIFT, TYPE_TEMPLATE_LEAF, pack_node,
 };
-use super::super::pair::{EMPTY, Extents, code_pair, outer};
+use super::super::pair::{Extents, LaneVertices, Lanes, code_pair, to_extents, union};
 use super::model::Layout;
 use crate::codec::common::bits::BitWriter;
 
 /// Buffers reused from tree to tree.
 #[derive(Default)]
 pub struct Rebuild {
-    /// Per position, the tight box and the vertex attaining each extent.
-    tight: Vec<(Extents, [u32; 6])>,
-    decoded: Vec<Extents>,
+    /// Per position, the tight box and the vertex attaining each lane.
+    tight: Vec<(Lanes, LaneVertices)>,
+    decoded: Vec<Lanes>,
+    /// Per inter-connection, the vertex its template leaf gave up, and
+    /// one more entry that takes the writes of other nodes.
     ic_vertex: Vec<u32>,
 }
 
 /// The tight box of `tris` over vertices `pts` and the vertex attaining
-/// each extent (ties go to the first corner).
+/// each lane (ties go to the first corner).
 #[inline(always)]
-fn leaf_box(tris: &[[u32; 3]], pts: &[[f32; 3]]) -> (Extents, [u32; 6]) {
-    let (mut b, mut v) = (EMPTY, [0u32; 6]);
-    for &c in tris.iter().flatten() {
-        let pt = pts[c as usize];
-        for a in 0..3 {
-            let lo = pt[a] < b[a];
-            b[a] = if lo { pt[a] } else { b[a] };
-            v[a] = if lo { c } else { v[a] };
-            let hi = pt[a] > b[a + 3];
-            b[a + 3] = if hi { pt[a] } else { b[a + 3] };
-            v[a + 3] = if hi { c } else { v[a + 3] };
-        }
+fn leaf_box(tris: &[[u32; 3]], pts: &[Lanes]) -> (Lanes, LaneVertices) {
+    let mut corners = tris.iter().flatten();
+    let first = corners.next().map_or(0, |&c| c);
+    let mut b = (pts[first as usize], [first; 8]);
+    for &c in corners {
+        b = union((&b.0, &b.1), (&pts[c as usize], &[c; 8]));
     }
-    (b, v)
+    b
 }
 
 /// [`leaf_box`] of one triangle `c`, unrolled.
 #[inline(always)]
-fn triangle_box(c: [u32; 3], pts: &[[f32; 3]]) -> (Extents, [u32; 6]) {
-    let p = c.map(|v| pts[v as usize]);
-    let (mut b, mut v) = (EMPTY, [0u32; 6]);
-    for k in 0..3 {
-        for a in 0..3 {
-            let lo = p[k][a] < b[a];
-            b[a] = if lo { p[k][a] } else { b[a] };
-            v[a] = if lo { c[k] } else { v[a] };
-            let hi = p[k][a] > b[a + 3];
-            b[a + 3] = if hi { p[k][a] } else { b[a + 3] };
-            v[a + 3] = if hi { c[k] } else { v[a + 3] };
-        }
-    }
-    (b, v)
+fn triangle_box(c: [u32; 3], pts: &[Lanes]) -> (Lanes, LaneVertices) {
+    let b = (pts[c[0] as usize], [c[0]; 8]);
+    let b = union((&b.0, &b.1), (&pts[c[1] as usize], &[c[1]; 8]));
+    union((&b.0, &b.1), (&pts[c[2] as usize], &[c[2]; 8]))
 }
 
 impl Rebuild {
@@ -78,7 +66,7 @@ impl Rebuild {
         &mut self,
         lay: &Layout,
         (spans, tris): (&[(u32, u32)], &[[u32; 3]]),
-        pts: &[[f32; 3]],
+        pts: &[Lanes],
         (nodes, ics, multi): (
             &mut Vec<u32>,
             &mut Vec<u32>,
@@ -93,8 +81,8 @@ impl Rebuild {
         let n = lay.types.len();
         let types = &lay.types[..n];
         let kids = &lay.kids[..n];
-        self.tight.resize(n, (EMPTY, [0; 6]));
-        self.decoded.resize(n, EMPTY);
+        self.tight.resize(n, ([0.0; 8], [0; 8]));
+        self.decoded.resize(n, [0.0; 8]);
         // Tight boxes and the vertices attaining them: the leaves, then the
         // other nodes bottom-up (children sit at larger positions than
         // their parent); ties go to the first corner and to the left
@@ -111,21 +99,23 @@ impl Rebuild {
         for &p in lay.inner.iter().rev() {
             let [l, r] = kids[p as usize].map(|k| k as usize);
             let ((tl, al), (tr, ar)) = (&self.tight[l], &self.tight[r]);
-            let (mut b, mut v) = (*tl, *al);
-            for e in 0..6 {
-                let right = outer(e, tr[e], tl[e]);
-                b[e] = if right { tr[e] } else { tl[e] };
-                v[e] = if right { ar[e] } else { al[e] };
-            }
-            self.tight[p as usize] = (b, v);
+            self.tight[p as usize] = union((tl, al), (tr, ar));
         }
         let base = nodes.len();
         nodes.resize(base + n, TYPE_INNER << TYPE_SHIFT);
         let words = &mut nodes[base..];
         for &p in &lay.inner {
-            if types[p as usize] == TYPE_TEMPLATE_LEAF {
-                words[p as usize] = pack_node([0, 0, lay.ic_of[p as usize]], 0, TYPE_TEMPLATE_LEAF);
-            }
+            // A select, not a branch: template leaves come unpredictably.
+            // (Other nodes have no inter-connection: their masked field
+            // is computed and dropped.)
+            let ic = lay.ic_of[p as usize] & INDEX_MASK;
+            let tl = pack_node([0, 0, ic], 0, TYPE_TEMPLATE_LEAF);
+            let w = &mut words[p as usize];
+            *w = if types[p as usize] == TYPE_TEMPLATE_LEAF {
+                tl
+            } else {
+                *w
+            };
         }
         match multi {
             None => {
@@ -151,7 +141,8 @@ impl Rebuild {
             }
         }
         self.ic_vertex.clear();
-        self.ic_vertex.resize(lay.ics.len(), 0);
+        self.ic_vertex.resize(lay.ics.len() + 1, 0);
+        let spare = lay.ics.len();
         // Pairs top-down, each against its parent's decoded box.
         self.decoded[0] = self.tight[0].0;
         for &p in &lay.inner {
@@ -161,17 +152,16 @@ impl Rebuild {
             let ((tl, al), (tr, ar)) = (&self.tight[l], &self.tight[r]);
             let pc = code_pair(&self.decoded[p as usize], (tl, al, ll), (tr, ar, rl));
             // Fields a pair does not use are zero: or-ing them in is a
-            // no-op, and a template leaf's third field (its
-            // inter-connection's vertex) is zero unless set.
+            // no-op. A template leaf's third field goes to its
+            // inter-connection (other nodes write the spare entry).
             for (side, &pos) in pair.iter().enumerate() {
                 let f = pc.fields[side];
-                let mut w = f[0] | f[1] << INDEX_BITS | (pc.mask >> (3 * side) & 7) << MASK_SHIFT;
-                if types[pos] == TYPE_TEMPLATE_LEAF {
-                    self.ic_vertex[lay.ic_of[pos] as usize] = f[2];
-                } else {
-                    w |= f[2] << (2 * INDEX_BITS);
-                }
-                words[pos] |= w;
+                let tl = types[pos] == TYPE_TEMPLATE_LEAF;
+                let ic = if tl { lay.ic_of[pos] as usize } else { spare };
+                self.ic_vertex[ic] = f[2];
+                let third = if tl { 0 } else { f[2] << (2 * INDEX_BITS) };
+                words[pos] |=
+                    f[0] | f[1] << INDEX_BITS | third | (pc.mask >> (3 * side) & 7) << MASK_SHIFT;
             }
             stats.inner_pairs += usize::from(!ll && !rl);
             stats.mixed_pairs += usize::from(ll != rl);
@@ -196,6 +186,6 @@ impl Rebuild {
                 .pack(),
             );
         }
-        self.tight[0].0
+        to_extents(&self.tight[0].0)
     }
 }
