@@ -98,6 +98,12 @@ mod lane {
             std::array::from_fn(|i| mask(a[i] < b[i]))
         }
 
+        /// Bit `i` set where mask lane `i` is set.
+        #[inline(always)]
+        pub fn bits(m: &[u32; 8]) -> u32 {
+            (0..8).fold(0, |b, i| b | (m[i] & 1) << i)
+        }
+
         /// Bit `i` set where lane `i` of `a` differs from `b`'s.
         #[inline(always)]
         pub fn differs(a: &Lanes, b: &Lanes) -> u32 {
@@ -161,6 +167,20 @@ mod lane {
             }
             // SAFETY: see above.
             unsafe { go(ps(a), ps(b)) }
+        }
+
+        /// As [`plain::bits`](super::plain::bits).
+        #[inline(always)]
+        pub fn bits(m: &[u32; 8]) -> u32 {
+            #[inline]
+            #[target_feature(enable = "sse2")]
+            fn go(m: Si) -> u32 {
+                let lo = _mm_movemask_ps(_mm_castsi128_ps(m[0]));
+                let hi = _mm_movemask_ps(_mm_castsi128_ps(m[1]));
+                (lo | hi << 4) as u32
+            }
+            // SAFETY: see above.
+            unsafe { go(si(m)) }
         }
 
         /// As [`plain::differs`](super::plain::differs).
@@ -256,6 +276,7 @@ mod lane {
                 let m = plain::less(&a, &b);
                 assert_eq!(m, sse2::less(&a, &b));
                 assert_eq!(plain::differs(&a, &b), sse2::differs(&a, &b));
+                assert_eq!(plain::bits(&m), sse2::bits(&m));
                 assert_eq!(
                     plain::left_inherits(&d, &a, &b),
                     sse2::left_inherits(&d, &a, &b)
@@ -328,10 +349,7 @@ pub(super) fn code_pair(
         let boxes = [lane::pick(&keep_l, d, tl), lane::pick(&keep_r, d, tr)];
         // Minima in the left word, maxima in the right one.
         let f = lane::pick_u32(&left, vr, vl).map(|v| v & inner);
-        let mut mask = 0;
-        for (e, &l) in left[..6].iter().enumerate() {
-            mask |= (l & 1) << e;
-        }
+        let mask = lane::bits(&left) & 0b11_1111;
         let used = 3 * usize::from(!ll);
         return PairCode {
             mask: mask & inner,
