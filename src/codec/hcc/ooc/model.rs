@@ -436,20 +436,24 @@ pub mod ranks {
     mod x86 {
         use std::arch::x86_64::*;
 
-        /// [`Plain`](super::Plain) in four SSE2 registers (eight 16-bit
-        /// lanes each).
+        /// [`Plain`](super::Plain) with the ranks in one SSE2 register
+        /// (sixteen 8-bit lanes) and the vertices in memory: the rank
+        /// update is three vector instructions, and the lane it fronts is
+        /// found by a move mask, its vertex read by a load.
         #[derive(Clone, Copy)]
         pub struct Sse2 {
-            ranks: [__m128i; 2],
-            verts: [__m128i; 2],
+            ranks: __m128i,
+            /// The lanes' vertices, and a spare entry that takes the
+            /// writes of hits.
+            verts: [u16; 17],
         }
 
         impl Default for Sse2 {
             fn default() -> Self {
-                let ranks: [u16; 16] = std::array::from_fn(|i| i as u16);
+                let ranks: [u8; 16] = std::array::from_fn(|i| i as u8);
                 Self {
                     ranks: bytemuck::cast(ranks),
-                    verts: [bytemuck::cast([0u16; 8]); 2],
+                    verts: [0; 17],
                 }
             }
         }
@@ -458,36 +462,26 @@ pub mod ranks {
             /// As [`Plain::front`](super::Plain::front).
             #[inline(always)]
             pub fn front(&mut self, at: u16, put: bool, v: u16) -> u16 {
+                #[inline]
+                #[target_feature(enable = "sse2")]
+                fn go(ranks: __m128i, at: u16) -> (__m128i, u32) {
+                    let a = _mm_set1_epi8(at as i8);
+                    let front = _mm_cmpeq_epi8(ranks, a);
+                    // All ones below `at`: subtracting adds one.
+                    let below = _mm_cmplt_epi8(ranks, a);
+                    let ranks = _mm_andnot_si128(front, _mm_sub_epi8(ranks, below));
+                    (ranks, _mm_movemask_epi8(front) as u32)
+                }
                 // SAFETY: SSE2 is part of the x86-64 baseline: every CPU
                 // this target runs on has it.
-                unsafe { self.front_sse2(at, put, v) }
-            }
-
-            #[inline]
-            #[target_feature(enable = "sse2")]
-            fn front_sse2(&mut self, at: u16, put: bool, v: u16) -> u16 {
-                let a = _mm_set1_epi16(at as i16);
-                let put = _mm_set1_epi16(-i16::from(put));
-                let v = _mm_set1_epi16(v as i16);
-                let mut hit = _mm_setzero_si128();
-                for h in 0..2 {
-                    let r = self.ranks[h];
-                    let front = _mm_cmpeq_epi16(r, a);
-                    // All ones below `at`: subtracting adds one.
-                    let below = _mm_cmplt_epi16(r, a);
-                    hit = _mm_or_si128(hit, _mm_and_si128(front, self.verts[h]));
-                    self.ranks[h] = _mm_andnot_si128(front, _mm_sub_epi16(r, below));
-                    // Only a vertex from outside is written (a hit's lane
-                    // keeps its vertex), so the update does not wait for
-                    // the read.
-                    let new = _mm_and_si128(front, put);
-                    self.verts[h] =
-                        _mm_or_si128(_mm_and_si128(new, v), _mm_andnot_si128(new, self.verts[h]));
-                }
-                let x = _mm_or_si128(hit, _mm_srli_si128::<8>(hit));
-                let x = _mm_or_si128(x, _mm_srli_si128::<4>(x));
-                let x = _mm_or_si128(x, _mm_srli_si128::<2>(x));
-                _mm_cvtsi128_si32(x) as u16
+                let (ranks, front) = unsafe { go(self.ranks, at) };
+                self.ranks = ranks;
+                // The ranks are a permutation of 0..16 and `at` < 16: one
+                // lane is ranked `at`.
+                let lane = front.trailing_zeros() as usize % 16;
+                let hit = self.verts[lane];
+                self.verts[if put { lane } else { 16 }] = v;
+                hit
             }
         }
     }
