@@ -333,12 +333,12 @@ impl CornerCache {
 }
 
 /// The decoder's corner cache: the most-recently-used list of
-/// [`CornerCache`], kept as each entry's vertex and rank (0 the most
-/// recent) in 16 lanes each, so that a corner is read and moved to the
-/// front by the same compare, add and select on every lane (vector
-/// operations on x86-64, [`ranks`]), not by shifting the list: each
-/// corner's update depends on the last one's, and that chain is three
-/// instructions long. The vertex a hit reads is off that chain.
+/// [`CornerCache`], kept as each entry's rank (0 the most recent) and
+/// vertex, so that a corner is moved to the front by the same compare,
+/// add and select on all 16 ranks (one SSE2 register on x86-64,
+/// [`ranks`]), not by shifting the list: each corner's update depends on
+/// the last one's, and that chain is three instructions long. The vertex
+/// a hit reads (through a move mask and a load) is off that chain.
 #[derive(Clone, Copy, Default)]
 pub struct RankCache {
     lanes: ranks::Lanes,
