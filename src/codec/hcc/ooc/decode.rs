@@ -565,7 +565,7 @@ fn decode_tree(
     // Pass 1, the corners: each leaf's triangles, and where each vertex
     // is first used (`first_use[v]`: its triangle, times 4, plus its
     // corner slot).
-    // A local, so that it stays in registers.
+    // A local, so that its ranks stay in a register.
     let mut cache = RankCache::default();
     s.tris.clear();
     s.spans.clear();

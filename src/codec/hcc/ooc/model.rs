@@ -265,7 +265,7 @@ pub fn template_symbol(id: u8, start: usize, types: &[u32]) -> Option<u32> {
 /// lanes of 16 bits in four `u64` words (lanes 0–3, 4–7, 8–11, 12–15), so
 /// that reading an entry is one shift and moving an entry to the front is
 /// a few shifts and masks, not a loop.
-#[derive(Clone, Copy, Default)]
+#[derive(Default)]
 pub struct CornerCache {
     lanes: [u64; 4],
     len: usize,
@@ -514,11 +514,9 @@ pub struct Adjacency {
 
 const NONE: u32 = u32::MAX;
 
-/// Entries of [`Adjacency`]'s heads: every local vertex index, and two
-/// more, so that a decoder may clear the head of the next index before it
-/// knows whether that index is used (at most two past the last vertex
-/// within a triangle).
-const HEADS: usize = MAX_TREE_VERTICES + 3;
+/// Entries of [`Adjacency`]'s heads: every local vertex index (corners
+/// are 9-bit fields).
+const HEADS: usize = MAX_TREE_VERTICES;
 
 impl Adjacency {
     /// Empties it for a new tree.
@@ -536,7 +534,7 @@ impl Adjacency {
         self.head[..vertices].fill(NONE);
     }
 
-    /// Vertex `v` is new: no triangles yet (`v` ≤ `MAX_TREE_VERTICES` + 2).
+    /// Vertex `v` is new: no triangles yet (`v` < `MAX_TREE_VERTICES`).
     #[inline(always)]
     pub fn new_vertex(&mut self, v: u32) {
         self.head[v as usize] = NONE;
