@@ -101,9 +101,13 @@ impl<'a> BitReader<'a> {
         }
     }
 
-    /// Tops the buffer up to at least 56 valid bits.
+    /// Tops the buffer up to at least 56 valid bits. Reads that follow
+    /// without one ([`StaticDecoder::get_refilled`]) keep the load of the
+    /// stream off the chain from one code's length to the next code.
+    ///
+    /// [`StaticDecoder::get_refilled`]: super::static_dict::StaticDecoder::get_refilled
     #[inline(always)]
-    fn refill(&mut self) {
+    pub fn refill(&mut self) {
         self.buf |= u64_at_padded(self.bytes, self.byte) << self.count;
         self.byte += ((63 - self.count) >> 3) as usize;
         self.count |= 56;
@@ -114,6 +118,19 @@ impl<'a> BitReader<'a> {
     pub(super) fn peek(&mut self) -> u64 {
         self.refill();
         self.buf
+    }
+
+    /// The buffered bits as they are (valid as far as the last
+    /// [`refill`](Self::refill) less what was consumed since).
+    #[inline(always)]
+    pub(super) fn buffered(&self) -> u64 {
+        self.buf
+    }
+
+    /// Valid bits in the buffer.
+    #[cfg(test)]
+    pub(super) fn buffered_bits(&self) -> u32 {
+        self.count
     }
 
     /// Consumes `bits` bits already read with [`peek`](Self::peek) (at

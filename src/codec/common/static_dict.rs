@@ -281,16 +281,19 @@ impl StaticDict {
         // Every code of at most FAST_BITS bits, under every value of the
         // bits that follow it (codes are read least-significant bit
         // first: 0^n 1, then the n + k low bits of rank + 2^k).
-        let mut fast = vec![0u64; 1 << FAST_BITS];
+        let mut fast = Box::new([0u64; 1 << FAST_BITS]);
         for (rank, e) in table.iter().enumerate() {
             let x = rank as u64 + (1 << self.k);
             let n = 63 - x.leading_zeros() - self.k;
             let len = 2 * n + 1 + self.k;
-            if rank as u32 == self.esc || len > FAST_BITS {
+            if rank as u32 == self.esc || len > FAST_BITS || len + e.extra > FAST_SPAN {
                 continue;
             }
             let code = 1 << n | (x & ((1 << (n + self.k)) - 1)) << (n + 1);
-            let entry = u64::from(e.base) << 32 | u64::from(len) << 8 | u64::from(e.extra);
+            let entry = u64::from(e.base) << 32
+                | u64::from(len + e.extra) << 16
+                | u64::from(len) << 8
+                | u64::from(e.extra);
             for fill in 0..1u64 << (FAST_BITS - len) {
                 fast[(code | fill << len) as usize] = entry;
             }
@@ -310,6 +313,16 @@ impl StaticDict {
 
 /// Bits of the stream [`StaticDecoder`] looks codes up by.
 const FAST_BITS: u32 = 8;
+
+/// The most bits a value read through [`StaticDecoder`]'s table takes,
+/// code and extra bits: [`READS_PER_REFILL`] of them fit one refill.
+const FAST_SPAN: u32 = 18;
+
+/// Reads [`StaticDecoder::get_refilled`] may make after one
+/// [`BitReader::refill`].
+pub const READS_PER_REFILL: u32 = 3;
+
+const _: () = assert!(READS_PER_REFILL * FAST_SPAN <= 56);
 
 /// Codes values with a [`StaticDict`].
 pub struct StaticEncoder {
@@ -350,10 +363,13 @@ pub struct StaticDecoder {
     /// Values by rank (the escape's slot unused).
     table: Vec<Entry>,
     /// By the next [`FAST_BITS`] bits of the stream, when they start a
-    /// code of a rank other than the escape's: its value's base (bits
-    /// 32–63), the code's length (bits 8–15, never 0) and the extra bits'
-    /// count (bits 0–7); 0 otherwise (the code is read bit by bit).
-    fast: Vec<u64>,
+    /// code of a rank other than the escape's whose code and extra bits
+    /// take at most [`FAST_SPAN`] bits: its value's base (bits 32–63), the
+    /// bits it takes (16–23), the code's length (bits 8–15, never 0) and
+    /// the extra bits' count (bits 0–7); 0 otherwise (the code is read
+    /// bit by bit). A
+    /// fixed-size table: the masked index needs no bounds check.
+    fast: Box<[u64; 1 << FAST_BITS]>,
     esc: u32,
     k: u32,
     raw_bits: u32,
@@ -369,16 +385,39 @@ impl StaticDecoder {
     /// Reads one value.
     #[inline(always)]
     pub fn get(&self, r: &mut BitReader<'_>) -> Result<u32, FormatError> {
-        let w = r.peek();
-        // Short codes (most of them: ranks are sorted by frequency) by one
-        // look-up; the extra bits, at most 32, fit the peek's 56 bits
-        // after them.
+        r.refill();
+        self.get_refilled(r)
+    }
+
+    /// Reads one value, one of at most [`READS_PER_REFILL`] since the
+    /// last [`BitReader::refill`]: short codes (most of them: ranks are
+    /// sorted by frequency) by one look-up in the bits already buffered,
+    /// so that where the next code starts waits for this code's length
+    /// only, not for a load from the stream; other codes refill first.
+    #[inline(always)]
+    pub fn get_refilled(&self, r: &mut BitReader<'_>) -> Result<u32, FormatError> {
+        let w = r.buffered();
         let e = self.fast[(w & ((1 << FAST_BITS) - 1)) as usize];
         if e != 0 {
-            let (len, extra) = ((e >> 8) as u8 as u32, e as u8 as u32);
-            r.skip(len + extra);
+            let (span, len, extra) = (
+                (e >> 16) as u8 as u32,
+                (e >> 8) as u8 as u32,
+                e as u8 as u32,
+            );
+            r.skip(span);
             return Ok((e >> 32) as u32 | ((w >> len) & ((1u64 << extra) - 1)) as u32);
         }
+        // Refilled after, so that the reads left of this refill's find
+        // their bits buffered.
+        let v = self.get_long(r);
+        r.refill();
+        v
+    }
+
+    /// [`get`](Self::get) of a code the table does not hold.
+    #[inline]
+    fn get_long(&self, r: &mut BitReader<'_>) -> Result<u32, FormatError> {
+        let w = r.peek();
         // The rank's Exp-Golomb code and the extra bits after it from one
         // look at the stream when they fit in it (as `get_golomb`).
         let (rank, total) = golomb_at(w, self.k)?;
@@ -565,6 +604,54 @@ mod tests {
         // And a skewed input of small values keeps them whole.
         let (dict, _) = round_trip(&(0..5000u32).map(|i| i % 7 % 3).collect::<Vec<_>>());
         assert_eq!(split_value(2, dict.split).2, 0);
+    }
+
+    /// Reads in groups after one refill give what reads one by one give,
+    /// through short codes with extra bits, long codes and escapes, and
+    /// never run short of buffered bits (`skip` checks that in debug
+    /// builds).
+    #[test]
+    fn grouped_reads_after_one_refill_match_single_reads() {
+        let mut x = 11u64;
+        // Skewed and split values, a wide tail and rare singletons (sent
+        // raw after the escape).
+        let syms: Vec<u32> = (0..30000u32)
+            .map(|i| {
+                x = x
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                let r = (x >> 33) as u32;
+                match r % 8 {
+                    0..=3 => r % 5,
+                    4 | 5 => (r >> 8) % 300,
+                    6 => (r >> 4) >> (r % 24),
+                    _ => 1_000_000 + i,
+                }
+            })
+            .collect();
+        let dict = StaticDict::optimal(&counts(&syms));
+        let mut w = BitWriter::default();
+        let mut enc = dict.encoder();
+        for &s in &syms {
+            enc.put(&mut w, s);
+        }
+        let bytes = w.finish();
+        let dec = dict.decoder(32);
+        assert!(
+            dec.fast.iter().any(|&e| e != 0 && e as u8 != 0),
+            "short codes with extra bits"
+        );
+        let mut r = BitReader::new(&bytes);
+        for group in syms.chunks(READS_PER_REFILL as usize) {
+            r.refill();
+            for (j, &s) in group.iter().enumerate() {
+                assert_eq!(dec.get_refilled(&mut r).unwrap(), s);
+                // The bits the rest of the group may take are buffered.
+                let left = READS_PER_REFILL - 1 - j as u32;
+                assert!(r.buffered_bits() >= left * FAST_SPAN);
+            }
+        }
+        assert!(!r.overran());
     }
 
     #[test]
