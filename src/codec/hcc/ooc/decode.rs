@@ -465,6 +465,22 @@ fn read_symbol(
     }
 }
 
+/// [`read_symbol`] without a refill: one of at most
+/// [`READS_PER_REFILL`](crate::codec::common::static_dict::READS_PER_REFILL)
+/// reads after [`BitReader::refill`].
+#[inline(always)]
+fn read_refilled(
+    decs: &[StaticDecoder],
+    ctx: usize,
+    r: &mut BitReader<'_>,
+    k: u32,
+) -> Result<u32, OocError> {
+    match decs[ctx].get_refilled(r) {
+        Ok(v) => Ok(v),
+        Err(e) => Err(symbol_error(k, e)),
+    }
+}
+
 /// A symbol that could not be read, in tree `k`.
 #[cold]
 fn symbol_error(k: u32, e: FormatError) -> OocError {
@@ -537,8 +553,46 @@ pub(super) fn high_tree(h: &Header, bits: &[u8]) -> Result<(Vec<HighNode>, Vec<u
 }
 
 /// Decodes low-level tree `k` from its stream `bytes` and appends its
-/// i-HCCMesh to `out`.
+/// i-HCCMesh to `out`: [`decode_tree_with`] compiled for the x86-64 CPU
+/// features that shorten it (AVX2 with BMI1/2 and LZCNT: three-operand
+/// and 256-bit vector instructions, shifts by a register without moves),
+/// when the CPU has them, else for the baseline.
 fn decode_tree(
+    k: u32,
+    bytes: &[u8],
+    decs: &[StaticDecoder],
+    h: &Header,
+    s: &mut Scratch,
+    out: &mut Out,
+) -> Result<(), OocError> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+        fn wide(
+            k: u32,
+            bytes: &[u8],
+            decs: &[StaticDecoder],
+            h: &Header,
+            s: &mut Scratch,
+            out: &mut Out,
+        ) -> Result<(), OocError> {
+            decode_tree_with(k, bytes, decs, h, s, out)
+        }
+        use std::arch::is_x86_feature_detected as has;
+        // Each check reads a cached answer.
+        if has!("avx2") && has!("bmi1") && has!("bmi2") && has!("lzcnt") && has!("popcnt") {
+            // SAFETY: the CPU has every feature `wide` is compiled for.
+            return unsafe { wide(k, bytes, decs, h, s, out) };
+        }
+    }
+    decode_tree_with(k, bytes, decs, h, s, out)
+}
+
+/// [`decode_tree`] itself, inlined into each of its CPU-feature builds
+/// (as is everything it calls in the loops: the bit reader, the
+/// dictionaries, the model and the rebuild).
+#[inline(always)]
+fn decode_tree_with(
     k: u32,
     bytes: &[u8],
     decs: &[StaticDecoder],
@@ -553,12 +607,13 @@ fn decode_tree(
         .root(read_symbol(decs, CTX_TEMPLATE, &mut r, k)?)
         .map_err(bad)?;
     while let Some(at) = s.lay.pending.pop() {
-        let left = read_symbol(decs, CTX_TEMPLATE, &mut r, k)?;
-        let right = read_symbol(decs, CTX_TEMPLATE, &mut r, k)?;
+        r.refill();
+        let left = read_refilled(decs, CTX_TEMPLATE, &mut r, k)?;
+        let right = read_refilled(decs, CTX_TEMPLATE, &mut r, k)?;
         s.lay.expand(at, left, right).map_err(bad)?;
     }
     s.lay.list_kinds();
-    let n = s.lay.types.len();
+    let n = s.lay.positions();
     if out.nodes.len() + n > h.node_words as usize {
         return Err(bad("the trees hold more node words than the header says"));
     }
@@ -589,8 +644,10 @@ fn decode_tree(
         for _ in 0..count {
             let t = (s.tris.len() as u32) << 2;
             let mut c = [0u32; 3];
+            // One refill for the three corners.
+            r.refill();
             for (slot, cs) in c.iter_mut().enumerate() {
-                let sym = read_symbol(decs, CTX_CORNER + slot, &mut r, k)?;
+                let sym = read_refilled(decs, CTX_CORNER + slot, &mut r, k)?;
                 let v = cache.decode(sym, next).map_err(bad)?;
                 // Written whether or not `next` is used here (no branch
                 // on the symbol's kind): the entry stays once it is.
@@ -628,16 +685,19 @@ fn decode_tree(
     s.pts.clear();
     let mut outside = false;
     for &(ctx, slots) in &s.plans {
-        let mut d = [0i64; 3];
-        for (x, dx) in d.iter_mut().enumerate() {
-            *dx = unzigzag(u64::from(read_symbol(decs, ctx + x, &mut r, k)?));
-        }
         let pred = predicted(ctx, slots, &s.grid, max_q);
-        let g: [i64; 3] = std::array::from_fn(|x| i64::from(pred[x]) + d[x]);
-        outside |= g.iter().any(|&q| !(0..=i64::from(max_q)).contains(&q));
-        let g = g.map(|q| q as u32);
+        // Axis by axis, written out (`array::from_fn` stays a call).
+        let mut g = [0u32; 3];
+        // One refill for the three residuals.
+        r.refill();
+        for (x, gx) in g.iter_mut().enumerate() {
+            let d = unzigzag(u64::from(read_refilled(decs, ctx + x, &mut r, k)?));
+            let q = i64::from(pred[x]) + d;
+            outside |= !(0..=i64::from(max_q)).contains(&q);
+            *gx = q as u32;
+        }
         s.grid.push(g);
-        let p: [f32; 3] = std::array::from_fn(|a| out.q.value(a, g[a]));
+        let p = [0, 1, 2].map(|a| out.q.value(a, g[a]));
         s.pts.push(to_lanes(&[p[0], p[1], p[2], p[0], p[1], p[2]]));
     }
     if outside {

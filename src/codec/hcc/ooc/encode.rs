@@ -178,7 +178,7 @@ fn model_tree(
             .get(m.lay.ics.len())
             .map(|&w| Interconnection::unpack(w))
             .ok_or(bad("fewer inter-connections than template leaves"))?;
-        let start = m.lay.types.len();
+        let start = m.lay.positions();
         let left_nodes = TEMPLATES
             .get(ic.left_template as usize)
             .ok_or(bad("a template id is out of range"))?
@@ -193,7 +193,7 @@ fn model_tree(
             return Err(bad("an inter-connection's position is not the layout's"));
         }
     }
-    if m.lay.types != m.types || m.lay.ics.len() != ics.len() {
+    if m.lay.types() != m.types || m.lay.ics.len() != ics.len() {
         return Err(bad("the node types are not the templates'"));
     }
     // Leaves in node-word order: each triangle's corners, then its new

@@ -66,14 +66,19 @@ pub type Bad = &'static str;
 /// i-HCCMesh's layout (`encode.rs`: templates breadth-first, the two child
 /// templates of a template leaf back to back, template leaves taken from
 /// a stack), rebuilt from template symbols.
+///
+/// The per-position vectors keep room for one more template past
+/// [`positions`](Self::positions): a template is written as its whole
+/// fixed-size table, without growing a vector, and the room stays from
+/// tree to tree (no vector is cut or cleared).
 #[derive(Default)]
 pub struct Layout {
-    /// Node type of each position.
-    pub types: Vec<u32>,
+    /// Node type of each position (and room past them).
+    types: Vec<u32>,
     /// Positions of each inner node's children (unused for leaves).
-    pub kids: Vec<[u32; 2]>,
+    kids: Vec<[u32; 2]>,
     /// Inter-connection index of each template leaf (`u32::MAX` otherwise).
-    pub ic_of: Vec<u32>,
+    ic_of: Vec<u32>,
     /// Template leaves whose child templates are still to come.
     pub pending: Vec<u32>,
     /// Per inter-connection: left template, right template, left start.
@@ -87,6 +92,8 @@ pub struct Layout {
     /// have children), in increasing order (set by
     /// [`list_kinds`](Self::list_kinds)).
     pub inner: Vec<u32>,
+    /// Positions laid out so far.
+    len: usize,
 }
 
 /// A template's nodes as [`Layout::alloc`] lays them out, by local index:
@@ -98,7 +105,7 @@ pub struct Layout {
 struct Shape {
     nodes: u8,
     types: [u32; MAX_TEMPLATE_NODES],
-    kids: [[u8; 2]; MAX_TEMPLATE_NODES],
+    kids: [[u32; 2]; MAX_TEMPLATE_NODES],
     /// How many nodes `deep` lists.
     deepest: u8,
     deep: [u8; 8],
@@ -129,7 +136,7 @@ const fn shapes() -> [Shape; TEMPLATE_COUNT] {
                 depth[c] = depth[i] + 1;
                 depth[c + 1] = depth[i] + 1;
                 out[id].types[i] = TYPE_INNER;
-                out[id].kids[i] = [c as u8, c as u8 + 1];
+                out[id].kids[i] = [c as u32, c as u32 + 1];
             } else if depth[i] as usize == MAX_HEIGHT - 1 {
                 out[id].deep[out[id].deepest as usize] = i as u8;
                 out[id].deepest += 1;
@@ -145,13 +152,43 @@ const fn shapes() -> [Shape; TEMPLATE_COUNT] {
 impl Layout {
     /// Clears the layout for the next tree.
     pub fn clear(&mut self) {
-        self.types.clear();
-        self.kids.clear();
-        self.ic_of.clear();
+        self.len = 0;
         self.pending.clear();
         self.ics.clear();
         self.leaves.clear();
         self.inner.clear();
+    }
+
+    /// Positions laid out so far.
+    pub fn positions(&self) -> usize {
+        self.len
+    }
+
+    /// Node type of each position.
+    pub fn types(&self) -> &[u32] {
+        &self.types[..self.len]
+    }
+
+    /// Positions of each node's children (unused for leaves).
+    pub fn kids(&self) -> &[[u32; 2]] {
+        &self.kids[..self.len]
+    }
+
+    /// Inter-connection index of each position (`u32::MAX` but for
+    /// template leaves).
+    pub fn ic_of(&self) -> &[u32] {
+        &self.ic_of[..self.len]
+    }
+
+    /// Grows the per-position vectors to hold `n` positions.
+    #[cold]
+    fn grow(&mut self, n: usize) {
+        let n = n
+            .max(2 * self.types.len())
+            .min(MAX_TREE_NODES + MAX_TEMPLATE_NODES);
+        self.types.resize(n, TYPE_LEAF);
+        self.kids.resize(n, [0; 2]);
+        self.ic_of.resize(n, u32::MAX);
     }
 
     /// Lays out the template of symbol `sym` at the end; returns its id and
@@ -163,42 +200,44 @@ impl Layout {
             return Err("a template symbol is out of range");
         }
         let shape = &SHAPES[id];
-        let start = self.types.len() as u32;
+        let start = self.len;
         let nodes = shape.nodes as usize;
-        if self.types.len() + nodes > MAX_TREE_NODES {
+        if start + nodes > MAX_TREE_NODES {
             return Err("a low-level tree has more nodes than positions address");
         }
         let mut tl_bits = sym >> 5;
         if tl_bits >> shape.deepest != 0 {
             return Err("a template symbol marks nodes the template does not have");
         }
-        // The template's nodes with every deepest childless node a leaf,
-        // then the template leaves the symbol marks, in node order. Copies
-        // of the whole (fixed-size) tables cut back to the template's
-        // nodes: no copy of a variable length, which would be a call.
-        let end = start as usize + nodes;
-        self.types.extend_from_slice(&shape.types);
-        self.types.truncate(end);
-        self.kids
-            .extend_from_slice(&shape.kids.map(|k| k.map(|c| start + u32::from(c))));
-        self.kids.truncate(end);
-        self.ic_of
-            .extend_from_slice(&[u32::MAX; MAX_TEMPLATE_NODES]);
-        self.ic_of.truncate(end);
+        // The template's whole (fixed-size) tables, with every deepest
+        // childless node a leaf, written at the end (the vectors keep room
+        // for them; the positions past its nodes are overwritten by the
+        // next template), then the template leaves the symbol marks.
+        let end = start + MAX_TEMPLATE_NODES;
+        if self.types.len() < end {
+            self.grow(end);
+        }
+        let at = start as u32;
+        self.types[start..end].copy_from_slice(&shape.types);
+        for (k, s) in self.kids[start..end].iter_mut().zip(&shape.kids) {
+            *k = [s[0] + at, s[1] + at];
+        }
+        self.ic_of[start..end].fill(u32::MAX);
+        self.len = start + nodes;
         while tl_bits != 0 {
-            let p = start + u32::from(shape.deep[tl_bits.trailing_zeros() as usize % 8]);
+            let p = at + u32::from(shape.deep[tl_bits.trailing_zeros() as usize % 8]);
             tl_bits &= tl_bits - 1;
             self.types[p as usize] = TYPE_TEMPLATE_LEAF;
             self.pending.push(p);
         }
-        Ok((id as u8, start))
+        Ok((id as u8, at))
     }
 
     /// Lists the positions of leaves and of the other nodes
     /// ([`leaves`](Self::leaves), [`inner`](Self::inner)) once every
     /// template is laid out.
     pub fn list_kinds(&mut self) {
-        let n = self.types.len();
+        let n = self.len;
         self.leaves.clear();
         self.inner.clear();
         self.leaves.resize(n, 0);
@@ -206,7 +245,7 @@ impl Layout {
         // Each position is written to both lists and kept in one: no
         // branch on the node type.
         let (mut l, mut i) = (0, 0);
-        for (p, &ty) in self.types.iter().enumerate() {
+        for (p, &ty) in self.types[..n].iter().enumerate() {
             let leaf = usize::from(ty == TYPE_LEAF);
             self.leaves[l] = p as u32;
             self.inner[i] = p as u32;
@@ -610,11 +649,13 @@ pub fn plan(c: [u32; 3], k: usize, v: u32, adj: &Adjacency) -> (usize, [u32; 3])
 pub fn predicted(ctx: usize, [a, b, o]: [u32; 3], pos: &[[u32; 3]], max_q: u32) -> [u32; 3] {
     let (pa, pb, po) = (pos[a as usize], pos[b as usize], pos[o as usize]);
     let para = ctx == CTX_PARA;
-    std::array::from_fn(|x| {
+    // Axis by axis, written out: `array::from_fn` here stays a call.
+    let axis = |x: usize| {
         let sum = i64::from(pa[x]) + i64::from(pb[x]);
         let p = (sum - i64::from(po[x])).clamp(0, i64::from(max_q));
         if para { p as u32 } else { (sum >> 1) as u32 }
-    })
+    };
+    [axis(0), axis(1), axis(2)]
 }
 
 /// The grid slot 0 of [`plan`]: the centre of a grid of `max_q` + 1 steps.
@@ -702,9 +743,12 @@ mod tests {
         while let Some(at) = lay.pending.pop() {
             lay.expand(at, 0, 0).unwrap();
         }
-        assert_eq!(lay.types.len(), 15 + 16);
+        lay.list_kinds();
+        assert_eq!(lay.types().len(), 15 + 16);
+        assert_eq!(lay.leaves.len(), 16);
+        assert_eq!(lay.inner.len(), 15);
         assert_eq!(lay.ics.len(), 8);
-        assert_eq!(template_symbol(full, 0, &lay.types), Some(sym));
+        assert_eq!(template_symbol(full, 0, lay.types()), Some(sym));
         assert!(
             Layout::default()
                 .root(u32::from(full) | 0x1ff << 5)

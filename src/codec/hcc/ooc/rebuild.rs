@@ -60,8 +60,10 @@ impl Rebuild {
     /// `i`-th leaf (in `lay.leaves`) holds `tris[spans[i].0..][..spans[i].1]`
     /// (`tris[i]` alone when `spans` is empty, which it must be exactly
     /// when `multi` is `None`), over vertices `pts`. Counts its pairs and templates in `stats`;
-    /// returns the tree's tight box.
+    /// returns the tree's tight box. Inlined, so that each of the
+    /// decoder's CPU-feature builds compiles it for its features.
     #[allow(clippy::type_complexity)]
+    #[inline(always)]
     pub fn tree(
         &mut self,
         lay: &Layout,
@@ -78,9 +80,10 @@ impl Rebuild {
             let (first, count) = spans[i];
             &tris[first as usize..(first + count) as usize]
         };
-        let n = lay.types.len();
-        let types = &lay.types[..n];
-        let kids = &lay.kids[..n];
+        let n = lay.positions();
+        let types = lay.types();
+        let kids = lay.kids();
+        let ic_of = lay.ic_of();
         self.tight.resize(n, ([0.0; 8], [0; 8]));
         self.decoded.resize(n, [0.0; 8]);
         // Tight boxes and the vertices attaining them: the leaves, then the
@@ -108,7 +111,7 @@ impl Rebuild {
             // A select, not a branch: template leaves come unpredictably.
             // (Other nodes have no inter-connection: their masked field
             // is computed and dropped.)
-            let ic = lay.ic_of[p as usize] & INDEX_MASK;
+            let ic = ic_of[p as usize] & INDEX_MASK;
             let tl = pack_node([0, 0, ic], 0, TYPE_TEMPLATE_LEAF);
             let w = &mut words[p as usize];
             *w = if types[p as usize] == TYPE_TEMPLATE_LEAF {
@@ -143,7 +146,9 @@ impl Rebuild {
         self.ic_vertex.clear();
         self.ic_vertex.resize(lay.ics.len() + 1, 0);
         let spare = lay.ics.len();
-        // Pairs top-down, each against its parent's decoded box.
+        // Pairs top-down, each against its parent's decoded box; the
+        // counts kept in locals (registers), added to `stats` after.
+        let (mut inner_pairs, mut mixed_pairs, mut loose) = (0, 0, 0);
         self.decoded[0] = self.tight[0].0;
         for &p in &lay.inner {
             let pair = kids[p as usize].map(|k| k as usize);
@@ -157,18 +162,21 @@ impl Rebuild {
             for (side, &pos) in pair.iter().enumerate() {
                 let f = pc.fields[side];
                 let tl = types[pos] == TYPE_TEMPLATE_LEAF;
-                let ic = if tl { lay.ic_of[pos] as usize } else { spare };
+                let ic = if tl { ic_of[pos] as usize } else { spare };
                 self.ic_vertex[ic] = f[2];
                 let third = if tl { 0 } else { f[2] << (2 * INDEX_BITS) };
                 words[pos] |=
                     f[0] | f[1] << INDEX_BITS | third | (pc.mask >> (3 * side) & 7) << MASK_SHIFT;
             }
-            stats.inner_pairs += usize::from(!ll && !rl);
-            stats.mixed_pairs += usize::from(ll != rl);
-            stats.loose_extents += pc.loose;
+            inner_pairs += usize::from(!ll && !rl);
+            mixed_pairs += usize::from(ll != rl);
+            loose += pc.loose;
             self.decoded[l] = pc.boxes[0];
             self.decoded[r] = pc.boxes[1];
         }
+        stats.inner_pairs += inner_pairs;
+        stats.mixed_pairs += mixed_pairs;
+        stats.loose_extents += loose;
         if types[0] != TYPE_LEAF {
             words[0] |= u32::from(lay.root_template);
         }
