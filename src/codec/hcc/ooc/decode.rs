@@ -459,10 +459,8 @@ fn read_symbol(
     r: &mut BitReader<'_>,
     k: u32,
 ) -> Result<u32, OocError> {
-    match decs[ctx].get(r) {
-        Ok(v) => Ok(v),
-        Err(e) => Err(symbol_error(k, e)),
-    }
+    r.refill();
+    read_refilled(decs, ctx, r, k)
 }
 
 /// [`read_symbol`] without a refill: one of at most
