@@ -551,46 +551,8 @@ pub(super) fn high_tree(h: &Header, bits: &[u8]) -> Result<(Vec<HighNode>, Vec<u
 }
 
 /// Decodes low-level tree `k` from its stream `bytes` and appends its
-/// i-HCCMesh to `out`: [`decode_tree_with`] compiled for the x86-64 CPU
-/// features that shorten it (AVX2 with BMI1/2 and LZCNT: three-operand
-/// and 256-bit vector instructions, shifts by a register without moves),
-/// when the CPU has them, else for the baseline.
+/// i-HCCMesh to `out`.
 fn decode_tree(
-    k: u32,
-    bytes: &[u8],
-    decs: &[StaticDecoder],
-    h: &Header,
-    s: &mut Scratch,
-    out: &mut Out,
-) -> Result<(), OocError> {
-    #[cfg(target_arch = "x86_64")]
-    {
-        #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
-        fn wide(
-            k: u32,
-            bytes: &[u8],
-            decs: &[StaticDecoder],
-            h: &Header,
-            s: &mut Scratch,
-            out: &mut Out,
-        ) -> Result<(), OocError> {
-            decode_tree_with(k, bytes, decs, h, s, out)
-        }
-        use std::arch::is_x86_feature_detected as has;
-        // Each check reads a cached answer.
-        if has!("avx2") && has!("bmi1") && has!("bmi2") && has!("lzcnt") && has!("popcnt") {
-            // SAFETY: the CPU has every feature `wide` is compiled for.
-            return unsafe { wide(k, bytes, decs, h, s, out) };
-        }
-    }
-    decode_tree_with(k, bytes, decs, h, s, out)
-}
-
-/// [`decode_tree`] itself, inlined into each of its CPU-feature builds
-/// (as is everything it calls in the loops: the bit reader, the
-/// dictionaries, the model and the rebuild).
-#[inline(always)]
-fn decode_tree_with(
     k: u32,
     bytes: &[u8],
     decs: &[StaticDecoder],

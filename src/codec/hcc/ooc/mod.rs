@@ -87,9 +87,7 @@
 //! by then, so that no symbol read waits for the modelling of another
 //! part. The file's size is the same. A triangle's three corners, a
 //! vertex's three residuals and a template leaf's two templates are each
-//! read after one refill of the bit reader, and the decoder is compiled
-//! twice: for the x86-64 baseline and, chosen at run time, for AVX2 with
-//! BMI1/2 and LZCNT.
+//! read after one refill of the bit reader.
 //!
 //! Every context has its own static dictionary, one for the whole file
 //! (so that a tree decodes alone, for on-demand decoding), sized by §5.2's

@@ -60,8 +60,8 @@ impl Rebuild {
     /// `i`-th leaf (in `lay.leaves`) holds `tris[spans[i].0..][..spans[i].1]`
     /// (`tris[i]` alone when `spans` is empty, which it must be exactly
     /// when `multi` is `None`), over vertices `pts`. Counts its pairs and templates in `stats`;
-    /// returns the tree's tight box. Inlined, so that each of the
-    /// decoder's CPU-feature builds compiles it for its features.
+    /// returns the tree's tight box. Inlined into the decoder, its one
+    /// caller.
     #[allow(clippy::type_complexity)]
     #[inline(always)]
     pub fn tree(
