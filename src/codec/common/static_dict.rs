@@ -367,8 +367,7 @@ pub struct StaticDecoder {
     /// take at most [`FAST_SPAN`] bits: its value's base (bits 32–63), the
     /// bits it takes (16–23), the code's length (bits 8–15, never 0) and
     /// the extra bits' count (bits 0–7); 0 otherwise (the code is read
-    /// bit by bit). A
-    /// fixed-size table: the masked index needs no bounds check.
+    /// bit by bit). Fixed-size, so the masked index needs no bounds check.
     fast: Box<[u64; 1 << FAST_BITS]>,
     esc: u32,
     k: u32,
@@ -393,7 +392,8 @@ impl StaticDecoder {
     /// last [`BitReader::refill`]: short codes (most of them: ranks are
     /// sorted by frequency) by one look-up in the bits already buffered,
     /// so that where the next code starts waits for this code's length
-    /// only, not for a load from the stream; other codes refill first.
+    /// only, not for a load from the stream; other codes refill before
+    /// and after.
     #[inline(always)]
     pub fn get_refilled(&self, r: &mut BitReader<'_>) -> Result<u32, FormatError> {
         let w = r.buffered();
