@@ -572,7 +572,6 @@ fn decode_tree(
         let right = read_refilled(decs, CTX_TEMPLATE, &mut r, k)?;
         s.lay.expand(at, left, right).map_err(bad)?;
     }
-    s.lay.list_kinds();
     let n = s.lay.positions();
     if out.nodes.len() + n > h.node_words as usize {
         return Err(bad("the trees hold more node words than the header says"));

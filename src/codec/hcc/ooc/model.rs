@@ -86,11 +86,12 @@ pub struct Layout {
     /// Template id of the root template.
     pub root_template: u8,
     /// Positions of the leaves (type [`TYPE_LEAF`]), in increasing order
-    /// (set by [`list_kinds`](Self::list_kinds)).
+    /// (each template lists its own as it is laid out: templates are laid
+    /// out at increasing positions, and their types are final then).
     pub leaves: Vec<u32>,
     /// Positions of the other nodes (inner nodes and template leaves, which
-    /// have children), in increasing order (set by
-    /// [`list_kinds`](Self::list_kinds)).
+    /// have children), in increasing order (listed as
+    /// [`leaves`](Self::leaves) are).
     pub inner: Vec<u32>,
     /// Positions laid out so far.
     len: usize,
@@ -109,6 +110,9 @@ struct Shape {
     /// How many nodes `deep` lists.
     deepest: u8,
     deep: [u8; 8],
+    /// Bit `i` set when local node `i` is childless (a leaf unless the
+    /// symbol makes it a template leaf).
+    childless: u16,
 }
 
 /// Every template's [`Shape`], by template id.
@@ -122,6 +126,7 @@ const fn shapes() -> [Shape; TEMPLATE_COUNT] {
         kids: [[0; 2]; MAX_TEMPLATE_NODES],
         deepest: 0,
         deep: [0; 8],
+        childless: 0,
     }; TEMPLATE_COUNT];
     let mut id = 0;
     while id < TEMPLATE_COUNT {
@@ -137,9 +142,12 @@ const fn shapes() -> [Shape; TEMPLATE_COUNT] {
                 depth[c + 1] = depth[i] + 1;
                 out[id].types[i] = TYPE_INNER;
                 out[id].kids[i] = [c as u32, c as u32 + 1];
-            } else if depth[i] as usize == MAX_HEIGHT - 1 {
-                out[id].deep[out[id].deepest as usize] = i as u8;
-                out[id].deepest += 1;
+            } else {
+                out[id].childless |= 1 << i;
+                if depth[i] as usize == MAX_HEIGHT - 1 {
+                    out[id].deep[out[id].deepest as usize] = i as u8;
+                    out[id].deepest += 1;
+                }
             }
             i += 1;
         }
@@ -224,36 +232,26 @@ impl Layout {
         }
         self.ic_of[start..end].fill(u32::MAX);
         self.len = start + nodes;
+        let mut leaves = u32::from(shape.childless);
         while tl_bits != 0 {
-            let p = at + u32::from(shape.deep[tl_bits.trailing_zeros() as usize % 8]);
+            let local = shape.deep[tl_bits.trailing_zeros() as usize % 8];
             tl_bits &= tl_bits - 1;
+            leaves &= !(1 << local);
+            let p = at + u32::from(local);
             self.types[p as usize] = TYPE_TEMPLATE_LEAF;
             self.pending.push(p);
         }
-        Ok((id as u8, at))
-    }
-
-    /// Lists the positions of leaves and of the other nodes
-    /// ([`leaves`](Self::leaves), [`inner`](Self::inner)) once every
-    /// template is laid out.
-    pub fn list_kinds(&mut self) {
-        let n = self.len;
-        self.leaves.clear();
-        self.inner.clear();
-        self.leaves.resize(n, 0);
-        self.inner.resize(n, 0);
-        // Each position is written to both lists and kept in one: no
-        // branch on the node type.
-        let (mut l, mut i) = (0, 0);
-        for (p, &ty) in self.types[..n].iter().enumerate() {
-            let leaf = usize::from(ty == TYPE_LEAF);
-            self.leaves[l] = p as u32;
-            self.inner[i] = p as u32;
-            l += leaf;
-            i += 1 - leaf;
+        // The template's leaves and other nodes, in increasing order.
+        let mut inner = !leaves & ((1 << nodes) - 1);
+        while leaves != 0 {
+            self.leaves.push(at + leaves.trailing_zeros());
+            leaves &= leaves - 1;
         }
-        self.leaves.truncate(l);
-        self.inner.truncate(i);
+        while inner != 0 {
+            self.inner.push(at + inner.trailing_zeros());
+            inner &= inner - 1;
+        }
+        Ok((id as u8, at))
     }
 
     /// Starts a tree with the root template's symbol.
@@ -743,10 +741,14 @@ mod tests {
         while let Some(at) = lay.pending.pop() {
             lay.expand(at, 0, 0).unwrap();
         }
-        lay.list_kinds();
         assert_eq!(lay.types().len(), 15 + 16);
         assert_eq!(lay.leaves.len(), 16);
         assert_eq!(lay.inner.len(), 15);
+        // The lists as the types give them: every position in one, in
+        // increasing order.
+        let (leaves, inner): (Vec<u32>, Vec<u32>) =
+            (0..lay.positions() as u32).partition(|&p| lay.types()[p as usize] == TYPE_LEAF);
+        assert_eq!((&lay.leaves, &lay.inner), (&leaves, &inner));
         assert_eq!(lay.ics.len(), 8);
         assert_eq!(template_symbol(full, 0, lay.types()), Some(sym));
         assert!(
@@ -755,5 +757,43 @@ mod tests {
                 .is_err()
         );
         assert!(Layout::default().root(26).is_err());
+    }
+
+    /// Random mixes of templates and template leaves: the leaf and inner
+    /// lists each template adds as it is laid out are the types' own, in
+    /// increasing order, across trees laid out one after the other.
+    #[test]
+    fn layouts_list_leaves_and_other_nodes_in_position_order() {
+        let mut x = 5u64;
+        let mut next = |n: u32| {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (x >> 33) as u32 % n
+        };
+        let mut lay = Layout::default();
+        let mut template_leaves = 0;
+        for _ in 0..300 {
+            // A symbol of a random template with random template leaves
+            // (masked to the nodes it has), fewer of them deeper down.
+            let sym = |next: &mut dyn FnMut(u32) -> u32, depth: u32| {
+                let id = next(TEMPLATE_COUNT as u32) as usize;
+                let marks = if depth < 3 { next(256) } else { 0 };
+                id as u32 | (marks & ((1 << SHAPES[id].deepest) - 1)) << 5
+            };
+            lay.root(sym(&mut next, 0)).unwrap();
+            let mut depth = 0;
+            while let Some(at) = lay.pending.pop() {
+                depth += 1;
+                let (l, r) = (sym(&mut next, depth / 8), sym(&mut next, depth / 8));
+                lay.expand(at, l, r).unwrap();
+            }
+            let types = lay.types();
+            template_leaves += types.iter().filter(|&&t| t == TYPE_TEMPLATE_LEAF).count();
+            let (leaves, inner): (Vec<u32>, Vec<u32>) =
+                (0..lay.positions() as u32).partition(|&p| types[p as usize] == TYPE_LEAF);
+            assert_eq!((&lay.leaves, &lay.inner), (&leaves, &inner));
+        }
+        assert!(template_leaves > 300, "the mixes have template leaves");
     }
 }
