@@ -27,7 +27,7 @@ use crate::codec::common::static_dict::{StaticDecoder, StaticDict};
 struct Scratch {
     lay: Layout,
     adj: Adjacency,
-    /// Per leaf (in `lay.leaves`), its first triangle in `tris` and its
+    /// Per leaf (in `lay.leaves()`), its first triangle in `tris` and its
     /// count; empty without multi-triangle leaves (leaf `i` holds triangle
     /// `i`).
     spans: Vec<(u32, u32)>,
@@ -585,7 +585,7 @@ fn decode_tree(
     s.spans.clear();
     s.first_use.resize(MAX_TREE_VERTICES + 3, 0);
     let mut next = 0u32;
-    for _ in 0..s.lay.leaves.len() {
+    for _ in 0..s.lay.leaves().len() {
         let count = if h.multi {
             read_symbol(decs, CTX_LEAF, &mut r, k)? + 1
         } else {
@@ -686,7 +686,7 @@ fn decode_tree(
     out.roots.push(root);
     let base = out.nodes.len() - n;
     out.leaf_bits.resize(out.nodes.len().div_ceil(64), 0);
-    for &p in &s.lay.leaves {
+    for &p in s.lay.leaves() {
         let p = base + p as usize;
         out.leaf_bits[p / 64] |= 1 << (p % 64);
     }

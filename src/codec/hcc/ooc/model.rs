@@ -85,14 +85,14 @@ pub struct Layout {
     pub ics: Vec<(u8, u8, u32)>,
     /// Template id of the root template.
     pub root_template: u8,
-    /// Positions of the leaves (type [`TYPE_LEAF`]), in increasing order
-    /// (each template lists its own as it is laid out: templates are laid
-    /// out at increasing positions, and their types are final then).
-    pub leaves: Vec<u32>,
-    /// Positions of the other nodes (inner nodes and template leaves, which
-    /// have children), in increasing order (listed as
-    /// [`leaves`](Self::leaves) are).
-    pub inner: Vec<u32>,
+    /// Positions of the leaves (see [`leaves`](Self::leaves)), and room
+    /// past them for one more template's.
+    leaves: Vec<u32>,
+    /// Positions of the other nodes (see [`inner`](Self::inner)), and room
+    /// past them.
+    inner: Vec<u32>,
+    /// Entries of `leaves` and `inner` in use.
+    lists: [usize; 2],
     /// Positions laid out so far.
     len: usize,
 }
@@ -110,9 +110,18 @@ struct Shape {
     /// How many nodes `deep` lists.
     deepest: u8,
     deep: [u8; 8],
-    /// Bit `i` set when local node `i` is childless (a leaf unless the
-    /// symbol makes it a template leaf).
-    childless: u16,
+    /// The childless nodes' local indices, in increasing order (unused
+    /// entries 0), and how many there are.
+    childless: [u8; 8],
+    childless_count: u8,
+    /// Per entry of `childless`, its bit in the symbol's template-leaf
+    /// bits (the entry's index in `deep`), or 8 (no bit) for one above the
+    /// deepest level.
+    deep_bit: [u8; 8],
+    /// The nodes with children, in increasing order (unused entries 0),
+    /// and how many there are.
+    parents: [u8; 8],
+    parent_count: u8,
 }
 
 /// Every template's [`Shape`], by template id.
@@ -126,7 +135,11 @@ const fn shapes() -> [Shape; TEMPLATE_COUNT] {
         kids: [[0; 2]; MAX_TEMPLATE_NODES],
         deepest: 0,
         deep: [0; 8],
-        childless: 0,
+        childless: [0; 8],
+        childless_count: 0,
+        deep_bit: [8; 8],
+        parents: [0; 8],
+        parent_count: 0,
     }; TEMPLATE_COUNT];
     let mut id = 0;
     while id < TEMPLATE_COUNT {
@@ -142,9 +155,14 @@ const fn shapes() -> [Shape; TEMPLATE_COUNT] {
                 depth[c + 1] = depth[i] + 1;
                 out[id].types[i] = TYPE_INNER;
                 out[id].kids[i] = [c as u32, c as u32 + 1];
+                out[id].parents[out[id].parent_count as usize] = i as u8;
+                out[id].parent_count += 1;
             } else {
-                out[id].childless |= 1 << i;
+                let k = out[id].childless_count as usize;
+                out[id].childless[k] = i as u8;
+                out[id].childless_count += 1;
                 if depth[i] as usize == MAX_HEIGHT - 1 {
+                    out[id].deep_bit[k] = out[id].deepest;
                     out[id].deep[out[id].deepest as usize] = i as u8;
                     out[id].deepest += 1;
                 }
@@ -163,8 +181,24 @@ impl Layout {
         self.len = 0;
         self.pending.clear();
         self.ics.clear();
-        self.leaves.clear();
-        self.inner.clear();
+        self.lists = [0; 2];
+    }
+
+    /// Positions of the leaves (type [`TYPE_LEAF`]), in increasing order:
+    /// each template lists its own as it is laid out (templates are laid
+    /// out at increasing positions, and their types are final then).
+    pub fn leaves(&self) -> &[u32] {
+        &self.leaves[..self.lists[0]]
+    }
+
+    /// Positions of the other nodes (inner nodes and template leaves,
+    /// which have children), in increasing order, listed as
+    /// [`leaves`](Self::leaves) are: a template's nodes with children,
+    /// then its template leaves (which sit on its deepest level, numbered
+    /// after every node with children: templates number their nodes
+    /// breadth-first).
+    pub fn inner(&self) -> &[u32] {
+        &self.inner[..self.lists[1]]
     }
 
     /// Positions laid out so far.
@@ -197,6 +231,11 @@ impl Layout {
         self.types.resize(n, TYPE_LEAF);
         self.kids.resize(n, [0; 2]);
         self.ic_of.resize(n, u32::MAX);
+        // Each list holds at most every position, and room for one more
+        // template's entries written whole (8 leaves; 8 nodes with
+        // children and 8 template leaves).
+        self.leaves.resize(n + 8, 0);
+        self.inner.resize(n + 16, 0);
     }
 
     /// Lays out the template of symbol `sym` at the end; returns its id and
@@ -232,25 +271,34 @@ impl Layout {
         }
         self.ic_of[start..end].fill(u32::MAX);
         self.len = start + nodes;
-        let mut leaves = u32::from(shape.childless);
+        // The lists, written whole into their room (the grown vectors
+        // hold the positions and the room) and kept in part, without
+        // branches on the template's shape: its childless nodes that the
+        // symbol does not mark are leaves, in order; its nodes with
+        // children, then the template leaves it marks, are the others.
+        let [nl, ni] = self.lists;
+        let marks = tl_bits;
+        let leaves: &mut [u32; 8] = (&mut self.leaves[nl..nl + 8]).try_into().unwrap();
+        let mut kept = 0;
+        for k in 0..8 {
+            leaves[kept % 8] = at + u32::from(shape.childless[k]);
+            let marked = marks >> shape.deep_bit[k] & 1;
+            kept += usize::from(k < usize::from(shape.childless_count)) & (1 - marked) as usize;
+        }
+        let inner: &mut [u32; 16] = (&mut self.inner[ni..ni + 16]).try_into().unwrap();
+        for (slot, &local) in inner.iter_mut().zip(&shape.parents) {
+            *slot = at + u32::from(local);
+        }
+        let mut listed = usize::from(shape.parent_count);
         while tl_bits != 0 {
-            let local = shape.deep[tl_bits.trailing_zeros() as usize % 8];
+            let p = at + u32::from(shape.deep[tl_bits.trailing_zeros() as usize % 8]);
             tl_bits &= tl_bits - 1;
-            leaves &= !(1 << local);
-            let p = at + u32::from(local);
             self.types[p as usize] = TYPE_TEMPLATE_LEAF;
             self.pending.push(p);
+            inner[listed % 16] = p;
+            listed += 1;
         }
-        // The template's leaves and other nodes, in increasing order.
-        let mut inner = !leaves & ((1 << nodes) - 1);
-        while leaves != 0 {
-            self.leaves.push(at + leaves.trailing_zeros());
-            leaves &= leaves - 1;
-        }
-        while inner != 0 {
-            self.inner.push(at + inner.trailing_zeros());
-            inner &= inner - 1;
-        }
+        self.lists = [nl + kept, ni + listed];
         Ok((id as u8, at))
     }
 
@@ -742,13 +790,13 @@ mod tests {
             lay.expand(at, 0, 0).unwrap();
         }
         assert_eq!(lay.types().len(), 15 + 16);
-        assert_eq!(lay.leaves.len(), 16);
-        assert_eq!(lay.inner.len(), 15);
+        assert_eq!(lay.leaves().len(), 16);
+        assert_eq!(lay.inner().len(), 15);
         // The lists as the types give them: every position in one, in
         // increasing order.
         let (leaves, inner): (Vec<u32>, Vec<u32>) =
             (0..lay.positions() as u32).partition(|&p| lay.types()[p as usize] == TYPE_LEAF);
-        assert_eq!((&lay.leaves, &lay.inner), (&leaves, &inner));
+        assert_eq!((lay.leaves(), lay.inner()), (&leaves[..], &inner[..]));
         assert_eq!(lay.ics.len(), 8);
         assert_eq!(template_symbol(full, 0, lay.types()), Some(sym));
         assert!(
@@ -792,7 +840,7 @@ mod tests {
             template_leaves += types.iter().filter(|&&t| t == TYPE_TEMPLATE_LEAF).count();
             let (leaves, inner): (Vec<u32>, Vec<u32>) =
                 (0..lay.positions() as u32).partition(|&p| types[p as usize] == TYPE_LEAF);
-            assert_eq!((&lay.leaves, &lay.inner), (&leaves, &inner));
+            assert_eq!((lay.leaves(), lay.inner()), (&leaves[..], &inner[..]));
         }
         assert!(template_leaves > 300, "the mixes have template leaves");
     }

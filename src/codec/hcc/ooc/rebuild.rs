@@ -57,7 +57,7 @@ impl Rebuild {
     /// Appends the node words and inter-connections of the tree laid out
     /// in `lay` to `nodes` and `ics` (and, for multi-triangle leaves, its
     /// triangle blocks to `blocks` and their start to `block_start`); the
-    /// `i`-th leaf (in `lay.leaves`) holds `tris[spans[i].0..][..spans[i].1]`
+    /// `i`-th leaf (in `lay.leaves()`) holds `tris[spans[i].0..][..spans[i].1]`
     /// (`tris[i]` alone when `spans` is empty, which it must be exactly
     /// when `multi` is `None`), over vertices `pts`. Counts its pairs and templates in `stats`;
     /// returns the tree's tight box. Inlined into the decoder, its one
@@ -91,15 +91,15 @@ impl Rebuild {
         // their parent); ties go to the first corner and to the left
         // child, as the encoder's.
         if spans.is_empty() {
-            for (&p, &c) in lay.leaves.iter().zip(tris) {
+            for (&p, &c) in lay.leaves().iter().zip(tris) {
                 self.tight[p as usize] = triangle_box(c, pts);
             }
         } else {
-            for (i, &p) in lay.leaves.iter().enumerate() {
+            for (i, &p) in lay.leaves().iter().enumerate() {
                 self.tight[p as usize] = leaf_box(leaf(i), pts);
             }
         }
-        for &p in lay.inner.iter().rev() {
+        for &p in lay.inner().iter().rev() {
             let [l, r] = kids[p as usize].map(|k| k as usize);
             let ((tl, al), (tr, ar)) = (&self.tight[l], &self.tight[r]);
             self.tight[p as usize] = union((tl, al), (tr, ar));
@@ -107,7 +107,7 @@ impl Rebuild {
         let base = nodes.len();
         nodes.resize(base + n, TYPE_INNER << TYPE_SHIFT);
         let words = &mut nodes[base..];
-        for &p in &lay.inner {
+        for &p in lay.inner() {
             // A select, not a branch: template leaves come unpredictably.
             // (Other nodes have no inter-connection: their masked field
             // is computed and dropped.)
@@ -122,7 +122,7 @@ impl Rebuild {
         }
         match multi {
             None => {
-                for (&p, &c) in lay.leaves.iter().zip(tris) {
+                for (&p, &c) in lay.leaves().iter().zip(tris) {
                     words[p as usize] = pack_node(c, 0, TYPE_LEAF);
                 }
             }
@@ -132,7 +132,7 @@ impl Rebuild {
                 // offset within the leaf word's field.
                 let slot_bits = block::slot_bits(tris.len() as u32);
                 let mut w = BitWriter::default();
-                for (i, &p) in lay.leaves.iter().enumerate() {
+                for (i, &p) in lay.leaves().iter().enumerate() {
                     let (slot, count) = spans[i];
                     let at = block::write(&mut w, slot, slot_bits, leaf(i));
                     debug_assert!(at < 1 << MULTI_OFFSET_BITS);
@@ -150,7 +150,7 @@ impl Rebuild {
         // counts kept in locals (registers), added to `stats` after.
         let (mut inner_pairs, mut mixed_pairs, mut loose) = (0, 0, 0);
         self.decoded[0] = self.tight[0].0;
-        for &p in &lay.inner {
+        for &p in lay.inner() {
             let pair = kids[p as usize].map(|k| k as usize);
             let [l, r] = pair;
             let (ll, rl) = (types[l] == TYPE_LEAF, types[r] == TYPE_LEAF);
