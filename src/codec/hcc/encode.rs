@@ -58,7 +58,7 @@ struct Tight {
 }
 
 /// The tight boxes of `bvh`'s nodes over `triangles` with positions
-/// `points` (the decoded positions: quantized ones when quantizing).
+/// `points` (world positions, or grid coordinates when quantizing).
 fn tight(bvh: &CanonicalBvh, triangles: &[[u32; 3]], points: &[[f32; 3]]) -> Tight {
     let n = bvh.nodes.len();
     let mut boxes = vec![[0.0f32; 6]; n];
@@ -107,7 +107,11 @@ fn tight(bvh: &CanonicalBvh, triangles: &[[u32; 3]], points: &[[f32; 3]]) -> Tig
 struct Scratch<'a> {
     bvh: &'a CanonicalBvh,
     mesh: &'a Mesh,
+    /// The tight boxes: in world coordinates, or with quantized vertices
+    /// in the grid's integer coordinates (see `grid`).
     tight: Tight,
+    /// The quantization grid, when `tight` is on it.
+    grid: Option<Quantized>,
     /// Local position of each canonical node in its low-level tree.
     pos_of: Vec<u32>,
     /// Local vertex index of each mesh vertex, valid where `stamp` is the
@@ -264,6 +268,7 @@ impl HccBvh {
                 boxes: Vec::new(),
                 verts: Vec::new(),
             },
+            grid: quant.clone(),
             pos_of: vec![0; bvh.nodes.len()],
             local_of: vec![0; mesh.vertices.len()],
             stamp: vec![u32::MAX; mesh.vertices.len()],
@@ -271,7 +276,15 @@ impl HccBvh {
             rank_ids: Vec::with_capacity(mesh.triangles.len()),
         };
         if !mesh.triangles.is_empty() {
-            s.tight = tight(bvh, &mesh.triangles, points);
+            // With quantized vertices, the boxes and the pair coding work
+            // on the grid's integer coordinates (exact in `f32`: at most
+            // 24 bits), which the o-HCCMesh decoder has without computing
+            // a value: a pair is coded by comparing integers, whatever
+            // the grid's values round to.
+            let on_grid: Option<Vec<[f32; 3]>> = qcoords
+                .as_ref()
+                .map(|qc| qc.iter().map(|g| g.map(|c| c as f32)).collect());
+            s.tight = tight(bvh, &mesh.triangles, on_grid.as_deref().unwrap_or(points));
             out.encode_trees(&mut s)?;
         }
         out.build_leaf_ranks();
@@ -336,7 +349,13 @@ impl HccBvh {
         self.high.push(HighNode::zeroed_node());
         let mut stack = vec![(0u32, 0u32)];
         while let Some((c, h)) = stack.pop() {
-            let b = &s.tight.boxes[c as usize];
+            let b = s.tight.boxes[c as usize];
+            let b = match &s.grid {
+                // Monotone: the grid value of the least grid coordinate is
+                // the least value.
+                Some(q) => std::array::from_fn(|e| q.value(e % 3, b[e] as u32)),
+                None => b,
+            };
             let mut node = HighNode {
                 min: [b[0], b[1], b[2]],
                 max: [b[3], b[4], b[5]],

@@ -124,6 +124,8 @@ mod decompose;
 mod encode;
 mod error;
 mod file;
+#[cfg(target_arch = "x86_64")]
+mod grid16;
 mod ids;
 pub mod node;
 pub mod ooc;

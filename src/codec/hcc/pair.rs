@@ -10,6 +10,13 @@
 //! compiler turns into vector compares and blends) rather than a branch
 //! per extent. Negating is exact, so the choices are those of the six
 //! extents themselves.
+//!
+//! With quantized vertices, both code boxes in the grid's integer
+//! coordinates (exact in `f32`), not in the values they decode to: a pair
+//! then codes the same whatever the grid's values round to, and the
+//! o-HCCMesh decoder, which has the grid coordinates, compares integers
+//! (16-bit lanes in [`grid16`](super::grid16) on grids of at most 16 bits).
+//! The grid is monotone, so a box on it decodes to the box of the values.
 
 /// An extent `e` of a box as six numbers: 0–2 the minimum, 3–5 the maximum.
 pub(super) type Extents = [f32; 6];
@@ -289,8 +296,8 @@ mod lane {
     }
 }
 
-/// What one sibling pair codes.
-pub(super) struct PairCode {
+/// What one sibling pair codes, with boxes as `L`.
+pub(super) struct PairCode<L = Lanes> {
     /// The six reuse-mask bits (bits 0–2 go to the left word, 3–5 to the
     /// right one).
     pub mask: u32,
@@ -301,15 +308,72 @@ pub(super) struct PairCode {
     /// fields hold its corners).
     pub used: [usize; 2],
     /// The boxes the two children decode to.
-    pub boxes: [Lanes; 2],
+    pub boxes: [L; 2],
     /// Extents the inner child of a leaf–inner pair inherits although it
     /// does not attain them.
     pub loose: usize,
 }
 
+/// A box as lanes that a pair is coded on, with the vertices attaining its
+/// lanes: [`Lanes`] (any positions), or the 16-bit lanes of
+/// [`grid16`](super::grid16) (grid coordinates of at most 16 bits), which
+/// code every pair exactly as [`Lanes`] of the same grid coordinates do.
+pub(super) trait BoxLanes: Copy + Default {
+    /// Per lane, the vertex attaining it.
+    type Vertices: Copy + Default;
+    /// The box of the vertex at grid coordinates `g`.
+    fn point(g: [u32; 3]) -> Self;
+    /// Vertex `v` on every lane.
+    fn vertex(v: u32) -> Self::Vertices;
+    /// As [`union`].
+    fn union(a: (&Self, &Self::Vertices), b: (&Self, &Self::Vertices)) -> (Self, Self::Vertices);
+    /// As [`code_pair`].
+    fn code(
+        d: &Self,
+        l: (&Self, &Self::Vertices, bool),
+        r: (&Self, &Self::Vertices, bool),
+    ) -> PairCode<Self>;
+    /// The box's extents (in its coordinates).
+    fn extents(&self) -> Extents;
+}
+
+impl BoxLanes for Lanes {
+    type Vertices = LaneVertices;
+
+    #[inline(always)]
+    fn point(g: [u32; 3]) -> Self {
+        let p = g.map(|c| c as f32);
+        to_lanes(&[p[0], p[1], p[2], p[0], p[1], p[2]])
+    }
+
+    #[inline(always)]
+    fn vertex(v: u32) -> LaneVertices {
+        [v; 8]
+    }
+
+    #[inline(always)]
+    fn union(a: (&Self, &LaneVertices), b: (&Self, &LaneVertices)) -> (Self, LaneVertices) {
+        union(a, b)
+    }
+
+    #[inline(always)]
+    fn code(
+        d: &Self,
+        l: (&Self, &LaneVertices, bool),
+        r: (&Self, &LaneVertices, bool),
+    ) -> PairCode<Self> {
+        code_pair(d, l, r)
+    }
+
+    #[inline(always)]
+    fn extents(&self) -> Extents {
+        to_extents(self)
+    }
+}
+
 /// Per six-bit set of extents (at most three), the extents in increasing
 /// order (unused entries 0).
-static FIRST_THREE: [[u8; 3]; 64] = {
+pub(super) static FIRST_THREE: [[u8; 3]; 64] = {
     let mut t = [[0u8; 3]; 64];
     let mut m = 0;
     while m < 64 {

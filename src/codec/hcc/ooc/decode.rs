@@ -2,9 +2,11 @@
 //! encoder builds from the same tree and options, byte for byte.
 
 use super::super::MAX_LEAF_TRIANGLES;
+#[cfg(target_arch = "x86_64")]
+use super::super::grid16::Box16;
 use super::super::ids::{IdMap, VertexIds};
 use super::super::node::{HIGH_LEAF, HighNode, MAX_TREE_TRIANGLES, MAX_TREE_VERTICES, TreeHeader};
-use super::super::pair::{Extents, Lanes, outer, to_lanes};
+use super::super::pair::{Extents, Lanes, outer};
 use super::super::vertices::{MAX_VERTEX_BITS, Quantized, Vertices};
 use super::super::{HccBvh, HccStats};
 use super::OocError;
@@ -38,9 +40,11 @@ struct Scratch {
     plans: Vec<(usize, [u32; 3])>,
     /// The grid slots of `plan`: the centre, then the vertices.
     grid: Vec<[u32; 3]>,
-    /// The vertices' positions as boxes (see `Lanes`).
-    pts: Vec<Lanes>,
-    rebuild: Rebuild,
+    /// The rebuild on [`Lanes`] (any grid), and on 16-bit lanes (grids of
+    /// at most 16 bits).
+    rebuild: Rebuild<Lanes>,
+    #[cfg(target_arch = "x86_64")]
+    rebuild16: Rebuild<Box16>,
 }
 
 /// The i-HCCMesh being rebuilt.
@@ -641,7 +645,6 @@ fn decode_tree(
     let max_q = out.q.max_q();
     s.grid.clear();
     s.grid.push(centre(max_q));
-    s.pts.clear();
     let mut outside = false;
     for &(ctx, slots) in &s.plans {
         let pred = predicted(ctx, slots, &s.grid, max_q);
@@ -656,8 +659,6 @@ fn decode_tree(
             *gx = q as u32;
         }
         s.grid.push(g);
-        let p = [0, 1, 2].map(|a| out.q.value(a, g[a]));
-        s.pts.push(to_lanes(&[p[0], p[1], p[2], p[0], p[1], p[2]]));
     }
     if outside {
         return Err(bad("a vertex decodes outside the grid"));
@@ -673,17 +674,28 @@ fn decode_tree(
         first_triangle: out.triangles,
     });
     let multi = h.multi.then_some((&mut out.blocks, &mut out.block_start));
-    let root = s.rebuild.tree(
-        &s.lay,
-        (&s.spans, &s.tris),
-        &s.pts,
-        (&mut out.nodes, &mut out.ics, multi),
-        &mut out.stats,
-    );
+    // Boxes on the grid, as the i-HCCMesh encoder codes quantized ones:
+    // in one 16-bit register each when the grid allows.
+    let tree = (&s.spans[..], &s.tris[..]);
+    let outs = (&mut out.nodes, &mut out.ics, multi);
+    #[cfg(target_arch = "x86_64")]
+    let root = if h.bits <= 16 {
+        s.rebuild16
+            .tree(&s.lay, tree, &s.grid[1..], outs, &mut out.stats)
+    } else {
+        s.rebuild
+            .tree(&s.lay, tree, &s.grid[1..], outs, &mut out.stats)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let root = s
+        .rebuild
+        .tree(&s.lay, tree, &s.grid[1..], outs, &mut out.stats);
     if u32::try_from(out.blocks.len()).is_err() {
         return Err(bad("the trees' triangle blocks outgrow 4 GiB"));
     }
-    out.roots.push(root);
+    // The root box in world coordinates (the grid is monotone).
+    out.roots
+        .push(std::array::from_fn(|e| out.q.value(e % 3, root[e] as u32)));
     let base = out.nodes.len() - n;
     out.leaf_bits.resize(out.nodes.len().div_ceil(64), 0);
     for &p in s.lay.leaves() {

@@ -3,13 +3,17 @@
 //! bottom-up manner and re-construct the AABB information"): tight boxes
 //! bottom-up, then each sibling pair coded top-down against the box its
 //! parent decodes to, with the i-HCCMesh encoder's own pair coding
-//! ([`code_pair`]), so that the words come out as that encoder writes them.
+//! ([`code_pair`](super::super::pair::code_pair)), so that the words come
+//! out as that encoder writes them.
 //! Linear in the tree's nodes, no recursion (children always sit at larger
 //! positions than their parent, so one reverse and one forward sweep over
 //! the nodes with children do, after one sweep over the leaves; the
 //! layout lists both kinds, so no sweep branches on node types). Boxes are
 //! kept as the pair coding's eight lanes (minima and negated maxima), so
-//! that a union or a pair is a few vector operations.
+//! that a union or a pair is a few vector operations: on the quantization
+//! grid (as the encoder codes quantized boxes), in 16-bit lanes
+//! ([`grid16`](super::super::grid16), one SSE2 register a box) when the
+//! grid has at most 16 bits, else in `f32` lanes of grid coordinates.
 
 use super::super::HccStats;
 use super::super::block;
@@ -17,16 +21,18 @@ use super::super::node::{
     INDEX_BITS, INDEX_MASK, Interconnection, MASK_SHIFT, MULTI_COUNT_SHIFT, MULTI_OFFSET_BITS,
     TYPE_INNER, TYPE_LEAF, TYPE_SHIFT, TYPE_TEMPLATE_LEAF, pack_node,
 };
-use super::super::pair::{Extents, LaneVertices, Lanes, code_pair, to_extents, union};
+use super::super::pair::{BoxLanes, Extents};
 use super::model::Layout;
 use crate::codec::common::bits::BitWriter;
 
-/// Buffers reused from tree to tree.
+/// Buffers reused from tree to tree, for boxes as `L`.
 #[derive(Default)]
-pub struct Rebuild {
+pub struct Rebuild<L: BoxLanes> {
+    /// Per vertex, its box.
+    pts: Vec<L>,
     /// Per position, the tight box and the vertex attaining each lane.
-    tight: Vec<(Lanes, LaneVertices)>,
-    decoded: Vec<Lanes>,
+    tight: Vec<(L, L::Vertices)>,
+    decoded: Vec<L>,
     /// Per inter-connection, the vertex its template leaf gave up, and
     /// one more entry that takes the writes of other nodes.
     ic_vertex: Vec<u32>,
@@ -35,32 +41,33 @@ pub struct Rebuild {
 /// The tight box of `tris` over vertices `pts` and the vertex attaining
 /// each lane (ties go to the first corner).
 #[inline(always)]
-fn leaf_box(tris: &[[u32; 3]], pts: &[Lanes]) -> (Lanes, LaneVertices) {
+fn leaf_box<L: BoxLanes>(tris: &[[u32; 3]], pts: &[L]) -> (L, L::Vertices) {
     let mut corners = tris.iter().flatten();
     let first = corners.next().map_or(0, |&c| c);
-    let mut b = (pts[first as usize], [first; 8]);
+    let mut b = (pts[first as usize], L::vertex(first));
     for &c in corners {
-        b = union((&b.0, &b.1), (&pts[c as usize], &[c; 8]));
+        b = L::union((&b.0, &b.1), (&pts[c as usize], &L::vertex(c)));
     }
     b
 }
 
 /// [`leaf_box`] of one triangle `c`, unrolled.
 #[inline(always)]
-fn triangle_box(c: [u32; 3], pts: &[Lanes]) -> (Lanes, LaneVertices) {
-    let b = (pts[c[0] as usize], [c[0]; 8]);
-    let b = union((&b.0, &b.1), (&pts[c[1] as usize], &[c[1]; 8]));
-    union((&b.0, &b.1), (&pts[c[2] as usize], &[c[2]; 8]))
+fn triangle_box<L: BoxLanes>(c: [u32; 3], pts: &[L]) -> (L, L::Vertices) {
+    let b = (pts[c[0] as usize], L::vertex(c[0]));
+    let b = L::union((&b.0, &b.1), (&pts[c[1] as usize], &L::vertex(c[1])));
+    L::union((&b.0, &b.1), (&pts[c[2] as usize], &L::vertex(c[2])))
 }
 
-impl Rebuild {
+impl<L: BoxLanes> Rebuild<L> {
     /// Appends the node words and inter-connections of the tree laid out
     /// in `lay` to `nodes` and `ics` (and, for multi-triangle leaves, its
     /// triangle blocks to `blocks` and their start to `block_start`); the
     /// `i`-th leaf (in `lay.leaves()`) holds `tris[spans[i].0..][..spans[i].1]`
     /// (`tris[i]` alone when `spans` is empty, which it must be exactly
-    /// when `multi` is `None`), over vertices `pts`. Counts its pairs and templates in `stats`;
-    /// returns the tree's tight box. Inlined into the decoder, its one
+    /// when `multi` is `None`), over vertices at grid coordinates `grid`
+    /// (as the i-HCCMesh encoder codes quantized boxes). Counts its pairs
+    /// and templates in `stats`; returns the tree's tight box, on the grid. Inlined into the decoder, its one
     /// caller.
     #[allow(clippy::type_complexity)]
     #[inline(always)]
@@ -68,7 +75,7 @@ impl Rebuild {
         &mut self,
         lay: &Layout,
         (spans, tris): (&[(u32, u32)], &[[u32; 3]]),
-        pts: &[Lanes],
+        grid: &[[u32; 3]],
         (nodes, ics, multi): (
             &mut Vec<u32>,
             &mut Vec<u32>,
@@ -80,12 +87,15 @@ impl Rebuild {
             let (first, count) = spans[i];
             &tris[first as usize..(first + count) as usize]
         };
+        self.pts.clear();
+        self.pts.extend(grid.iter().map(|&g| L::point(g)));
+        let pts = &self.pts[..];
         let n = lay.positions();
         let types = lay.types();
         let kids = lay.kids();
         let ic_of = lay.ic_of();
-        self.tight.resize(n, ([0.0; 8], [0; 8]));
-        self.decoded.resize(n, [0.0; 8]);
+        self.tight.resize(n, Default::default());
+        self.decoded.resize(n, L::default());
         // Tight boxes and the vertices attaining them: the leaves, then the
         // other nodes bottom-up (children sit at larger positions than
         // their parent); ties go to the first corner and to the left
@@ -102,7 +112,7 @@ impl Rebuild {
         for &p in lay.inner().iter().rev() {
             let [l, r] = kids[p as usize].map(|k| k as usize);
             let ((tl, al), (tr, ar)) = (&self.tight[l], &self.tight[r]);
-            self.tight[p as usize] = union((tl, al), (tr, ar));
+            self.tight[p as usize] = L::union((tl, al), (tr, ar));
         }
         let base = nodes.len();
         nodes.resize(base + n, TYPE_INNER << TYPE_SHIFT);
@@ -155,7 +165,7 @@ impl Rebuild {
             let [l, r] = pair;
             let (ll, rl) = (types[l] == TYPE_LEAF, types[r] == TYPE_LEAF);
             let ((tl, al), (tr, ar)) = (&self.tight[l], &self.tight[r]);
-            let pc = code_pair(&self.decoded[p as usize], (tl, al, ll), (tr, ar, rl));
+            let pc = L::code(&self.decoded[p as usize], (tl, al, ll), (tr, ar, rl));
             // Fields a pair does not use are zero: or-ing them in is a
             // no-op. A template leaf's third field goes to its
             // inter-connection (other nodes write the spare entry).
@@ -194,6 +204,6 @@ impl Rebuild {
                 .pack(),
             );
         }
-        to_extents(&self.tight[0].0)
+        self.tight[0].0.extents()
     }
 }
