@@ -11,7 +11,9 @@
 //! `g − 32768`, the maxima as `32767 − g`, and two padding lanes of 32767
 //! (never farther out than another value).
 
-use super::pair::{BoxLanes, Extents, FIRST_THREE, LaneVertices, Lanes, PairCode, code_pair};
+use super::pair::{
+    BoxLanes, Extents, FIRST_THREE, LaneVertices, Lanes, PairCode, code_pair, to_extents,
+};
 use std::arch::x86_64::*;
 
 /// A box on a grid of at most 16 bits, as 16-bit lanes.
@@ -218,8 +220,7 @@ impl BoxLanes for Box16 {
 
     #[inline(always)]
     fn extents(&self) -> Extents {
-        let l = self.to_grid();
-        [l[0], l[1], l[2], -l[3], -l[4], -l[5]]
+        to_extents(&self.to_grid())
     }
 }
 

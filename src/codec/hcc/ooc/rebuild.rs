@@ -67,8 +67,8 @@ impl<L: BoxLanes> Rebuild<L> {
     /// (`tris[i]` alone when `spans` is empty, which it must be exactly
     /// when `multi` is `None`), over vertices at grid coordinates `grid`
     /// (as the i-HCCMesh encoder codes quantized boxes). Counts its pairs
-    /// and templates in `stats`; returns the tree's tight box, on the grid. Inlined into the decoder, its one
-    /// caller.
+    /// and templates in `stats`; returns the tree's tight box, on the
+    /// grid. Inlined into the decoder, its one caller.
     #[allow(clippy::type_complexity)]
     #[inline(always)]
     pub fn tree(
