@@ -43,6 +43,7 @@ use glam::Vec3A;
 
 use super::features::clip_to_prism;
 pub use super::features::{closest_on_segments, closest_points};
+use super::orient::{PairFacing, oriented_axis};
 use super::sat::{Batch, Corners, sat_dispatch};
 use crate::geom::Triangle;
 
@@ -192,6 +193,7 @@ pub struct PairKernel {
     prediction: f32,
     simd: Simd,
     exact: bool,
+    facing: Option<PairFacing>,
     /// Work counters since creation.
     pub stats: KernelStats,
 }
@@ -220,6 +222,7 @@ impl PairKernel {
             prediction: prediction.max(0.0),
             simd,
             exact: true,
+            facing: None,
             stats: KernelStats::default(),
         }
     }
@@ -232,6 +235,24 @@ impl PairKernel {
     pub fn exact_separation(mut self, exact: bool) -> Self {
         self.exact = exact;
         self
+    }
+
+    /// Oriented contacts ([`super::orient`]): with `Some`, every pair's
+    /// normal points out of A's surface into B's, on an axis both triangles
+    /// accept given their facing and their edge flags (pushed with
+    /// [`push_flagged`](Self::push_flagged); pairs pushed otherwise count as
+    /// having every edge active), and separated pairs get the separation
+    /// along that axis (a lower bound of the distance). `None` (the default)
+    /// takes the axis that separates most, either way round.
+    pub fn oriented(mut self, facing: Option<PairFacing>) -> Self {
+        self.facing = facing;
+        self
+    }
+
+    /// Sets the facing of [`oriented`](Self::oriented) on a kernel in use
+    /// (a body pair's facing changes with its pose).
+    pub fn set_facing(&mut self, facing: Option<PairFacing>) {
+        self.facing = facing;
     }
 
     /// The prediction distance.
@@ -287,6 +308,27 @@ impl PairKernel {
         }
     }
 
+    /// [`push_within`](Self::push_within) with each triangle's edge flags
+    /// ([`EdgeFlags::get`](super::EdgeFlags::get)), which oriented contacts
+    /// use.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    pub fn push_flagged(
+        &mut self,
+        (i, a, fa): (u32, &Triangle, u8),
+        (j, b, fb): (u32, &Triangle, u8),
+        prediction: f32,
+        sink: &mut impl ContactSink,
+    ) {
+        let pred = prediction.min(self.prediction).max(0.0);
+        let l = self.batch.len;
+        let full = self.batch.put(a, b, (i, j), pred);
+        self.batch.flags[l] = (fa, fb);
+        if full {
+            self.flush_into(sink);
+        }
+    }
+
     /// Runs the queued pairs.
     pub fn flush(&mut self, sink: &mut impl FnMut(&PairContact)) {
         self.flush_into(&mut FnSink(sink));
@@ -319,37 +361,35 @@ impl PairKernel {
             };
             let (a, b) = (lane(&self.batch.a), lane(&self.batch.b));
             let (i, j) = self.batch.ids[l];
-            let (sep, axis, up) = (out.sep[l], out.axis[l] as u8, out.up[l] != 0);
-            if (sep <= 0.0 || !self.exact) && self.absorbed(i, &a, j, &b, sep, axis, up, sink) {
+            let (mut sep, mut axis, up) = (out.sep[l], out.axis[l] as u8, out.up[l] != 0);
+            let mut normal = None;
+            if let Some(facing) = &self.facing {
+                let (fa, fb) = self.batch.flags[l];
+                let Some(o) = oriented_axis(&a, fa, &b, fb, facing, self.prediction) else {
+                    continue;
+                };
+                if o.sep > pred {
+                    continue;
+                }
+                (sep, axis, normal) = (o.sep, o.axis, Some(o.normal));
+            }
+            let exact = self.exact && normal.is_none();
+            let n = normal.unwrap_or_else(|| axis_direction(&a, &b, axis, up));
+            if (sep <= 0.0 || !exact)
+                && n.is_finite()
+                && n != Vec3A::ZERO
+                && sink.absorb(i, j, n, sep, &a)
+            {
                 self.stats.contacts += 1;
                 self.stats.absorbed += 1;
                 continue;
             }
-            if self.finish(i, &a, j, &b, (sep, axis, up), pred) {
+            if self.finish(i, &a, j, &b, (sep, axis, up), normal, pred) {
                 self.stats.contacts += 1;
                 sink.contact(&self.out);
             }
         }
         self.batch.len = 0;
-    }
-
-    /// Offers a pair whose normal is the best axis to the sink without its
-    /// points (see [`ContactSink::absorb`]); whether the sink took it.
-    #[allow(clippy::too_many_arguments)]
-    #[inline]
-    fn absorbed(
-        &self,
-        i: u32,
-        a: &Triangle,
-        j: u32,
-        b: &Triangle,
-        sep: f32,
-        axis: u8,
-        up: bool,
-        sink: &mut impl ContactSink,
-    ) -> bool {
-        let n = axis_direction(a, b, axis, up);
-        n.is_finite() && n != Vec3A::ZERO && sink.absorb(i, j, n, sep, a)
     }
 
     /// The contact of one pair from its test result (scalar part), into
@@ -362,6 +402,7 @@ impl PairKernel {
         j: u32,
         b: &Triangle,
         (sep, axis, up): (f32, u8, bool),
+        oriented: Option<Vec3A>,
         prediction: f32,
     ) -> bool {
         let c = &mut self.out;
@@ -373,7 +414,7 @@ impl PairKernel {
         c.len = 0;
         let na = face_normal(a);
         let nb = face_normal(b);
-        if sep > 0.0 && self.exact {
+        if sep > 0.0 && self.exact && oriented.is_none() {
             // Separated: the exact distance from the closest features,
             // unless a face axis's witness corner lies over the face (then
             // the bound is the distance).
@@ -402,9 +443,9 @@ impl PairKernel {
             });
         } else {
             // Overlapping (the best axis gives the exact depth), or
-            // separated with the bound asked for: the best axis and its
-            // witness.
-            let n = axis_direction(a, b, axis, up);
+            // separated with the bound asked for, or oriented: the best
+            // axis and its witness.
+            let n = oriented.unwrap_or_else(|| axis_direction(a, b, axis, up));
             c.normal = n;
             let (p1, p2) = witness(a, b, axis, n, sep);
             c.push(PairPoint {

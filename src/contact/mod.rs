@@ -7,6 +7,10 @@
 //! - [`patch`]: the reduction of many pair contacts into contact patches
 //!   (normals within a few degrees, near each other), each at most four
 //!   points that keep the patch's support area;
+//! - [`edges`]: active edges, one byte a triangle computed once from the
+//!   mesh: which edges are real (convex or boundary) seen from each side;
+//! - [`orient`]: oriented normals: out of A's surface into B's, on an axis
+//!   both triangles accept given the side they face and their edge flags;
 //! - [`motion`]: the prediction distance bounded by how far each region of
 //!   a body moved since the last step.
 //!
@@ -16,15 +20,19 @@
 //! parry's convex-convex code: that path stays available as the
 //! per-triangle-pair contact mode.
 
+pub mod edges;
 mod features;
 pub mod kernel;
 pub mod motion;
+pub mod orient;
 pub mod patch;
 mod sat;
 
+pub use edges::EdgeFlags;
 pub use kernel::{
     ContactSink, Interference, KernelStats, PairContact, PairKernel, PairPoint, pair_contact,
     triangles_intersect,
 };
 pub use motion::MotionBound;
+pub use orient::{Facing, PairFacing};
 pub use patch::{Patch, PatchOptions, PatchPoint, PatchSet};

@@ -17,6 +17,8 @@ pub(super) struct Batch {
     pub(super) a: Corners,
     pub(super) b: Corners,
     pub(super) ids: [(u32, u32); LANES],
+    /// Each pair's edge flags (A's triangle, B's), for oriented contacts.
+    pub(super) flags: [(u8, u8); LANES],
     /// Each pair's prediction distance.
     pub(super) pred: Lanes,
     pub(super) len: usize,
@@ -28,6 +30,7 @@ impl Default for Batch {
             a: [[[0.0; LANES]; 3]; 3],
             b: [[[0.0; LANES]; 3]; 3],
             ids: [(0, 0); LANES],
+            flags: [(0, 0); LANES],
             pred: [0.0; LANES],
             len: 0,
         }
@@ -47,6 +50,7 @@ impl Batch {
             }
         }
         self.ids[l] = ids;
+        self.flags[l] = (super::edges::ALL_ACTIVE, super::edges::ALL_ACTIVE);
         self.pred[l] = pred;
         self.len += 1;
         self.len == LANES

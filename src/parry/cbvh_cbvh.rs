@@ -14,10 +14,11 @@ use parry3d::query::{
     PersistentQueryDispatcher, QueryDispatcher, ShapeDistance, ShapeIntersection,
 };
 
+use super::cones::PairRule;
 use super::patches::{ContactCounters, ContactMode, count_pair_manifolds, patch_manifolds};
 use super::shape::{CbvhShape, pose_from_parry, to_parry_triangle};
 use super::workspace::ManifoldUpdate;
-use crate::contact::{Interference, PairKernel, PatchOptions, PatchSet};
+use crate::contact::{Interference, PairFacing, PairKernel, PatchOptions, PatchSet};
 use crate::cursor::TraversalStats;
 use crate::geom::Triangle;
 use crate::query::{Prediction, bvtt, bvtt_min, bvtt_par, bvtt_par_within};
@@ -87,6 +88,7 @@ pub fn patches(
     let mut merged = PatchSet::new(opts, size, record);
     let (mut candidates, mut contacts) = (0u64, 0u64);
     let largest = prediction.at_most();
+    let facing = pair_facing(&pose, s1, s2);
     with_codec!(s1.codec(), |a| with_codec!(s2.codec(), |b| {
         let (states, _stats) = bvtt_par_within(
             a,
@@ -96,11 +98,16 @@ pub fn patches(
             FRONT_TASKS,
             || {
                 (
-                    PairKernel::new(largest).exact_separation(false),
+                    PairKernel::new(largest)
+                        .exact_separation(false)
+                        .oriented(Some(facing)),
                     PatchSet::new(opts, size, record),
                 )
             },
-            |(kernel, set), i, ti, j, tj, p| kernel.push_within(i, ti, j, tj, p, set),
+            |(kernel, set), i, ti, j, tj, p| {
+                let (fi, fj) = (s1.edge_flags_of(i), s2.edge_flags_of(j));
+                kernel.push_flagged((i, ti, fi), (j, tj, fj), p, set)
+            },
         );
         for (mut kernel, mut set) in states {
             kernel.flush_into(&mut set);
@@ -113,6 +120,15 @@ pub fn patches(
         c.add(candidates, contacts, merged.patches.len() as u64);
     }
     merged
+}
+
+/// How the triangles of `s1` (in its own frame) and of `s2` (placed by
+/// `pose` in `s1`'s frame) face each other: each toward the other's centre
+/// when two-sided.
+pub fn pair_facing(pose: &crate::geom::Pose, s1: &CbvhShape, s2: &CbvhShape) -> PairFacing {
+    let c1 = s1.local_aabb().center();
+    let c2 = pose.transform_point(s2.local_aabb().center());
+    PairFacing::new(s1.facing(c2), s2.facing(c1))
 }
 
 /// The papers' interference figure: the number of intersecting (or
@@ -176,21 +192,33 @@ pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + S
 ) {
     let mut update = ManifoldUpdate::begin(workspace, manifolds);
     let mut stats = TraversalStats::default();
-    let mut pairs: Vec<(Triangle, Triangle)> = Vec::new();
+    let mut pairs: Vec<(PairRule, Triangle)> = Vec::new();
+    let pose = pose_from_parry(pos12);
+    let facing = pair_facing(&pose, s1, s2);
     // Every pair the traversal finds goes to parry, as parry's own
     // composite-shape code does: parry keeps points beyond the prediction
-    // distance too, so no pair may be culled by its own test first.
+    // distance too, so no pair may be culled by its own test first. The
+    // traversal hands shape 2's triangle in its own frame, as parry takes
+    // it; the rule takes both in shape 1's.
     for_each_pair(s1, s2, pos12, prediction, &mut stats, |i, t1, j, t2| {
         update.manifold(i, j);
-        pairs.push((*t1, *t2));
+        let rule = PairRule {
+            a: *t1,
+            fa: s1.edge_flags_of(i),
+            b: t2.map(|v| pose.transform_point(v)),
+            fb: s2.edge_flags_of(j),
+            facing,
+            prediction,
+        };
+        pairs.push((rule, *t2));
         ControlFlow::Continue(())
     });
-    let generate = |m: &mut ContactManifold<M, C>, (t1, t2): &(Triangle, Triangle)| {
+    let generate = |m: &mut ContactManifold<M, C>, (rule, t2): &(PairRule, Triangle)| {
         let _ = DefaultQueryDispatcher.contact_manifold_convex_convex(
             pos12,
-            &to_parry_triangle(t1),
+            &to_parry_triangle(&rule.a),
             &to_parry_triangle(t2),
-            None,
+            Some(rule),
             None,
             prediction,
             m,

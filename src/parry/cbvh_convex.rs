@@ -13,10 +13,13 @@ use parry3d::query::{
 };
 use parry3d::shape::Shape;
 
+use parry3d::query::details::NormalConstraints;
+
+use super::cones::EdgeCone;
 use super::patches::{ContactCounters, ContactMode, count_pair_manifolds, patch_manifolds};
 use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle};
 use super::workspace::ManifoldUpdate;
-use crate::contact::{PatchOptions, PatchPoint, PatchSet};
+use crate::contact::{Facing, PatchOptions, PatchPoint, PatchSet};
 use crate::cursor::TraversalStats;
 use crate::geom::Triangle;
 use crate::query::overlap;
@@ -36,6 +39,13 @@ fn for_each_triangle_near(
     with_codec!(mesh.codec(), |c| {
         overlap(c, &query, &mut stats, &mut f);
     });
+}
+
+/// How the mesh's triangles face a convex shape placed at `pose` in the
+/// mesh's frame: toward its centre when two-sided.
+fn convex_facing(mesh: &CbvhShape, convex: &dyn Shape, pose: &PPose) -> Facing {
+    let c = *pose * convex.compute_local_aabb().center();
+    mesh.facing(glam::Vec3A::from(c.to_array()))
 }
 
 /// Contact manifolds in the dispatcher's `mode`; `flipped` says the cbvh
@@ -99,15 +109,19 @@ pub fn patches(
     let mut set = PatchSet::new(opts, size, record);
     let mut scratch: ContactManifold<(), ()> = ContactManifold::new();
     let (mut candidates, mut contacts) = (0u64, 0u64);
+    let facing = convex_facing(mesh, convex, pose);
     for_each_triangle_near(mesh, convex, pose, prediction, |i, t| {
         candidates += 1;
         scratch.points.clear();
+        let Some(cone) = EdgeCone::new(t, mesh.edge_flags_of(i), facing) else {
+            return ControlFlow::Continue(());
+        };
         let tri = to_parry_triangle(t);
         let _ = DefaultQueryDispatcher.contact_manifold_convex_convex(
             pose,
             &tri,
             convex,
-            None,
+            Some(&cone),
             None,
             prediction,
             &mut scratch,
@@ -159,16 +173,19 @@ pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + S
     let mut update = ManifoldUpdate::begin(workspace, manifolds);
     // The convex shape's pose in the mesh's frame.
     let pose = if flipped { pos12.inverse() } else { *pos12 };
+    let facing = convex_facing(mesh, convex, &pose);
     for_each_triangle_near(mesh, convex, &pose, prediction, |i, t| {
         let tri = to_parry_triangle(t);
+        let cone = EdgeCone::new(t, mesh.edge_flags_of(i), facing);
+        let nc = cone.as_ref().map(|c| c as &dyn NormalConstraints);
         if flipped {
             let m = update.manifold(0, i);
             let _ = DefaultQueryDispatcher
-                .contact_manifold_convex_convex(pos12, convex, &tri, None, None, prediction, m);
+                .contact_manifold_convex_convex(pos12, convex, &tri, None, nc, prediction, m);
         } else {
             let m = update.manifold(i, 0);
             let _ = DefaultQueryDispatcher
-                .contact_manifold_convex_convex(pos12, &tri, convex, None, None, prediction, m);
+                .contact_manifold_convex_convex(pos12, &tri, convex, nc, None, prediction, m);
         }
         ControlFlow::Continue(())
     });

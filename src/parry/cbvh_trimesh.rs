@@ -19,7 +19,11 @@ use parry3d::shape::{CompositeShape, Shape, TriMesh};
 use super::patches::{ContactCounters, ContactMode, count_pair_manifolds, patch_manifolds};
 use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle};
 use super::workspace::ManifoldUpdate;
-use crate::contact::{PairKernel, PatchOptions, PatchSet};
+use parry3d::query::details::NormalConstraints;
+
+use super::cones::EdgeCone;
+use crate::contact::edges::ALL_ACTIVE;
+use crate::contact::{Facing, PairFacing, PairKernel, PatchOptions, PatchSet};
 use crate::cursor::TraversalStats;
 use crate::query::overlap;
 use crate::with_codec;
@@ -81,10 +85,20 @@ pub fn patches(
         .length()
         .min(tm.local_aabb().extents().length());
     let mut set = PatchSet::new(opts, size, record);
-    let mut kernel = PairKernel::new(prediction).exact_separation(false);
+    let to_mesh = |p: parry3d::math::Vector| glam::Vec3A::from((*tm_in_mesh * p).to_array());
+    // parry's TriMesh carries no active-edge flags: its triangles count as
+    // having every edge active, two-sided toward the cbvh shape's centre.
+    let facing = PairFacing::new(
+        mesh.facing(to_mesh(tm.local_aabb().center())),
+        Facing::TwoSided {
+            toward: mesh.local_aabb().center(),
+        },
+    );
+    let mut kernel = PairKernel::new(prediction)
+        .exact_separation(false)
+        .oriented(Some(facing));
     let query = from_parry_aabb(&tm.compute_aabb(tm_in_mesh)).loosened(prediction);
     let mut stats = TraversalStats::default();
-    let to_mesh = |p: parry3d::math::Vector| glam::Vec3A::from((*tm_in_mesh * p).to_array());
     with_codec!(mesh.codec(), |c| {
         overlap(c, &query, &mut stats, |i, tri| {
             let ptri = to_parry_triangle(tri);
@@ -92,7 +106,12 @@ pub fn patches(
             for j in tm.bvh().intersect_aabb(&b) {
                 let t = tm.triangle(j);
                 let moved = [to_mesh(t.a), to_mesh(t.b), to_mesh(t.c)];
-                kernel.push_into(i, tri, j, &moved, &mut set);
+                kernel.push_flagged(
+                    (i, tri, mesh.edge_flags_of(i)),
+                    (j, &moved, ALL_ACTIVE),
+                    prediction,
+                    &mut set,
+                );
             }
             ControlFlow::Continue(())
         });
@@ -125,21 +144,25 @@ pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + S
     let mesh_in_tm = tm_in_mesh.inverse();
     let query = from_parry_aabb(&tm.compute_aabb(&tm_in_mesh)).loosened(prediction);
     let mut stats = TraversalStats::default();
+    let tm_center = glam::Vec3A::from((tm_in_mesh * tm.local_aabb().center()).to_array());
+    let facing = mesh.facing(tm_center);
     with_codec!(mesh.codec(), |c| {
         overlap(c, &query, &mut stats, |i, tri| {
             let ptri = to_parry_triangle(tri);
+            let cone = EdgeCone::new(tri, mesh.edge_flags_of(i), facing);
+            let own = cone.as_ref().map(|c| c as &dyn NormalConstraints);
             let b = ptri.compute_aabb(&mesh_in_tm).loosened(prediction);
             for j in tm.bvh().intersect_aabb(&b) {
                 tm.map_part_at(j, &mut |_, part, normals| {
                     if flipped {
                         let m = update.manifold(j, i);
                         let _ = DefaultQueryDispatcher.contact_manifold_convex_convex(
-                            pos12, part, &ptri, normals, None, prediction, m,
+                            pos12, part, &ptri, normals, own, prediction, m,
                         );
                     } else {
                         let m = update.manifold(i, j);
                         let _ = DefaultQueryDispatcher.contact_manifold_convex_convex(
-                            pos12, &ptri, part, None, normals, prediction, m,
+                            pos12, &ptri, part, own, normals, prediction, m,
                         );
                     }
                 });

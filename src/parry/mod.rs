@@ -28,6 +28,7 @@ pub mod cbvh_any;
 pub mod cbvh_cbvh;
 pub mod cbvh_convex;
 pub mod cbvh_trimesh;
+pub mod cones;
 mod dispatcher;
 pub mod patches;
 pub mod raycast_target;
@@ -37,6 +38,6 @@ mod workspace;
 
 pub use dispatcher::Dispatcher;
 pub use patches::{ContactCounters, ContactMode};
-pub use shape::{CbvhShape, ShapeBuildError, pose_from_parry};
+pub use shape::{CbvhShape, ShapeBuildError, Sides, pose_from_parry};
 pub use trimesh::{parry_trimesh, trimesh_bytes_by_part};
 pub use workspace::CbvhWorkspace;

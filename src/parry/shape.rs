@@ -22,6 +22,7 @@ use crate::codec::common::MassProps;
 use crate::codec::{
     AnyCodec, AnyOptions, ByteSize, CodecError, CodecFileError, CodecKind, OpenOptions,
 };
+use crate::contact::{EdgeFlags, Facing};
 use crate::cursor::{NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Pose, Ray, TriHit, Triangle};
 use crate::mesh::Mesh;
@@ -47,6 +48,8 @@ pub enum ShapeBuildError {
 
 struct Inner {
     codec: AnyCodec,
+    /// Active edges, by triangle id ([`EdgeFlags`]).
+    edges: EdgeFlags,
     aabb: Aabb,
     /// Mass properties at density 1.
     unit_mass: MassProperties,
@@ -65,6 +68,24 @@ struct Inner {
 #[derive(Clone)]
 pub struct CbvhShape {
     inner: Arc<Inner>,
+    sides: Sides,
+}
+
+/// Which side of its triangles a [`CbvhShape`] takes contacts on (see
+/// [`crate::contact::orient`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Sides {
+    /// A closed mesh is one-sided (outward, whichever way it is wound); an
+    /// open one (a ground, a ramp, a bowl) two-sided: each triangle faces
+    /// the other shape's centre. The default.
+    #[default]
+    Auto,
+    /// Contacts only on the side the winding's normals point to (for an
+    /// open mesh whose back must never be touched, or whose other shapes
+    /// may have their centre behind it, like a terrain under a long body).
+    OneSided,
+    /// Each triangle faces the other shape's centre, even on a closed mesh.
+    TwoSided,
 }
 
 impl std::fmt::Debug for CbvhShape {
@@ -130,7 +151,10 @@ impl CbvhShape {
                 source,
             }
         })?;
-        Ok(Self::new(codec))
+        let edges = EdgeFlags::compute(mesh.triangles.len(), |t| {
+            crate::geom::triangle_from_arrays(mesh.triangle_vertices(t as usize))
+        });
+        Ok(Self::with_edges(codec, edges))
     }
 
     /// [`CbvhShape::build`] with the plain codec (the uncompressed
@@ -163,19 +187,67 @@ impl CbvhShape {
     }
 
     /// Wraps an encoded codec (built, or opened from its file), with the
-    /// mass properties it stores.
+    /// mass properties it stores; its active edges are computed from its
+    /// triangles.
     pub fn new(codec: AnyCodec) -> Self {
+        let edges = with_codec!(&codec, |c| EdgeFlags::compute(c.triangle_count(), |id| c
+            .triangle(id)));
+        Self::with_edges(codec, edges)
+    }
+
+    /// Wraps an encoded codec with its triangles' edge flags (computed from
+    /// the same mesh, ids as the codec's).
+    pub fn with_edges(codec: AnyCodec, edges: EdgeFlags) -> Self {
         let unit_mass = parry_mass(&codec.mass());
         let aabb = with_codec!(&codec, |c| c.root().1);
         Self {
             inner: Arc::new(Inner {
                 triangles: codec.triangle_count(),
                 codec,
+                edges,
                 aabb,
                 unit_mass,
                 fallback: OnceLock::new(),
                 fallback_builds: AtomicUsize::new(0),
             }),
+            sides: Sides::Auto,
+        }
+    }
+
+    /// The same shape taking contacts on `sides` (cheap: the data is
+    /// shared).
+    pub fn with_sides(mut self, sides: Sides) -> Self {
+        self.sides = sides;
+        self
+    }
+
+    /// Which sides the shape takes contacts on.
+    pub fn sides(&self) -> Sides {
+        self.sides
+    }
+
+    /// The active edges of the triangles, by id.
+    pub fn edge_flags(&self) -> &EdgeFlags {
+        &self.inner.edges
+    }
+
+    /// The edge flags of triangle `id` ([`EdgeFlags::get`]).
+    #[inline]
+    pub fn edge_flags_of(&self, id: u32) -> u8 {
+        self.inner.edges.get(id)
+    }
+
+    /// How the triangles face a contact with a shape whose centre is at
+    /// `toward` (in the frame the triangles are given in): one-sided
+    /// outward for a closed mesh, two-sided toward `toward` for an open one
+    /// (with [`Sides::Auto`]).
+    pub fn facing(&self, toward: Vec3A) -> Facing {
+        match self.sides {
+            Sides::Auto if self.inner.edges.is_closed() => {
+                Facing::OneSided(self.inner.edges.outward())
+            }
+            Sides::OneSided => Facing::OneSided(1.0),
+            _ => Facing::TwoSided { toward },
         }
     }
 

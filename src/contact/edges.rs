@@ -1,0 +1,369 @@
+//! Active edges: which triangle edges of a mesh are real edges of its
+//! surface, computed once from the mesh, so that contacts on a tessellated
+//! surface do not catch on the edges between its triangles.
+//!
+//! # The flags
+//!
+//! Every triangle gets one byte ([`EdgeFlags::get`]): bits 0–2 say whether
+//! its edges 0, 1, 2 (edge `k` runs from corner `k` to corner `k + 1`) are
+//! *active seen from the front* (the side its winding's normal points to),
+//! bits 3–5 the same *seen from the back*. An edge is
+//!
+//! - active from both sides when it lies on the mesh's boundary (one
+//!   triangle), is shared by more than two triangles, or belongs to a
+//!   triangle without area;
+//! - inactive from both sides when its two triangles are within the flat
+//!   angle of each other ([`EdgeFlags::DEFAULT_FLAT_DEG`], 5°, as Jolt's
+//!   default): a tessellated plane or a smooth curve;
+//! - otherwise active from the side on which it is convex (a ridge) and
+//!   inactive from the side on which it is concave (a valley: a convex body
+//!   cannot touch the edge without touching a face first).
+//!
+//! A neighbour wound the other way round (the shared edge runs the same way
+//! in both triangles) is compared with its normal reversed. Vertices are
+//! welded by position, so a mesh that repeats its vertices per triangle
+//! gets the same flags as one that shares them.
+//!
+//! Jolt stores the front bits only (its meshes are one-sided); the back bits
+//! let a two-sided open mesh (a ground, a ramp, a bowl) be touched from
+//! either side with the right edges. See [`crate::contact::orient`] for how
+//! contacts use them.
+//!
+//! # Cost
+//!
+//! One byte a triangle in memory. Computing takes two sorts of three
+//! entries a triangle (welding the corners, then pairing the edges), in
+//! parallel on rayon's threads: about 48 bytes a triangle while it runs.
+
+use glam::{DVec3, Vec3A};
+use rayon::prelude::*;
+
+use crate::geom::Triangle;
+
+/// Bits of the edges active from the front.
+pub const FRONT: u8 = 0b000_111;
+/// Bits of the edges active from the back.
+pub const BACK: u8 = 0b111_000;
+/// Every edge active from both sides (a triangle with no neighbours).
+pub const ALL_ACTIVE: u8 = FRONT | BACK;
+
+/// The flags of a mesh's triangles, by triangle id. See the module docs.
+#[derive(Clone, Debug, Default)]
+pub struct EdgeFlags {
+    flags: Vec<u8>,
+    /// Edges with one triangle.
+    pub boundary_edges: u64,
+    /// Edges with more than two triangles.
+    pub non_manifold_edges: u64,
+    /// Edges whose two triangles are wound the same way round.
+    pub misoriented_edges: u64,
+    /// Edges inactive from both sides (flat).
+    pub flat_edges: u64,
+    /// The signed volume the triangles enclose (positive when wound
+    /// counter-clockwise seen from outside).
+    pub signed_volume: f64,
+}
+
+impl EdgeFlags {
+    /// The default flat angle in degrees: neighbours closer than this are
+    /// one smooth surface.
+    pub const DEFAULT_FLAT_DEG: f32 = 5.0;
+
+    /// The flags of `count` triangles, triangle `id` given by `triangle(id)`,
+    /// with the default flat angle.
+    pub fn compute(count: usize, triangle: impl Fn(u32) -> Triangle + Sync) -> Self {
+        Self::compute_with(count, triangle, Self::DEFAULT_FLAT_DEG)
+    }
+
+    /// [`compute`](Self::compute) with the flat angle `flat_deg` (degrees).
+    pub fn compute_with(
+        count: usize,
+        triangle: impl Fn(u32) -> Triangle + Sync,
+        flat_deg: f32,
+    ) -> Self {
+        assert!(
+            count <= (u32::MAX / 3) as usize,
+            "edge flags index corners with u32"
+        );
+        let cos_flat = flat_deg.to_radians().cos();
+        // Unit normals (NaN for triangles without area) and the corners'
+        // position bits, which weld corners that are the same point.
+        let normals: Vec<Vec3A> = (0..count as u32)
+            .into_par_iter()
+            .map(|t| {
+                let v = triangle(t);
+                (v[1] - v[0]).cross(v[2] - v[0]).normalize_or(Vec3A::NAN)
+            })
+            .collect();
+        let mut corners: Vec<([u32; 3], u32)> = (0..count as u32)
+            .into_par_iter()
+            .flat_map_iter(|t| {
+                let v = triangle(t);
+                (0..3u32).map(move |k| (key(v[k as usize]), t * 3 + k))
+            })
+            .collect();
+        corners.par_sort_unstable();
+        // Welded vertex of every corner, and each vertex's position.
+        let mut vertex_of = vec![0u32; corners.len()];
+        let mut positions: Vec<Vec3A> = Vec::new();
+        for (k, (bits, corner)) in corners.iter().enumerate() {
+            if k == 0 || corners[k - 1].0 != *bits {
+                positions.push(Vec3A::from(bits.map(f32::from_bits)));
+            }
+            vertex_of[*corner as usize] = (positions.len() - 1) as u32;
+        }
+        drop(corners);
+        let signed_volume = (0..count)
+            .into_par_iter()
+            .map(|t| {
+                let p = |k: usize| {
+                    let q = positions[vertex_of[t * 3 + k] as usize];
+                    DVec3::new(q.x as f64, q.y as f64, q.z as f64)
+                };
+                p(0).dot(p(1).cross(p(2))) / 6.0
+            })
+            .sum();
+        // Half-edges by their welded ends, the lower first; the low bit
+        // of the value says whether the edge runs from the higher end.
+        let mut half: Vec<(u64, u32)> = (0..count * 3)
+            .into_par_iter()
+            .map(|c| {
+                let t = c / 3;
+                let (a, b) = (vertex_of[c], vertex_of[t * 3 + (c % 3 + 1) % 3]);
+                let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
+                (key, ((c as u32) << 1) | u32::from(a > b))
+            })
+            .collect();
+        half.par_sort_unstable();
+        let mut flags = vec![0u8; count];
+        let mut out = EdgeFlags::default();
+        let mut start = 0;
+        while start < half.len() {
+            let mut end = start + 1;
+            while end < half.len() && half[end].0 == half[start].0 {
+                end += 1;
+            }
+            let (key, group) = (half[start].0, &half[start..end]);
+            let degenerate = (key >> 32) == (key & 0xffff_ffff);
+            let corner = |h: u32| (h >> 1) as usize;
+            let mut set = |h: u32, bits: u8| {
+                let c = corner(h);
+                flags[c / 3] |= bits << (c % 3);
+            };
+            if degenerate || group.len() != 2 {
+                if group.len() == 1 {
+                    out.boundary_edges += 1;
+                } else if !degenerate {
+                    out.non_manifold_edges += 1;
+                }
+                for &(_, h) in group {
+                    set(h, 0b1001);
+                }
+            } else {
+                let (h1, h2) = (group[0].1, group[1].1);
+                let (t1, t2) = (corner(h1) / 3, corner(h2) / 3);
+                let same_way = (h1 & 1) == (h2 & 1);
+                out.misoriented_edges += u64::from(same_way);
+                let (n1, n2) = (normals[t1], normals[t2]);
+                if !n1.is_finite() || !n2.is_finite() {
+                    set(h1, 0b1001);
+                    set(h2, 0b1001);
+                } else {
+                    // The neighbour's normal as if it were wound like this
+                    // triangle.
+                    let n2 = if same_way { -n2 } else { n2 };
+                    if n1.dot(n2) >= cos_flat {
+                        out.flat_edges += 1;
+                    } else {
+                        // Convex seen from t1's front: the neighbour bends
+                        // away, e · (n1 × n2) > 0 along t1's edge e.
+                        let c1 = corner(h1);
+                        let a = positions[vertex_of[c1] as usize];
+                        let b = positions[vertex_of[(c1 / 3) * 3 + (c1 % 3 + 1) % 3] as usize];
+                        let convex = (b - a).dot(n1.cross(n2)) > 0.0;
+                        // t2 sees the same edge convex from its front when
+                        // wound consistently, from its back otherwise.
+                        let front = |convex: bool| if convex { 0b0001 } else { 0b1000 };
+                        set(h1, front(convex));
+                        set(h2, front(convex != same_way));
+                    }
+                }
+            }
+            start = end;
+        }
+        out.flags = flags;
+        out.signed_volume = signed_volume;
+        out
+    }
+
+    /// The flags of a triangle whose edges are all active from both sides,
+    /// for `count` triangles: contacts then behave as without flags.
+    pub fn all_active(count: usize) -> Self {
+        Self {
+            flags: vec![ALL_ACTIVE; count],
+            boundary_edges: 3 * count as u64,
+            ..Self::default()
+        }
+    }
+
+    /// The flags of triangle `id` (bits 0–2 front, 3–5 back), or all active
+    /// for an id past the end.
+    #[inline]
+    pub fn get(&self, id: u32) -> u8 {
+        self.flags.get(id as usize).copied().unwrap_or(ALL_ACTIVE)
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.flags.len()
+    }
+
+    /// Whether there are no triangles.
+    pub fn is_empty(&self) -> bool {
+        self.flags.is_empty()
+    }
+
+    /// Bytes held.
+    pub fn bytes(&self) -> usize {
+        self.flags.len()
+    }
+
+    /// Whether the mesh is closed: every edge has exactly two triangles.
+    pub fn is_closed(&self) -> bool {
+        !self.flags.is_empty() && self.boundary_edges == 0 && self.non_manifold_edges == 0
+    }
+
+    /// The side of a closed mesh's triangles that faces outward: `1.0` when
+    /// the winding's normals point out of the enclosed volume, `-1.0` when
+    /// they point in.
+    pub fn outward(&self) -> f32 {
+        if self.signed_volume < 0.0 { -1.0 } else { 1.0 }
+    }
+}
+
+/// The position bits of a point (`-0.0` as `0.0`, so that both weld).
+#[inline]
+fn key(p: Vec3A) -> [u32; 3] {
+    p.to_array().map(|x| (x + 0.0).to_bits())
+}
+
+/// The active-edge bits (0–2) of one side of a triangle's flags: the front
+/// when `front`, else the back.
+#[inline]
+pub fn side_bits(flags: u8, front: bool) -> u8 {
+    if front {
+        flags & FRONT
+    } else {
+        (flags & BACK) >> 3
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn flags_of(v: &[[f32; 3]], t: &[[u32; 3]]) -> EdgeFlags {
+        EdgeFlags::compute(t.len(), |i| {
+            t[i as usize].map(|k| Vec3A::from(v[k as usize]))
+        })
+    }
+
+    #[test]
+    fn a_flat_square_has_one_inactive_diagonal() {
+        let v = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 0.0, 1.0],
+            [0.0, 0.0, 1.0],
+        ];
+        // Both wound with their normal up (-y x ... ): consistent.
+        let t = [[0, 2, 1], [0, 3, 2]];
+        let f = flags_of(&v, &t);
+        assert_eq!(f.boundary_edges, 4);
+        assert_eq!(f.flat_edges, 1);
+        assert!(!f.is_closed());
+        // Triangle 0's edge 0 (0 -> 2) is the diagonal: inactive both ways.
+        assert_eq!(f.get(0), 0b110_110);
+        // Triangle 1's edge 2 (2 -> 0) is the diagonal.
+        assert_eq!(f.get(1), 0b011_011);
+    }
+
+    #[test]
+    fn a_cube_is_closed_and_its_face_diagonals_are_inactive() {
+        let v: Vec<[f32; 3]> = (0..8)
+            .map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32])
+            .collect();
+        // Outward-wound quads (counter-clockwise seen from outside).
+        let quads = [
+            [0, 2, 3, 1], // -z
+            [4, 5, 7, 6], // +z
+            [0, 1, 5, 4], // -y
+            [2, 6, 7, 3], // +y
+            [0, 4, 6, 2], // -x
+            [1, 3, 7, 5], // +x
+        ];
+        let t: Vec<[u32; 3]> = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
+        let f = flags_of(&v, &t);
+        assert!(f.is_closed());
+        assert_eq!(f.misoriented_edges, 0);
+        assert!((f.signed_volume - 1.0).abs() < 1e-9, "{}", f.signed_volume);
+        assert_eq!(f.outward(), 1.0);
+        assert_eq!(f.flat_edges, 6);
+        for i in 0..12 {
+            // Two cube edges active from the front (convex), the diagonal
+            // inactive; nothing active from the back.
+            let bits = f.get(i);
+            assert_eq!((bits & FRONT).count_ones(), 2, "triangle {i}: {bits:06b}");
+            assert_eq!(bits & BACK, 0, "triangle {i}: {bits:06b}");
+        }
+        // Wound inward, the same edges are active from the back instead.
+        let inward: Vec<[u32; 3]> = t.iter().map(|t| [t[0], t[2], t[1]]).collect();
+        let g = flags_of(&v, &inward);
+        assert_eq!(g.outward(), -1.0);
+        for i in 0..12 {
+            assert_eq!((g.get(i) & BACK).count_ones(), 2);
+            assert_eq!(g.get(i) & FRONT, 0);
+        }
+    }
+
+    #[test]
+    fn a_valley_is_active_from_below_only() {
+        // Two faces meeting at a 90 degree valley along z, normals up-ish.
+        let v = [
+            [-1.0, 1.0, 0.0],
+            [0.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [1.0, 1.0, 0.0],
+            [-1.0, 1.0, 1.0],
+            [1.0, 1.0, 1.0],
+        ];
+        let t = [[0, 2, 1], [0, 4, 2], [1, 5, 3], [1, 2, 5]];
+        let f = flags_of(&v, &t);
+        // Triangle 0's edge 1 (1 -> 2) is the valley: inactive from the
+        // front (concave), active from the back.
+        let n0 =
+            (Vec3A::from(v[2]) - Vec3A::from(v[0])).cross(Vec3A::from(v[1]) - Vec3A::from(v[0]));
+        assert!(n0.y > 0.0, "front faces up");
+        assert_eq!(f.get(0) & 0b010, 0);
+        assert_eq!(f.get(0) & 0b010_000, 0b010_000);
+    }
+
+    #[test]
+    fn duplicated_vertices_weld() {
+        let v = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 1.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 1.0],
+        ];
+        let t = [[0, 1, 2], [3, 4, 5]];
+        let f = flags_of(&v, &t);
+        assert_eq!(f.flat_edges, 1);
+        assert_eq!(f.boundary_edges, 4);
+    }
+}

@@ -1,0 +1,359 @@
+//! Oriented contact normals for a triangle pair of two meshes, from the
+//! triangles' facing and their active edges ([`super::edges`]).
+//!
+//! # The rule
+//!
+//! The normal of a pair points from triangle A to triangle B, out of A's
+//! surface and into B's, never the other way. Each triangle *faces* one
+//! side ([`Facing`]):
+//!
+//! - a closed mesh faces outward: the side of its winding's normal when its
+//!   signed volume is positive, the other side when negative;
+//! - an open mesh (a ground, a ramp, a bowl) is two-sided by default: each
+//!   triangle faces the side on which the other shape's centre lies, so a
+//!   body resting on a ground is pushed up whichever way the ground was
+//!   wound, and a ball in a bowl is pushed toward the bowl's inside. It can
+//!   be made one-sided instead.
+//!
+//! The normal is the separating axis of the pair (the two face normals,
+//! the nine edge–edge cross products and the six in-plane edge normals, each
+//! both ways round) with the largest signed separation *among the axes
+//! both triangles accept*. Along an axis `n`, triangle A touches with its
+//! support feature (the corners farthest along `n`) and B with its corners
+//! farthest along `−n`; a feature accepts `n` when
+//!
+//! - it is the face and `n` is (within the cone angle) the face's outward
+//!   normal;
+//! - it is an *active* edge or a corner on an active edge (seen from the
+//!   side the triangle faces), and `n` leans out of the triangle there (not
+//!   back over its face) and not more than 120° from its outward normal;
+//! - it is an *inactive* edge or corner (a flat or concave one, inside a
+//!   smooth surface) and `n` is within the cone angle of the face's outward
+//!   normal: a body sliding over a tessellated plane meets the plane, not
+//!   the edges between its triangles (Jolt's active edges, Bullet's
+//!   internal-edge adjustment and parry's `FIX_INTERNAL_EDGES` do the same
+//!   for a convex shape against a mesh; here both sides are meshes).
+//!
+//! When neither side touches with its face and one side touches with an
+//! inactive feature, the normal becomes that side's face normal (A's first),
+//! and the separation is measured along it: the contact is with the smooth
+//! surface the inactive feature lies in. A pair no axis is accepted for
+//! gives no contact: it would only push into a back face or catch on an
+//! internal edge.
+//!
+//! The cone angle is the flat angle of the edge flags: a corner of a finely
+//! tessellated sphere is inactive, and the faces around it lie within that
+//! angle of the plane it rests on, so the plane's normal is accepted.
+
+use glam::Vec3A;
+
+use super::edges::side_bits;
+use crate::geom::Triangle;
+
+/// Which side of its triangles a shape's contacts come from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Facing {
+    /// Every triangle faces the side of its winding's normal times the sign
+    /// (`1.0` or `-1.0`): a closed mesh, or an open one made one-sided.
+    OneSided(f32),
+    /// Each triangle faces the side on which `toward` (the other shape's
+    /// centre, in the pair's frame) lies.
+    TwoSided {
+        /// The point the triangles face.
+        toward: Vec3A,
+    },
+}
+
+/// The facing of both sides of a pair and the cone angle (as its cosine).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PairFacing {
+    /// Shape A's facing.
+    pub a: Facing,
+    /// Shape B's facing.
+    pub b: Facing,
+    /// Cosine of the cone angle within which an inactive feature accepts a
+    /// normal.
+    pub cone_cos: f32,
+}
+
+impl PairFacing {
+    /// Both facings with the cone angle of the default flat angle.
+    pub fn new(a: Facing, b: Facing) -> Self {
+        Self {
+            a,
+            b,
+            cone_cos: super::edges::EdgeFlags::DEFAULT_FLAT_DEG.to_radians().cos(),
+        }
+    }
+}
+
+/// The oriented axis of a pair.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OrientedAxis {
+    /// Unit normal from A to B.
+    pub normal: Vec3A,
+    /// Signed separation along it (negative: penetration).
+    pub sep: f32,
+    /// The axis in the kernel's numbering (0 A's face, 1 B's face, 2–10
+    /// edge–edge, 11–13 A's in-plane edge normals, 14–16 B's).
+    pub axis: u8,
+}
+
+/// How a triangle's support feature accepted an axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Support {
+    Face,
+    Active,
+    Inactive,
+}
+
+/// One side of the pair, ready for the tests.
+struct Side<'a> {
+    t: &'a Triangle,
+    /// Unit normal of the winding.
+    raw: Vec3A,
+    /// Unit normal of the side it faces.
+    out: Vec3A,
+    /// Active edges (bits 0–2) from that side.
+    active: u8,
+    centroid: Vec3A,
+}
+
+impl<'a> Side<'a> {
+    fn new(t: &'a Triangle, flags: u8, facing: Facing) -> Option<Self> {
+        let raw = (t[1] - t[0]).cross(t[2] - t[0]).try_normalize()?;
+        let centroid = (t[0] + t[1] + t[2]) * (1.0 / 3.0);
+        let sign = match facing {
+            Facing::OneSided(s) => s,
+            Facing::TwoSided { toward } => {
+                if raw.dot(toward - centroid) < 0.0 {
+                    -1.0
+                } else {
+                    1.0
+                }
+            }
+        };
+        Some(Self {
+            t,
+            raw,
+            out: raw * sign,
+            active: side_bits(flags, sign > 0.0),
+            centroid,
+        })
+    }
+
+    /// Whether the feature farthest along `n` (a unit direction out of this
+    /// side) accepts `n`, and how.
+    fn support(&self, n: Vec3A, cone_cos: f32) -> Option<Support> {
+        let p = self.t.map(|v| n.dot(v));
+        let max = p[0].max(p[1]).max(p[2]);
+        let min = p[0].min(p[1]).min(p[2]);
+        let eps = 1e-4 * (max - min) + 1e-6 * max.abs().max(min.abs());
+        let tied = p.map(|x| x >= max - eps);
+        let count = tied.iter().filter(|t| **t).count();
+        let facing = n.dot(self.out);
+        let within_cone = facing >= cone_cos;
+        let active = |k: usize| self.active & (1 << k) != 0;
+        // Not more than 120 degrees from the outward normal.
+        let outward = facing >= -0.5;
+        match count {
+            3 => within_cone.then_some(Support::Face),
+            2 => {
+                let k = (0..3)
+                    .find(|&k| tied[k] && tied[(k + 1) % 3])
+                    .expect("two of three corners tied share an edge");
+                let e = self.t[(k + 1) % 3] - self.t[k];
+                let m = e.cross(self.raw).normalize_or_zero();
+                if active(k) && outward && n.dot(m) >= -0.05 {
+                    Some(Support::Active)
+                } else {
+                    within_cone.then_some(Support::Inactive)
+                }
+            }
+            _ => {
+                let k = tied.iter().position(|t| *t).expect("one corner is the max");
+                let r = (self.t[k] - self.centroid).normalize_or_zero();
+                if (active(k) || active((k + 2) % 3)) && outward && n.dot(r) >= -0.05 {
+                    Some(Support::Active)
+                } else {
+                    within_cone.then_some(Support::Inactive)
+                }
+            }
+        }
+    }
+}
+
+/// Signed separation of `b` from `a` along the unit direction `n`.
+#[inline]
+fn separation(a: &Triangle, b: &Triangle, n: Vec3A) -> f32 {
+    let max_a = n.dot(a[0]).max(n.dot(a[1])).max(n.dot(a[2]));
+    let min_b = n.dot(b[0]).min(n.dot(b[1])).min(n.dot(b[2]));
+    min_b - max_a
+}
+
+/// The oriented axis of the pair `a` (flags `fa`), `b` (flags `fb`), both
+/// in A's frame; `None` when no axis is accepted by both sides (or a
+/// triangle has no area), or when the accepted axis would report the pair
+/// deeper than its plain separating-axis depth by more than `slack` plus a
+/// quarter of the smaller triangle's longest edge. See the module docs.
+pub fn oriented_axis(
+    a: &Triangle,
+    fa: u8,
+    b: &Triangle,
+    fb: u8,
+    facing: &PairFacing,
+    slack: f32,
+) -> Option<OrientedAxis> {
+    let sa = Side::new(a, fa, facing.a)?;
+    let sb = Side::new(b, fb, facing.b)?;
+    let cone = facing.cone_cos;
+    let mut best: Option<(OrientedAxis, Support, Support)> = None;
+    // The plain separating-axis result, whichever way round and whatever
+    // the features: the pair's true separation or penetration depth.
+    let mut plain = f32::NEG_INFINITY;
+    let mut consider = |n: Vec3A, axis: u8| {
+        let sep = separation(a, b, n);
+        plain = plain.max(sep);
+        if best.is_some_and(|(o, _, _)| sep <= o.sep) || !sep.is_finite() {
+            return;
+        }
+        let Some(ka) = sa.support(n, cone) else {
+            return;
+        };
+        let Some(kb) = sb.support(-n, cone) else {
+            return;
+        };
+        best = Some((
+            OrientedAxis {
+                normal: n,
+                sep,
+                axis,
+            },
+            ka,
+            kb,
+        ));
+    };
+    consider(sa.out, 0);
+    consider(-sb.out, 1);
+    consider(-sa.out, 0);
+    consider(sb.out, 1);
+    let ea = [a[1] - a[0], a[2] - a[1], a[0] - a[2]];
+    let eb = [b[1] - b[0], b[2] - b[1], b[0] - b[2]];
+    for (k, x) in ea.iter().enumerate() {
+        for (l, y) in eb.iter().enumerate() {
+            let len2 = x.length_squared() * y.length_squared();
+            let c = x.cross(*y);
+            if c.length_squared() > 1e-10 * len2 {
+                let n = c.normalize();
+                let axis = 2 + (k * 3 + l) as u8;
+                consider(n, axis);
+                consider(-n, axis);
+            }
+        }
+    }
+    for (k, x) in ea.iter().enumerate() {
+        if let Some(n) = sa.raw.cross(*x).try_normalize() {
+            consider(n, 11 + k as u8);
+            consider(-n, 11 + k as u8);
+        }
+    }
+    for (k, y) in eb.iter().enumerate() {
+        if let Some(n) = sb.raw.cross(*y).try_normalize() {
+            consider(n, 14 + k as u8);
+            consider(-n, 14 + k as u8);
+        }
+    }
+    let (mut o, ka, kb) = best?;
+    let longest = |t: &Triangle| {
+        (t[1] - t[0])
+            .length()
+            .max((t[2] - t[1]).length())
+            .max((t[0] - t[2]).length())
+    };
+    let limit = plain - slack - 0.25 * longest(a).min(longest(b));
+    if ka != Support::Face && kb != Support::Face {
+        if ka == Support::Inactive {
+            o = OrientedAxis {
+                normal: sa.out,
+                sep: separation(a, b, sa.out),
+                axis: 0,
+            };
+        } else if kb == Support::Inactive {
+            o = OrientedAxis {
+                normal: -sb.out,
+                sep: separation(a, b, -sb.out),
+                axis: 1,
+            };
+        }
+    }
+    // An accepted axis far deeper than the pair's true depth: the features
+    // that accept it are not where the triangles meet (a far corner of a
+    // large triangle, a facet of a curved body that faces away).
+    (o.sep >= limit).then_some(o)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::edges::{ALL_ACTIVE, FRONT};
+
+    fn tri(p: [[f32; 3]; 3]) -> Triangle {
+        p.map(Vec3A::from)
+    }
+
+    fn two_sided_toward(p: [f32; 3]) -> Facing {
+        Facing::TwoSided {
+            toward: Vec3A::from(p),
+        }
+    }
+
+    /// A floor triangle (normal up) and a triangle 1 cm below its plane,
+    /// facing down: the normal is up, never down into the floor.
+    #[test]
+    fn a_face_just_below_a_floor_is_pushed_up() {
+        let floor = tri([[-2.0, 0.0, -2.0], [-2.0, 0.0, 2.0], [2.0, 0.0, 0.0]]);
+        let t = tri([[0.0, -0.01, 0.0], [0.5, -0.01, 0.0], [0.0, -0.01, 0.5]]);
+        let f = PairFacing::new(two_sided_toward([0.0, 0.5, 0.0]), Facing::OneSided(1.0));
+        let o = oriented_axis(&floor, 0, &t, ALL_ACTIVE, &f, 0.1).expect("a contact");
+        assert!((o.normal - Vec3A::Y).length() < 1e-6, "{:?}", o);
+        assert!((o.sep + 0.01).abs() < 1e-6, "{:?}", o);
+    }
+
+    /// A cube's side triangle standing on a flat floor triangle whose
+    /// corner pokes just under the side face: the floor's internal corner
+    /// is inactive, so the normal is the floor's, not the side face's.
+    #[test]
+    fn an_internal_corner_under_a_side_face_gives_the_floor_normal() {
+        // Floor triangle, internal to a tessellated plane: no active edge.
+        let floor = tri([[-1.0, 0.0, 0.0], [-1.0, 0.0, 1.0], [0.0005, 0.0, 0.5]]);
+        // The side face of a body at x >= 0, facing -x, its bottom edge
+        // (active) 1 mm into the floor.
+        let side = tri([[0.0, -0.001, 0.0], [0.0, -0.001, 1.0], [0.0, 1.0, 0.0]]);
+        let facing = PairFacing::new(two_sided_toward([0.5, 0.5, 0.5]), Facing::OneSided(1.0));
+        let raw = (side[1] - side[0]).cross(side[2] - side[0]).normalize();
+        assert!(raw.x < 0.0, "the side faces -x");
+        // Bottom edge (corner 0 -> 1, edge 0) active from the front.
+        let o = oriented_axis(&floor, 0, &side, 0b001, &facing, 0.1).expect("a contact");
+        assert!((o.normal - Vec3A::Y).length() < 1e-5, "{:?}", o);
+        // With the floor's edges all active (a boundary), the side face's
+        // normal separates least and is taken.
+        let edge = oriented_axis(&floor, FRONT | 0b111_000, &side, 0b001, &facing, 0.1).unwrap();
+        assert!(edge.normal.x.abs() > 0.99, "{:?}", edge);
+    }
+
+    /// A triangle wholly behind a one-sided face, deeper than it is wide,
+    /// with both triangles inactive everywhere: still pushed out the front.
+    #[test]
+    fn normals_never_point_into_a_one_sided_face() {
+        let a = tri([[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]);
+        let b = tri([[0.2, -0.05, 0.2], [0.4, -0.05, 0.2], [0.2, -0.05, 0.4]]);
+        let f = PairFacing::new(Facing::OneSided(1.0), Facing::OneSided(1.0));
+        let o = oriented_axis(&a, 0, &b, 0, &f, 0.1).expect("a contact");
+        assert!(o.normal.dot(Vec3A::Y) > 0.999, "{:?}", o);
+        // Facing the other way, the same pair gives nothing pointing up.
+        let g = PairFacing::new(Facing::OneSided(-1.0), Facing::OneSided(1.0));
+        if let Some(o) = oriented_axis(&a, 0, &b, 0, &g, 0.1) {
+            assert!(o.normal.dot(Vec3A::Y) < -0.999, "{:?}", o);
+        }
+    }
+}
