@@ -14,7 +14,8 @@
 //!   implement, and the registry ([`codec::any`]) that names every codec once.
 //! - [`query`]: ray, overlap, closest-point and tree-vs-tree queries over any cursor.
 //! - [`parry`]: the parry3d / rapier3d integration.
-//! - [`sim`]: the rapier drop-test harness behind the sims.
+//! - [`sim`]: the rapier harnesses: the drop test behind the sims, and
+//!   scenes with analytic answers that check contacts in motion.
 //! - [`render`]: a Whitted-style ray tracer over any cursor (and parry's `TriMesh`).
 //! - [`plot`]: PNG line plots for the sims.
 //! - [`geom`]: the small geometry types (glam-based) shared by all of them.

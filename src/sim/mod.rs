@@ -1,6 +1,7 @@
-//! The rapier drop-test harness behind the sims (`sims/`): a dynamic mesh
-//! dropped onto a fixed one, once per shape kind (parry's `TriMesh` and
-//! every codec of the registry), with the narrow phase timed per step.
+//! The rapier harnesses: the drop test behind the sims (`sims/`), a
+//! dynamic mesh dropped onto a fixed one, once per shape kind (parry's
+//! `TriMesh` and every codec of the registry), with the narrow phase timed
+//! per step; and the analytic scenes that check contacts in motion.
 //!
 //! This folder drives rapier, so it imports parry3d and rapier3d: with
 //! [`crate::parry`] (the integration itself) it is one of the two places
@@ -9,10 +10,15 @@
 //!
 //! - [`droptest`]: the scene, the placement, one run per [`ShapeKind`]
 //!   and its [`RunReport`].
+//! - [`slide`]: scenes with analytic answers (a cube sliding or staying
+//!   on a ramp, a sphere rolling, a ball settling in a bowl, cubes resting,
+//!   stacked, at a table's edge), run for every representation of the
+//!   ground and the body, each [`slide::Report`] measured against expected.
 //! - [`timed`]: [`Timed`], the dispatcher wrapper that times the narrow
 //!   phase.
 
 pub mod droptest;
+pub mod slide;
 pub mod timed;
 
 pub use droptest::{DropScene, Placement, Replay, RunReport, RunSpec, ShapeKind, Trajectory};

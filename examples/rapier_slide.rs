@@ -1,0 +1,156 @@
+//! The analytic scenes of [`cbvh::sim::slide`] for every representation
+//! of the ground and the body, as a table of measured against expected:
+//! a cube sliding (or staying) on a ramp, a sphere rolling down one, a
+//! ball settling in a bowl, a cube dropped on the ground, a stack of cubes,
+//! a cube at a table's edge. Grounds are a parry primitive (where the scene
+//! has one), parry's `TriMesh` with and without `FIX_INTERNAL_EDGES`, and
+//! cbvh shapes of the plain, hcc and clbvh codecs in both contact modes;
+//! the body is of the same representation, and a primitive body is run on
+//! every mesh ground too (see [`cbvh::sim::slide::pairings`]).
+//!
+//! ```sh
+//! cargo run --release --example rapier_slide
+//! cargo run --release --example rapier_slide -- --scene slide --rep plain-pairs --json out.json
+//! ```
+//!
+//! `--scene NAME` keeps the scenes whose name contains NAME; `--rep NAMES`
+//! (comma-separated) the runs whose ground or body is one of NAMES
+//! (`primitive`, `trimesh`, `trimesh-fixed`, `plain`, `plain-pairs`, ...);
+//! `--json FILE` writes every report. Failing scenes do not fail the
+//! program: the table is the result.
+
+use std::io::Write;
+use std::time::Instant;
+
+use cbvh::codec::CodecKind;
+use cbvh::sim::slide::{Rep, Report, Scene, pairings};
+
+/// The codecs the example runs, by name.
+const CODECS: [&str; 3] = ["plain", "hcc", "clbvh"];
+
+struct Args {
+    scene: Option<String>,
+    reps: Option<Vec<Rep>>,
+    json: Option<String>,
+}
+
+fn parse_args() -> Result<Args, String> {
+    let mut args = Args {
+        scene: None,
+        reps: None,
+        json: None,
+    };
+    let mut it = std::env::args().skip(1);
+    while let Some(a) = it.next() {
+        let mut value = || it.next().ok_or_else(|| format!("{a} needs a value"));
+        match a.as_str() {
+            "--scene" => args.scene = Some(value()?),
+            "--rep" => {
+                args.reps = Some(
+                    value()?
+                        .split(',')
+                        .map(str::parse)
+                        .collect::<Result<Vec<Rep>, String>>()?,
+                )
+            }
+            "--json" => args.json = Some(value()?),
+            "-h" | "--help" => {
+                println!(
+                    "rapier_slide [--scene NAME] [--rep NAME[,NAME...]] [--json FILE]\n\
+                     scenes: {}",
+                    Scene::standard()
+                        .iter()
+                        .map(Scene::name)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                );
+                std::process::exit(0);
+            }
+            other => return Err(format!("unknown argument {other:?} (see --help)")),
+        }
+    }
+    Ok(args)
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    cbvh::logger::init_stderr();
+    let args = parse_args()?;
+    let codecs = CODECS
+        .iter()
+        .map(|n| n.parse::<CodecKind>())
+        .collect::<Result<Vec<_>, _>>()?;
+    let keep = |ground: Rep, body: Rep| {
+        args.reps
+            .as_ref()
+            .is_none_or(|r| r.contains(&ground) || r.contains(&body))
+    };
+    let t0 = Instant::now();
+    let mut reports: Vec<Report> = Vec::new();
+    println!(
+        "{:<18} {:<14} {:<14} {:<22} {:>9} {:>9} {:>7} {:>8} {:>8} {:>8}  result",
+        "scene",
+        "ground",
+        "body",
+        "quantity",
+        "measured",
+        "expected",
+        "err %",
+        "uphill",
+        "side",
+        "moved"
+    );
+    for scene in Scene::standard() {
+        if args
+            .scene
+            .as_ref()
+            .is_some_and(|s| !scene.name().contains(s.as_str()))
+        {
+            continue;
+        }
+        for (ground, body) in pairings(&codecs) {
+            if !scene.has_ground(ground) || !keep(ground, body) {
+                continue;
+            }
+            let r = scene.run(ground, body)?;
+            let err = r
+                .rel_error
+                .map_or_else(|| "-".into(), |e| format!("{:.1}", 100.0 * e));
+            let (uphill, side) = r.slope.map_or_else(
+                || ("-".into(), "-".into()),
+                |s| {
+                    (
+                        format!("{:.4}", s.max_uphill),
+                        format!("{:.4}", s.max_sideways),
+                    )
+                },
+            );
+            println!(
+                "{:<18} {:<14} {:<14} {:<22} {:>9.4} {:>9.4} {:>7} {:>8} {:>8} {:>8.4}  {}",
+                r.scene,
+                r.ground,
+                r.body,
+                r.quantity,
+                r.measured,
+                r.expected,
+                err,
+                uphill,
+                side,
+                r.max_travel,
+                if r.pass { "PASS" } else { "FAIL" }
+            );
+            std::io::stdout().flush()?;
+            reports.push(r);
+        }
+    }
+    let passed = reports.iter().filter(|r| r.pass).count();
+    println!(
+        "{passed} of {} pass, {} fail ({:.1} s)",
+        reports.len(),
+        reports.len() - passed,
+        t0.elapsed().as_secs_f64()
+    );
+    if let Some(path) = &args.json {
+        std::fs::write(path, serde_json::to_string_pretty(&reports)?)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,398 @@
+//! Contacts in motion against mechanics: the analytic scenes of
+//! [`cbvh::sim::slide`] with cbvh grounds and bodies (the plain and hcc
+//! codecs, in the patch and the per-pair contact modes) and with parry's
+//! cuboid and ball on a cbvh ground. Each test asserts the scene's goal
+//! (see [`Scene`]); the `harness` tests check the yardstick itself: the
+//! generated meshes, the fit, the expected values, and parry's primitives
+//! meeting every goal.
+//!
+//! Run in release: `cargo test --release --test physics` (each test
+//! prints its report; `-- --nocapture` shows them).
+
+use cbvh::codec::CodecKind;
+use cbvh::mesh::Mesh;
+use cbvh::sim::slide::{
+    BOWL_GOAL, CbvhMode, GRAVITY, MOVING_SPEED, REL_TOLERANCE, REST_TOLERANCE, Rep, Report,
+    STAY_LIMIT, Scene, SlideError,
+};
+
+const PLAIN: Rep = Rep::Cbvh(CodecKind::Plain, CbvhMode::Patches);
+const PLAIN_PAIRS: Rep = Rep::Cbvh(CodecKind::Plain, CbvhMode::Pairs);
+const HCC: Rep = Rep::Cbvh(CodecKind::Hcc, CbvhMode::Patches);
+const HCC_PAIRS: Rep = Rep::Cbvh(CodecKind::Hcc, CbvhMode::Pairs);
+
+/// Runs `scene` (it must set up), prints its report and returns it.
+fn run(scene: Scene, ground: Rep, body: Rep) -> Report {
+    let r = scene
+        .run(ground, body)
+        .unwrap_or_else(|e| panic!("{} on {ground} / {body}: {e}", scene.name()));
+    println!("{r}");
+    r
+}
+
+/// The body moved less than [`STAY_LIMIT`] over the run.
+fn stays(r: &Report) {
+    assert!(r.max_travel < STAY_LIMIT, "did not stay: {r}");
+}
+
+/// The acceleration along the slope is within [`REL_TOLERANCE`] of the
+/// expected one, and the body never moved uphill.
+fn accelerates(r: &Report) {
+    let slope = r.slope.expect("a slope scene");
+    let e = r.rel_error.expect("a relative check");
+    assert!(
+        e <= REL_TOLERANCE,
+        "acceleration off by {:.1} %: {r}",
+        100.0 * e
+    );
+    assert!(!slope.moved_uphill, "moved uphill: {r}");
+}
+
+/// The ball ended within [`BOWL_GOAL`] of the bowl's axis.
+fn settles(r: &Report) {
+    assert!(r.measured < BOWL_GOAL, "not on the axis: {r}");
+}
+
+/// The cube rests at half its side, not moving.
+fn rests(r: &Report) {
+    assert!(
+        (r.measured - r.expected).abs() <= REST_TOLERANCE,
+        "wrong height: {r}"
+    );
+    assert!(r.final_speed <= MOVING_SPEED, "still moving: {r}");
+}
+
+/// The stack stands: the top cube at its height (within a tolerance per
+/// cube), and the scene's own checks of every cube (height, drift, rest).
+fn stands(r: &Report) {
+    assert!(
+        (r.measured - r.expected).abs() <= 5.0 * REST_TOLERANCE,
+        "top cube at the wrong height: {r}"
+    );
+    assert!(r.pass, "the stack moved: {r}");
+}
+
+/// The cube fell off the table.
+fn tips(r: &Report) {
+    assert!(r.measured < 0.0, "did not tip off: {r}");
+}
+
+/// The scene's tests: a cbvh body on a cbvh ground of the same codec and
+/// mode, and a parry primitive on each cbvh ground.
+macro_rules! scene_tests {
+    ($name:ident, $scene:expr, $check:ident) => {
+        mod $name {
+            use super::*;
+
+            fn go(ground: Rep, body: Rep) {
+                $check(&run($scene, ground, body));
+            }
+
+            #[test]
+            fn plain() {
+                go(PLAIN, PLAIN)
+            }
+            #[test]
+            fn plain_pairs() {
+                go(PLAIN_PAIRS, PLAIN_PAIRS)
+            }
+            #[test]
+            fn hcc() {
+                go(HCC, HCC)
+            }
+            #[test]
+            fn hcc_pairs() {
+                go(HCC_PAIRS, HCC_PAIRS)
+            }
+            #[test]
+            fn primitive_on_plain() {
+                go(PLAIN, Rep::Primitive)
+            }
+            #[test]
+            fn primitive_on_plain_pairs() {
+                go(PLAIN_PAIRS, Rep::Primitive)
+            }
+            #[test]
+            fn primitive_on_hcc() {
+                go(HCC, Rep::Primitive)
+            }
+            #[test]
+            fn primitive_on_hcc_pairs() {
+                go(HCC_PAIRS, Rep::Primitive)
+            }
+        }
+    };
+}
+
+scene_tests!(slide_20deg_2tri_stays, Scene::slide(20.0, 1), stays);
+scene_tests!(slide_20deg_64x64_stays, Scene::slide(20.0, 64), stays);
+scene_tests!(slide_40deg_2tri, Scene::slide(40.0, 1), accelerates);
+scene_tests!(slide_40deg_64x64, Scene::slide(40.0, 64), accelerates);
+scene_tests!(roll_15deg_2tri, Scene::roll(1), accelerates);
+scene_tests!(roll_15deg_64x64, Scene::roll(64), accelerates);
+scene_tests!(bowl, Scene::bowl(), settles);
+scene_tests!(rest, Scene::Rest { cells: 1 }, rests);
+scene_tests!(stack5, Scene::Stack { count: 5, cells: 1 }, stands);
+scene_tests!(
+    table_edge_stays,
+    Scene::TableEdge {
+        overhang: -0.1,
+        cells: 1
+    },
+    stays
+);
+scene_tests!(
+    table_edge_tips,
+    Scene::TableEdge {
+        overhang: 0.1,
+        cells: 1
+    },
+    tips
+);
+
+/// The yardstick itself.
+mod harness {
+    use std::collections::HashMap;
+
+    use cbvh::sim::slide::{
+        SlopeFrame, bowl_mesh, cube_mesh, icosphere_mesh, least_squares_slope, pairings, ramp_mesh,
+    };
+    use parry3d::math::Vector;
+
+    use super::*;
+
+    fn normal(m: &Mesh, t: usize) -> Vector {
+        let [a, b, c] = m.triangle_vertices(t).map(Vector::from_array);
+        (b - a).cross(c - a)
+    }
+
+    fn centroid(m: &Mesh, t: usize) -> Vector {
+        let [a, b, c] = m.triangle_vertices(t).map(Vector::from_array);
+        (a + b + c) / 3.0
+    }
+
+    /// How many times each directed edge occurs.
+    fn directed_edges(m: &Mesh) -> HashMap<(u32, u32), usize> {
+        let mut edges = HashMap::new();
+        for &[a, b, c] in &m.triangles {
+            for e in [(a, b), (b, c), (c, a)] {
+                *edges.entry(e).or_insert(0) += 1;
+            }
+        }
+        edges
+    }
+
+    /// Closed and consistently wound: every directed edge once, and its
+    /// reverse once.
+    fn assert_closed(m: &Mesh) {
+        let edges = directed_edges(m);
+        for (&(a, b), &n) in &edges {
+            assert_eq!(n, 1, "edge {a}-{b} used {n} times in one direction");
+            assert_eq!(edges.get(&(b, a)), Some(&1), "edge {a}-{b} is open");
+        }
+    }
+
+    /// The enclosed volume (divergence theorem): positive when wound
+    /// outward.
+    fn volume(m: &Mesh) -> f32 {
+        (0..m.triangles.len())
+            .map(|t| {
+                let [a, b, c] = m.triangle_vertices(t).map(Vector::from_array);
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum()
+    }
+
+    #[test]
+    fn ramp_is_a_tilted_square_wound_upward() {
+        for (cells, tris) in [(1, 2), (64, 2 * 64 * 64)] {
+            let m = ramp_mesh(30.0, cells, 8.0);
+            let f = SlopeFrame::new(30.0);
+            assert_eq!(m.triangle_count(), tris);
+            assert_eq!(m.vertex_count(), (cells + 1) * (cells + 1));
+            for t in 0..m.triangle_count() {
+                let n = normal(&m, t).normalize();
+                assert!(n.dot(f.normal) > 0.999, "triangle {t} of {cells}: {n}");
+            }
+            let area: f32 = (0..m.triangle_count())
+                .map(|t| 0.5 * normal(&m, t).length())
+                .sum();
+            assert!((area - 64.0).abs() < 1e-3, "area {area}");
+            for v in &m.vertices {
+                let v = Vector::from_array(*v);
+                assert!(v.dot(f.normal).abs() < 1e-5, "{v} off the plane");
+                assert!(v.dot(f.downhill).abs() <= 4.0 + 1e-5 && v.x.abs() <= 4.0 + 1e-5);
+            }
+        }
+        let f = SlopeFrame::new(30.0);
+        let (s, c) = 30f32.to_radians().sin_cos();
+        assert!(f.downhill.y < 0.0 && (f.downhill.y + s).abs() < 1e-6);
+        assert!((f.normal.y - c).abs() < 1e-6);
+        assert!((f.rotation * Vector::Y - f.normal).length() < 1e-6);
+        assert!((f.rotation * Vector::Z - f.downhill).length() < 1e-6);
+    }
+
+    #[test]
+    fn cube_is_closed_and_wound_outward() {
+        let m = cube_mesh(2.0);
+        assert_eq!((m.triangle_count(), m.vertex_count()), (12, 8));
+        assert_closed(&m);
+        for t in 0..12 {
+            assert!(normal(&m, t).dot(centroid(&m, t)) > 0.0);
+        }
+        assert!((volume(&m) - 8.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn icosphere_is_closed_round_and_wound_outward() {
+        for (sub, tris) in [(0, 20), (1, 80), (4, 5120)] {
+            let m = icosphere_mesh(0.5, sub);
+            assert_eq!(m.triangle_count(), tris);
+            assert_eq!(m.vertex_count(), tris / 2 + 2);
+            assert_closed(&m);
+            for v in &m.vertices {
+                assert!((Vector::from_array(*v).length() - 0.5).abs() < 1e-5);
+            }
+            for t in 0..tris {
+                assert!(normal(&m, t).dot(centroid(&m, t)) > 0.0);
+            }
+        }
+        let ball = 4.0 / 3.0 * std::f32::consts::PI * 0.125;
+        let v = volume(&icosphere_mesh(0.5, 4));
+        assert!(v < ball && v > 0.99 * ball, "volume {v} against {ball}");
+    }
+
+    #[test]
+    fn bowl_is_an_open_hemisphere_facing_its_centre() {
+        let (r, segments) = (2.0, 32);
+        let m = bowl_mesh(r, segments);
+        let rings = segments / 4;
+        assert_eq!(m.triangle_count(), segments * (2 * rings - 1));
+        let centre = Vector::new(0.0, r, 0.0);
+        for v in &m.vertices {
+            let v = Vector::from_array(*v);
+            assert!(((v - centre).length() - r).abs() < 1e-5);
+            assert!(v.y <= r + 1e-5);
+        }
+        for t in 0..m.triangle_count() {
+            assert!(normal(&m, t).dot(centre - centroid(&m, t)) > 0.0);
+        }
+        // The bottom fan faces up, and the rim is the only open boundary.
+        assert!(normal(&m, 0).normalize().y > 0.9);
+        let edges = directed_edges(&m);
+        let open = edges.keys().filter(|(a, b)| !edges.contains_key(&(*b, *a)));
+        let rim: Vec<f32> = open.map(|&(a, _)| m.vertices[a as usize][1]).collect();
+        assert_eq!(rim.len(), segments);
+        assert!(rim.iter().all(|y| (y - r).abs() < 1e-5));
+    }
+
+    #[test]
+    fn least_squares_slope_recovers_a_line() {
+        let t: Vec<f32> = (0..20).map(|i| i as f32 * 0.1).collect();
+        let y: Vec<f32> = t.iter().map(|t| 3.0 * t - 1.0).collect();
+        assert!((least_squares_slope(&t, &y) - 3.0).abs() < 1e-5);
+        // Symmetric noise leaves the slope.
+        let noisy: Vec<f32> = y
+            .iter()
+            .enumerate()
+            .map(|(i, y)| y + if i % 2 == 0 { 0.1 } else { -0.1 })
+            .collect();
+        assert!((least_squares_slope(&t, &noisy) - 3.0).abs() < 0.1);
+        assert_eq!(least_squares_slope(&[1.0], &[2.0]), 0.0);
+        assert_eq!(least_squares_slope(&[1.0, 1.0], &[2.0, 3.0]), 0.0);
+    }
+
+    #[test]
+    fn rep_names_round_trip_and_modes_must_agree() {
+        for (g, b) in pairings(CodecKind::ALL) {
+            for rep in [g, b] {
+                assert_eq!(rep.name().parse::<Rep>(), Ok(rep));
+            }
+        }
+        assert_eq!("hcc-pairs".parse::<Rep>(), Ok(HCC_PAIRS));
+        assert!("nonesuch".parse::<Rep>().is_err());
+        assert!(matches!(
+            Scene::Rest { cells: 1 }.run(PLAIN, PLAIN_PAIRS),
+            Err(SlideError::ModeMismatch { .. })
+        ));
+        assert!(matches!(
+            Scene::bowl().run(Rep::Primitive, Rep::Primitive),
+            Err(SlideError::NoPrimitive(_))
+        ));
+    }
+
+    #[test]
+    fn expected_values_are_the_textbook_ones() {
+        let (s, c) = 40f32.to_radians().sin_cos();
+        let r = run(Scene::slide(40.0, 1), Rep::Primitive, Rep::Primitive);
+        assert!((r.expected - GRAVITY * (s - 0.6 * c)).abs() < 1e-5);
+        let r = run(Scene::slide(20.0, 1), Rep::Primitive, Rep::Primitive);
+        assert_eq!(r.expected, 0.0);
+        // A solid ball: 5/7 g sin θ.
+        let r = run(Scene::roll(1), Rep::Primitive, Rep::Primitive);
+        let solid = 5.0 / 7.0 * GRAVITY * 15f32.to_radians().sin();
+        assert!((r.expected - solid).abs() < 1e-3 * solid, "{r}");
+        // The icosphere's own inertia and contact radius give within a
+        // percent of it.
+        let r = run(Scene::roll(1), Rep::TriMeshFixed, Rep::TriMeshFixed);
+        assert!((r.expected - solid).abs() < 1e-2 * solid, "{r}");
+        assert_ne!(r.expected, solid);
+    }
+
+    /// parry's primitives (on a primitive ground, or in the bowl on a
+    /// `TriMesh` with fixed internal edges) meet every goal: the scenes
+    /// and their checks are right.
+    #[test]
+    fn primitives_meet_every_goal() {
+        stays(&run(Scene::slide(20.0, 1), Rep::Primitive, Rep::Primitive));
+        accelerates(&run(Scene::slide(40.0, 1), Rep::Primitive, Rep::Primitive));
+        accelerates(&run(Scene::roll(1), Rep::Primitive, Rep::Primitive));
+        settles(&run(Scene::bowl(), Rep::TriMeshFixed, Rep::Primitive));
+        rests(&run(
+            Scene::Rest { cells: 1 },
+            Rep::Primitive,
+            Rep::Primitive,
+        ));
+        stands(&run(
+            Scene::Stack { count: 5, cells: 1 },
+            Rep::Primitive,
+            Rep::Primitive,
+        ));
+        stays(&run(
+            Scene::TableEdge {
+                overhang: -0.1,
+                cells: 1,
+            },
+            Rep::Primitive,
+            Rep::Primitive,
+        ));
+        tips(&run(
+            Scene::TableEdge {
+                overhang: 0.1,
+                cells: 1,
+            },
+            Rep::Primitive,
+            Rep::Primitive,
+        ));
+    }
+
+    /// The checks can fail: a cube on a ramp steeper than its friction
+    /// holds does not stay, and one that holds does not accelerate.
+    #[test]
+    fn checks_tell_sliding_from_staying() {
+        let sliding = run(Scene::slide(40.0, 1), Rep::Primitive, Rep::Primitive);
+        assert!(sliding.max_travel >= STAY_LIMIT);
+        let staying = run(Scene::slide(20.0, 1), Rep::Primitive, Rep::Primitive);
+        assert!(staying.measured.abs() < 0.1 * sliding.expected);
+        assert!(!staying.slope.expect("a slope scene").moved_uphill);
+        let tipping = run(
+            Scene::TableEdge {
+                overhang: 0.1,
+                cells: 1,
+            },
+            Rep::Primitive,
+            Rep::Primitive,
+        );
+        assert!(tipping.max_travel >= STAY_LIMIT && tipping.pass);
+    }
+}
