@@ -24,9 +24,13 @@
 //!
 //! - it is the face and `n` is (within the cone angle) the face's outward
 //!   normal;
-//! - it is an *active* edge or a corner on an active edge (seen from the
-//!   side the triangle faces), and `n` leans out of the triangle there (not
-//!   back over its face) and not more than 120° from its outward normal;
+//! - it is an *active* edge (seen from the side the triangle faces) and
+//!   `n`'s sideways part leans out across it (within 10°), or a corner
+//!   with an active edge and `n`'s sideways part leans into the wedge of
+//!   its active edges' outward normals (within 10°), in both cases not more
+//!   than 120° from the face's outward normal: the big triangles of a
+//!   2-triangle ramp have active corners (the ramp's own), but a normal
+//!   that leans across the inactive diagonal is not theirs;
 //! - it is an *inactive* edge or corner (a flat or concave one, inside a
 //!   smooth surface) and `n` is within the cone angle of the face's outward
 //!   normal: a body sliding over a tessellated plane meets the plane, not
@@ -116,16 +120,15 @@ struct Side<'a> {
     out: Vec3A,
     /// Active edges (bits 0–2) from that side.
     active: u8,
-    centroid: Vec3A,
 }
 
 impl<'a> Side<'a> {
     fn new(t: &'a Triangle, flags: u8, facing: Facing) -> Option<Self> {
         let raw = (t[1] - t[0]).cross(t[2] - t[0]).try_normalize()?;
-        let centroid = (t[0] + t[1] + t[2]) * (1.0 / 3.0);
         let sign = match facing {
             Facing::OneSided(s) => s,
             Facing::TwoSided { toward } => {
+                let centroid = (t[0] + t[1] + t[2]) * (1.0 / 3.0);
                 if raw.dot(toward - centroid) < 0.0 {
                     -1.0
                 } else {
@@ -138,7 +141,6 @@ impl<'a> Side<'a> {
             raw,
             out: raw * sign,
             active: side_bits(flags, sign > 0.0),
-            centroid,
         })
     }
 
@@ -156,15 +158,23 @@ impl<'a> Side<'a> {
         let active = |k: usize| self.active & (1 << k) != 0;
         // Not more than 120 degrees from the outward normal.
         let outward = facing >= -0.5;
+        // The sideways part of `n`, in the triangle's plane: over an active
+        // feature it must lean out across the feature's active edges.
+        let u = n - self.raw * n.dot(self.raw);
+        let lean = u.try_normalize();
+        let m = |k: usize| {
+            (self.t[(k + 1) % 3] - self.t[k])
+                .cross(self.raw)
+                .normalize_or_zero()
+        };
         match count {
             3 => within_cone.then_some(Support::Face),
             2 => {
                 let k = (0..3)
                     .find(|&k| tied[k] && tied[(k + 1) % 3])
                     .expect("two of three corners tied share an edge");
-                let e = self.t[(k + 1) % 3] - self.t[k];
-                let m = e.cross(self.raw).normalize_or_zero();
-                if active(k) && outward && n.dot(m) >= -0.05 {
+                let over = lean.is_none_or(|l| l.dot(m(k)) >= LEAN_COS);
+                if active(k) && outward && over {
                     Some(Support::Active)
                 } else {
                     within_cone.then_some(Support::Inactive)
@@ -172,8 +182,25 @@ impl<'a> Side<'a> {
             }
             _ => {
                 let k = tied.iter().position(|t| *t).expect("one corner is the max");
-                let r = (self.t[k] - self.centroid).normalize_or_zero();
-                if (active(k) || active((k + 2) % 3)) && outward && n.dot(r) >= -0.05 {
+                // The corner's cone is spanned by its active edges' cones:
+                // the wedge between their outward normals when both are
+                // active, the one normal when one is (widened by the lean
+                // tolerance either way).
+                let (e1, e2) = (k, (k + 2) % 3);
+                let over = match (active(e1), active(e2), lean) {
+                    (false, false, _) => false,
+                    (_, _, None) => true,
+                    (true, true, Some(l)) => {
+                        let (m1, m2) = (m(e1), m(e2));
+                        let bisector = (m1 + m2).normalize_or_zero();
+                        l.dot(bisector) >= m1.dot(bisector).min(LEAN_COS) - 1e-3
+                            || l.dot(m1) >= LEAN_COS
+                            || l.dot(m2) >= LEAN_COS
+                    }
+                    (true, false, Some(l)) => l.dot(m(e1)) >= LEAN_COS,
+                    (false, true, Some(l)) => l.dot(m(e2)) >= LEAN_COS,
+                };
+                if over && outward {
                     Some(Support::Active)
                 } else {
                     within_cone.then_some(Support::Inactive)
@@ -182,6 +209,11 @@ impl<'a> Side<'a> {
         }
     }
 }
+
+/// Cosine of the tolerance (10°) within which a normal's sideways part must
+/// lean along an active edge's outward normal (or into the wedge of a
+/// corner's two).
+const LEAN_COS: f32 = 0.984_807_8;
 
 /// Signed separation of `b` from `a` along the unit direction `n`.
 #[inline]

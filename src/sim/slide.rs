@@ -385,6 +385,11 @@ pub enum Rep {
     /// [`BuildOptions`] and the codec's default options, its contacts in
     /// the mode.
     Cbvh(CodecKind, CbvhMode),
+    /// parry's convex hull of the mesh's vertices, for a body: the same
+    /// polyhedron as the mesh with parry's exact convex contacts, the
+    /// reference for what a faceted body does (an icosphere rolls slower
+    /// than a sphere: it bumps over its edges).
+    Hull,
 }
 
 impl Rep {
@@ -397,6 +402,7 @@ impl Rep {
             Rep::Primitive => "primitive".into(),
             Rep::TriMesh => "trimesh".into(),
             Rep::TriMeshFixed => "trimesh-fixed".into(),
+            Rep::Hull => "hull".into(),
             Rep::Cbvh(k, CbvhMode::Patches) => k.name().into(),
             Rep::Cbvh(k, CbvhMode::Pairs) => format!("{}-pairs", k.name()),
         }
@@ -420,6 +426,15 @@ impl Rep {
                 )
                 .map_err(trimesh_error)?,
             ),
+            Rep::Hull => {
+                let points: Vec<Vector> = mesh
+                    .vertices
+                    .iter()
+                    .map(|v| Vector::from_array(*v))
+                    .collect();
+                SharedShape::convex_hull(&points)
+                    .ok_or_else(|| SlideError::TriMesh("no convex hull of the mesh".into()))?
+            }
             Rep::Cbvh(kind, _) => SharedShape::new(CbvhShape::build(
                 mesh,
                 &BuildOptions::default(),
@@ -444,6 +459,7 @@ impl FromStr for Rep {
             "primitive" => return Ok(Rep::Primitive),
             "trimesh" => return Ok(Rep::TriMesh),
             "trimesh-fixed" => return Ok(Rep::TriMeshFixed),
+            "hull" => return Ok(Rep::Hull),
             _ => {}
         }
         let (codec, mode) = match s.strip_suffix("-pairs") {
@@ -459,15 +475,19 @@ impl FromStr for Rep {
 
 /// The ground and body pairings the example runs for `codecs`: each
 /// representation on itself (a primitive on a primitive, a `TriMesh` on a
-/// `TriMesh`, a codec on the same codec in the same mode), and a primitive
-/// body on every mesh ground. A scene skips the grounds it has none of
+/// `TriMesh`, a codec on the same codec in the same mode), a primitive
+/// body on every mesh ground, and the body's convex hull on the primitive
+/// ground (the faceted body's reference). A scene skips the grounds it has none of
 /// ([`Scene::has_ground`]).
 pub fn pairings(codecs: &[CodecKind]) -> Vec<(Rep, Rep)> {
     let mut grounds = vec![Rep::TriMesh, Rep::TriMeshFixed];
     for &k in codecs {
         grounds.extend(CbvhMode::ALL.map(|m| Rep::Cbvh(k, m)));
     }
-    let mut all = vec![(Rep::Primitive, Rep::Primitive)];
+    let mut all = vec![
+        (Rep::Primitive, Rep::Primitive),
+        (Rep::Primitive, Rep::Hull),
+    ];
     for g in grounds {
         all.push((g, g));
         all.push((g, Rep::Primitive));
