@@ -496,7 +496,7 @@ pub fn machine() -> String {
 fn print_table(runs: &[RunReport], size: f32) {
     println!();
     println!(
-        "{:<19} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9} {:>7} {:>7} {:>8} {:>9} {:>8}",
+        "{:<19} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9} {:>6} {:>7} {:>7} {:>8} {:>9} {:>8}",
         "shape",
         "np median",
         "np p95",
@@ -509,6 +509,7 @@ fn print_table(runs: &[RunReport], size: f32) {
         "points",
         "interf",
         "max pen",
+        "n ang",
         "E gain",
         "B/tri",
         "RSS",
@@ -516,7 +517,7 @@ fn print_table(runs: &[RunReport], size: f32) {
         "fallback"
     );
     println!(
-        "{:<19} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9} {:>7} {:>7} {:>8}",
+        "{:<19} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9} {:>6} {:>7} {:>7} {:>8}",
         "",
         "ms",
         "ms",
@@ -529,13 +530,14 @@ fn print_table(runs: &[RunReport], size: f32) {
         "max",
         "pairs",
         "",
+        "deg",
         "%",
         "",
         "MB"
     );
     for r in runs {
         println!(
-            "{:<19} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9.5} {:>7.2} {:>7.1} {:>8} {:>9.4} {:>8}",
+            "{:<19} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>8} {:>8} {:>8} {:>7} {:>8} {:>9.5} {:>6.1} {:>7.2} {:>7.1} {:>8} {:>9.4} {:>8}",
             r.shape,
             r.narrow_phase_ms.median,
             r.narrow_phase_ms.p95,
@@ -548,6 +550,7 @@ fn print_table(runs: &[RunReport], size: f32) {
             r.max_contact_points,
             r.max_interference_pairs,
             r.max_penetration,
+            r.max_normal_angle_deg,
             100.0 * r.energy_gain,
             r.bytes_per_triangle,
             r.peak_rss_bytes

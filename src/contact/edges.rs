@@ -85,23 +85,54 @@ impl EdgeFlags {
             count <= (u32::MAX / 3) as usize,
             "edge flags index corners with u32"
         );
-        let cos_flat = flat_deg.to_radians().cos();
-        // Unit normals (NaN for triangles without area) and the corners'
-        // position bits, which weld corners that are the same point.
         let normals: Vec<Vec3A> = (0..count as u32)
             .into_par_iter()
-            .map(|t| {
-                let v = triangle(t);
-                (v[1] - v[0]).cross(v[2] - v[0]).normalize_or(Vec3A::NAN)
-            })
+            .map(|t| unit_normal(&triangle(t)))
             .collect();
-        let mut corners: Vec<([u32; 3], u32)> = (0..count as u32)
+        let corners: Vec<([u32; 3], u32)> = (0..count as u32)
             .into_par_iter()
             .flat_map_iter(|t| {
                 let v = triangle(t);
                 (0..3u32).map(move |k| (key(v[k as usize]), t * 3 + k))
             })
             .collect();
+        Self::from_corners(normals, corners, flat_deg)
+    }
+
+    /// The flags of `count` triangles handed out by `visit`, which calls
+    /// its argument once with every triangle id below `count` and the
+    /// triangle, in any order (a traversal of a tree's leaves, which is
+    /// cheaper than looking every id up); ids it skips get every edge
+    /// active. Default flat angle.
+    pub fn from_visit(count: usize, visit: impl FnOnce(&mut dyn FnMut(u32, &Triangle))) -> Self {
+        assert!(
+            count <= (u32::MAX / 3) as usize,
+            "edge flags index corners with u32"
+        );
+        let mut normals = vec![Vec3A::NAN; count];
+        let mut corners = vec![([u32::MAX; 3], u32::MAX); 3 * count];
+        visit(&mut |id, t| {
+            if (id as usize) < count {
+                normals[id as usize] = unit_normal(t);
+                for k in 0..3 {
+                    corners[id as usize * 3 + k] = (key(t[k]), id * 3 + k as u32);
+                }
+            }
+        });
+        // An id never visited: its corners stand apart from every other.
+        for (c, entry) in corners.iter_mut().enumerate() {
+            if entry.1 == u32::MAX {
+                *entry = ([u32::MAX, u32::MAX, c as u32], c as u32);
+            }
+        }
+        Self::from_corners(normals, corners, Self::DEFAULT_FLAT_DEG)
+    }
+
+    /// The flags from each triangle's unit normal and its corners' position
+    /// bits (corner `t * 3 + k` of triangle `t`).
+    fn from_corners(normals: Vec<Vec3A>, mut corners: Vec<([u32; 3], u32)>, flat_deg: f32) -> Self {
+        let count = normals.len();
+        let cos_flat = flat_deg.to_radians().cos();
         corners.par_sort_unstable();
         // Welded vertex of every corner, and each vertex's position.
         let mut vertex_of = vec![0u32; corners.len()];
@@ -116,6 +147,9 @@ impl EdgeFlags {
         let signed_volume = (0..count)
             .into_par_iter()
             .map(|t| {
+                if !normals[t].is_finite() {
+                    return 0.0;
+                }
                 let p = |k: usize| {
                     let q = positions[vertex_of[t * 3 + k] as usize];
                     DVec3::new(q.x as f64, q.y as f64, q.z as f64)
@@ -239,6 +273,12 @@ impl EdgeFlags {
     pub fn outward(&self) -> f32 {
         if self.signed_volume < 0.0 { -1.0 } else { 1.0 }
     }
+}
+
+/// The unit normal of a triangle's winding, NaN without area.
+#[inline]
+fn unit_normal(v: &Triangle) -> Vec3A {
+    (v[1] - v[0]).cross(v[2] - v[0]).normalize_or(Vec3A::NAN)
 }
 
 /// The position bits of a point (`-0.0` as `0.0`, so that both weld).

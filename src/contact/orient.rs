@@ -25,15 +25,14 @@
 //! - it is the face and `n` is (within the cone angle) the face's outward
 //!   normal;
 //! - it is an *active* edge (seen from the side the triangle faces) and
-//!   `n`'s sideways part leans out across it (within 10°), or a corner
-//!   with an active edge and `n`'s sideways part leans into the wedge of
-//!   its active edges' outward normals (within 10°), in both cases not more
-//!   than 120° from the face's outward normal: the big triangles of a
-//!   2-triangle ramp have active corners (the ramp's own), but a normal
-//!   that leans across the inactive diagonal is not theirs;
+//!   `n` leans out across it, or a corner with an active edge, near the
+//!   other triangle, and `n` leans out over it, in both cases not more
+//!   than 120° from the face's outward normal (a far corner of a large
+//!   triangle, like a 2-triangle ramp's own corners, is not where the two
+//!   meet: the contact lies on the inactive diagonal or face between);
 //! - it is an *inactive* edge or corner (a flat or concave one, inside a
-//!   smooth surface) and `n` is within the cone angle of the face's outward
-//!   normal: a body sliding over a tessellated plane meets the plane, not
+//!   smooth surface) and `n` is within the cone angle of the face's
+//!   outward normal: a body sliding over a tessellated plane meets the plane, not
 //!   the edges between its triangles (Jolt's active edges, Bullet's
 //!   internal-edge adjustment and parry's `FIX_INTERNAL_EDGES` do the same
 //!   for a convex shape against a mesh; here both sides are meshes).
@@ -146,7 +145,7 @@ impl<'a> Side<'a> {
 
     /// Whether the feature farthest along `n` (a unit direction out of this
     /// side) accepts `n`, and how.
-    fn support(&self, n: Vec3A, cone_cos: f32) -> Option<Support> {
+    fn support(&self, n: Vec3A, cone_cos: f32, near: &crate::geom::Aabb) -> Option<Support> {
         let p = self.t.map(|v| n.dot(v));
         let max = p[0].max(p[1]).max(p[2]);
         let min = p[0].min(p[1]).min(p[2]);
@@ -158,10 +157,6 @@ impl<'a> Side<'a> {
         let active = |k: usize| self.active & (1 << k) != 0;
         // Not more than 120 degrees from the outward normal.
         let outward = facing >= -0.5;
-        // The sideways part of `n`, in the triangle's plane: over an active
-        // feature it must lean out across the feature's active edges.
-        let u = n - self.raw * n.dot(self.raw);
-        let lean = u.try_normalize();
         let m = |k: usize| {
             (self.t[(k + 1) % 3] - self.t[k])
                 .cross(self.raw)
@@ -173,7 +168,7 @@ impl<'a> Side<'a> {
                 let k = (0..3)
                     .find(|&k| tied[k] && tied[(k + 1) % 3])
                     .expect("two of three corners tied share an edge");
-                let over = lean.is_none_or(|l| l.dot(m(k)) >= LEAN_COS);
+                let over = n.dot(m(k)) >= -0.05;
                 if active(k) && outward && over {
                     Some(Support::Active)
                 } else {
@@ -182,24 +177,15 @@ impl<'a> Side<'a> {
             }
             _ => {
                 let k = tied.iter().position(|t| *t).expect("one corner is the max");
-                // The corner's cone is spanned by its active edges' cones:
-                // the wedge between their outward normals when both are
-                // active, the one normal when one is (widened by the lean
-                // tolerance either way).
+                // A corner away from the other triangle is not where the two
+                // meet (a far corner of a large triangle, its own edges
+                // active, while the contact lies on the inactive edge or
+                // face between): only the face's normal is accepted there.
+                let local = near.contains_point(self.t[k]);
                 let (e1, e2) = (k, (k + 2) % 3);
-                let over = match (active(e1), active(e2), lean) {
-                    (false, false, _) => false,
-                    (_, _, None) => true,
-                    (true, true, Some(l)) => {
-                        let (m1, m2) = (m(e1), m(e2));
-                        let bisector = (m1 + m2).normalize_or_zero();
-                        l.dot(bisector) >= m1.dot(bisector).min(LEAN_COS) - 1e-3
-                            || l.dot(m1) >= LEAN_COS
-                            || l.dot(m2) >= LEAN_COS
-                    }
-                    (true, false, Some(l)) => l.dot(m(e1)) >= LEAN_COS,
-                    (false, true, Some(l)) => l.dot(m(e2)) >= LEAN_COS,
-                };
+                let r = (self.t[k] - (self.t[0] + self.t[1] + self.t[2]) * (1.0 / 3.0))
+                    .normalize_or_zero();
+                let over = local && (active(e1) || active(e2)) && n.dot(r) >= -0.05;
                 if over && outward {
                     Some(Support::Active)
                 } else {
@@ -209,11 +195,6 @@ impl<'a> Side<'a> {
         }
     }
 }
-
-/// Cosine of the tolerance (10°) within which a normal's sideways part must
-/// lean along an active edge's outward normal (or into the wedge of a
-/// corner's two).
-const LEAN_COS: f32 = 0.984_807_8;
 
 /// Signed separation of `b` from `a` along the unit direction `n`.
 #[inline]
@@ -239,6 +220,13 @@ pub fn oriented_axis(
     let sa = Side::new(a, fa, facing.a)?;
     let sb = Side::new(b, fb, facing.b)?;
     let cone = facing.cone_cos;
+    // Each triangle's box grown by its own size and the slack: the corners
+    // of the other triangle that can be where the two meet.
+    let near = |t: &Triangle| {
+        let b = crate::geom::Aabb::of_triangle(t);
+        b.loosened(b.extent().length() + slack)
+    };
+    let (near_a, near_b) = (near(a), near(b));
     let mut best: Option<(OrientedAxis, Support, Support)> = None;
     // The plain separating-axis result, whichever way round and whatever
     // the features: the pair's true separation or penetration depth.
@@ -249,10 +237,10 @@ pub fn oriented_axis(
         if best.is_some_and(|(o, _, _)| sep <= o.sep) || !sep.is_finite() {
             return;
         }
-        let Some(ka) = sa.support(n, cone) else {
+        let Some(ka) = sa.support(n, cone, &near_b) else {
             return;
         };
-        let Some(kb) = sb.support(-n, cone) else {
+        let Some(kb) = sb.support(-n, cone, &near_a) else {
             return;
         };
         best = Some((

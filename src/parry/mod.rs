@@ -19,6 +19,11 @@
 //!   through parry: at scan resolution a resting contact touches hundreds of
 //!   thousands of pairs, and one manifold each floods the narrow phase and
 //!   the solver.
+//! - [`cones`]: cbvh's active edges and facing ([`crate::contact::edges`],
+//!   [`crate::contact::orient`]) as parry normal constraints, where parry's
+//!   convex-convex code computes the contact: a cbvh triangle against a
+//!   convex shape, and the per-triangle-pair mode. A [`CbvhShape`] holds its
+//!   edge flags and which sides it takes contacts on ([`Sides`]).
 //! - [`trimesh`]: parry's own `TriMesh` built from a [`Mesh`](crate::Mesh),
 //!   the baseline every comparison is made against, with its memory counted
 //!   by part the same way cbvh's codecs count theirs.

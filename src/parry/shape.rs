@@ -151,10 +151,7 @@ impl CbvhShape {
                 source,
             }
         })?;
-        let edges = EdgeFlags::compute(mesh.triangles.len(), |t| {
-            crate::geom::triangle_from_arrays(mesh.triangle_vertices(t as usize))
-        });
-        Ok(Self::with_edges(codec, edges))
+        Ok(Self::new(codec))
     }
 
     /// [`CbvhShape::build`] with the plain codec (the uncompressed
@@ -188,10 +185,19 @@ impl CbvhShape {
 
     /// Wraps an encoded codec (built, or opened from its file), with the
     /// mass properties it stores; its active edges are computed from its
-    /// triangles.
+    /// triangles as it holds them (its ids, its vertex precision), in one
+    /// traversal of its tree.
     pub fn new(codec: AnyCodec) -> Self {
-        let edges = with_codec!(&codec, |c| EdgeFlags::compute(c.triangle_count(), |id| c
-            .triangle(id)));
+        let edges = with_codec!(&codec, |c| {
+            let everything = Aabb::new(Vec3A::splat(f32::MIN), Vec3A::splat(f32::MAX));
+            EdgeFlags::from_visit(c.triangle_count(), |f| {
+                let mut stats = TraversalStats::default();
+                query::overlap(c, &everything, &mut stats, |id, t| {
+                    f(id, t);
+                    std::ops::ControlFlow::Continue(())
+                });
+            })
+        });
         Self::with_edges(codec, edges)
     }
 

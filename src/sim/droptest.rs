@@ -19,6 +19,7 @@ use rapier3d::prelude::{
 use super::timed::{Timed, shape_address};
 use crate::build::BuildOptions;
 use crate::codec::{AnyOptions, CacheStats, CodecKind};
+use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 use crate::parry::cbvh_cbvh::interference;
 use crate::parry::trimesh::{parry_trimesh, trimesh_bytes_by_part, trimesh_interference};
@@ -381,6 +382,12 @@ pub struct RunReport {
     pub max_interference_pairs: u64,
     /// The largest penetration depth of any contact point during the run.
     pub max_penetration: f32,
+    /// The largest angle, in degrees, between a manifold's normal out of
+    /// the base and the base's outward surface normal at the manifold's
+    /// triangle (outward for a closed base, toward the dropped body's
+    /// centre for an open one). Near 0 on faces; up to the bend at a convex
+    /// edge; past 90 only for a normal pointing into the base's surface.
+    pub max_normal_angle_deg: f32,
     /// Peak resident memory of the process during this run (building the
     /// shapes and simulating), in bytes, if the platform tells.
     pub peak_rss_bytes: Option<u64>,
@@ -607,7 +614,7 @@ pub fn run_replaying(
     let drop_body: RigidBodyHandle = world
         .bodies
         .insert(RigidBodyBuilder::dynamic().can_sleep(false));
-    let _base: ColliderHandle = world.colliders.insert_with_parent(
+    let base_collider: ColliderHandle = world.colliders.insert_with_parent(
         ColliderBuilder::new(s_base.clone()).friction(0.6),
         base_body,
         &mut world.bodies,
@@ -631,6 +638,25 @@ pub fn run_replaying(
     let mut energy = Vec::with_capacity(scene.steps);
     let floor = scene.base.bounds().map_or(0.0, |(lo, _)| lo[1]);
     let mut max_penetration = 0.0f32;
+    let mut max_normal_angle = 0.0f32;
+    // Whether the base is closed, and its outward side, for the normal
+    // audit (from the mesh, as every representation has the same surface).
+    let base_edges = EdgeFlags::compute(scene.base.triangles.len(), |t| {
+        crate::geom::triangle_from_arrays(scene.base.triangle_vertices(t as usize))
+    });
+    let base_triangle = |id: u32| -> Option<[Vector; 3]> {
+        match &shapes {
+            Shapes::Cbvh(_, b) => {
+                let t = b.parry_triangle(id);
+                Some([t.a, t.b, t.c])
+            }
+            Shapes::Parry(_, b, _) => {
+                let tm = b.as_shape::<parry3d::shape::TriMesh>()?;
+                let t = tm.triangle(id);
+                Some([t.a, t.b, t.c])
+            }
+        }
+    };
     for step in 0..scene.steps {
         let before = counter.load(Ordering::Relaxed);
         counters.take();
@@ -651,11 +677,34 @@ pub fn run_replaying(
         );
         let [_, tri_contacts, _] = counters.take();
         let (mut manifolds, mut points) = (0, 0);
+        let drop_centre = world.bodies[drop_body].center_of_mass();
         for pair in world.narrow_phase.contact_pairs() {
+            let base_first = pair.collider1 == base_collider;
             for m in pair.manifolds() {
                 if !m.points.is_empty() {
                     manifolds += 1;
                     points += m.points.len();
+                    // The normal out of the base, in the base's frame (the
+                    // base body sits at the origin).
+                    let (n, id) = if base_first {
+                        (m.local_n1, m.subshape1)
+                    } else {
+                        (m.local_n2, m.subshape2)
+                    };
+                    if let Some(t) = base_triangle(id) {
+                        let face = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero();
+                        let sign = if base_edges.is_closed() {
+                            base_edges.outward()
+                        } else if face.dot(drop_centre - t[0]) < 0.0 {
+                            -1.0
+                        } else {
+                            1.0
+                        };
+                        let cos = (n.dot(face * sign)).clamp(-1.0, 1.0);
+                        if face != Vector::ZERO && n != Vector::ZERO {
+                            max_normal_angle = max_normal_angle.max(cos.acos().to_degrees());
+                        }
+                    }
                 }
                 for p in &m.points {
                     max_penetration = max_penetration.max(-p.dist);
@@ -764,6 +813,7 @@ pub fn run_replaying(
         interference_ms: TimeStats::of(&in_contact(&inter_ms)),
         max_interference_pairs: inter_pairs.iter().copied().max().unwrap_or(0),
         max_penetration,
+        max_normal_angle_deg: max_normal_angle,
         peak_rss_bytes: if rss_reset { peak_rss_bytes() } else { None },
         bytes_per_triangle: (bytes[0] + bytes[1]) as f64 / tris.max(1) as f64,
         bytes,
