@@ -6,10 +6,13 @@
 use std::collections::BTreeSet;
 
 use cbvh::build::BuildOptions;
-use cbvh::contact::{PairKernel, PatchOptions, PatchSet, pair_contact, triangles_intersect};
+use cbvh::contact::orient::oriented_axis;
+use cbvh::contact::{
+    ContactSink, PairContact, PairKernel, PatchOptions, PatchSet, pair_contact, triangles_intersect,
+};
 use cbvh::geom::Triangle;
 use cbvh::mesh::Mesh;
-use cbvh::parry::{CbvhShape, ContactMode, Dispatcher, cbvh_cbvh, parry_trimesh};
+use cbvh::parry::{CbvhShape, ContactMode, Dispatcher, cbvh_cbvh, parry_trimesh, pose_from_parry};
 use cbvh::scene::{Kind, generate};
 use glam::Vec3A;
 use parry3d::math::{Pose, Vector};
@@ -199,10 +202,21 @@ fn moved(t: &Triangle, pose: &Pose) -> Triangle {
     t.map(|p| vec3(*pose * Vector::new(p.x, p.y, p.z)))
 }
 
+/// A closure as a kernel sink that takes every pair with its points.
+struct Sink<'a, F: FnMut(&PairContact)>(&'a mut F);
+
+impl<F: FnMut(&PairContact)> ContactSink for Sink<'_, F> {
+    fn contact(&mut self, c: &PairContact) {
+        (self.0)(c)
+    }
+}
+
 /// Static poses of a statue against a turbine: resting, sliding,
-/// interpenetrating. Every pair parry reports within the prediction lies in
-/// a patch; the deepest penetration matches parry's; patch normals stand
-/// for their pairs; no manifold has more than four points.
+/// interpenetrating. Every pair parry reports within the prediction that
+/// the oriented rule accepts (an axis both triangles' features accept,
+/// within the prediction: see `cbvh::contact::orient`) lies in a patch;
+/// the deepest penetration is the deepest accepted pair's; patch normals
+/// stand for their pairs; no manifold has more than four points.
 #[test]
 fn patches_cover_every_pair_parry_reports() {
     let statue = mesh_of(Kind::Statue, 3000, 3);
@@ -229,24 +243,22 @@ fn patches_cover_every_pair_parry_reports() {
             DefaultQueryDispatcher
                 .contact_manifolds(&pos12, &t1, &t2, prediction, &mut pm, &mut None)
                 .unwrap();
+            let facing = cbvh_cbvh::pair_facing(&pose_from_parry(&pos12), &c1, &c2);
+            let oriented = |i: u32, j: u32| {
+                let b = moved(&tri_of(&turbine, j), &pos12);
+                let (fa, fb) = (c1.edge_flags_of(i), c2.edge_flags_of(j));
+                oriented_axis(&tri_of(&statue, i), fa, &b, fb, &facing, prediction)
+                    .filter(|o| o.sep <= prediction)
+            };
             let parry_pairs: BTreeSet<(u32, u32)> = pm
                 .iter()
                 .filter(|m| m.points.iter().any(|p| p.dist <= prediction))
                 .map(|m| (m.subshape1, m.subshape2))
+                .filter(|&(i, j)| oriented(i, j).is_some())
                 .collect();
             let parry_deepest = parry_pairs
                 .iter()
-                .filter_map(|&(i, j)| {
-                    parry3d::query::contact(
-                        &Pose::IDENTITY,
-                        &t1.triangle(i),
-                        &pos12,
-                        &t2.triangle(j),
-                        prediction,
-                    )
-                    .unwrap()
-                    .map(|c| c.dist)
-                })
+                .filter_map(|&(i, j)| oriented(i, j).map(|o| o.sep))
                 .fold(f32::INFINITY, f32::min);
 
             let set = cbvh_cbvh::patches(&pos12, &c1, &c2, &prediction, &opts, true, None);
@@ -281,10 +293,19 @@ fn patches_cover_every_pair_parry_reports() {
                     let b = moved(&tri_of(&turbine, j), &pos12);
                     // The normal the patch mode's kernel gave the pair (it
                     // takes the separating-axis bound for separated pairs).
-                    let mut kernel = PairKernel::new(prediction).exact_separation(false);
+                    let mut kernel = PairKernel::new(prediction)
+                        .exact_separation(false)
+                        .oriented(Some(facing));
                     let mut c = None;
-                    kernel.push(i, &tri_of(&statue, i), j, &b, &mut |x| c = Some(*x));
-                    kernel.flush(&mut |x| c = Some(*x));
+                    let mut sink = |x: &cbvh::contact::PairContact| c = Some(*x);
+                    let (fa, fb) = (c1.edge_flags_of(i), c2.edge_flags_of(j));
+                    kernel.push_flagged(
+                        (i, &tri_of(&statue, i), fa),
+                        (j, &b, fb),
+                        prediction,
+                        &mut Sink(&mut sink),
+                    );
+                    kernel.flush_into(&mut Sink(&mut sink));
                     let c = c.unwrap();
                     assert!(
                         c.normal.dot(p.normal) >= cos - 1e-6,
