@@ -100,6 +100,12 @@ fn tips(r: &Report) {
     assert!(r.measured < 0.0, "did not tip off: {r}");
 }
 
+/// The block on the dome rocked back through upright and held, or tipped
+/// off, as the scene's height says (see [`Scene::Rock`]).
+fn rocks_as_mechanics_says(r: &Report) {
+    assert!(r.pass, "{r}");
+}
+
 /// The scene's tests: a cbvh body on a cbvh ground of the same codec and
 /// mode, and a parry primitive on each cbvh ground.
 macro_rules! scene_tests {
@@ -171,6 +177,20 @@ scene_tests!(
         cells: 1
     },
     tips
+);
+
+// The rocking stone, the drop test's statue on the flat rotor's nose dome
+// in miniature: a block whose centre of mass is lower than the dome's
+// radius above its base rocks back, a taller one tips off.
+scene_tests!(
+    rock_low_holds,
+    Scene::Rock { height: 0.5 },
+    rocks_as_mechanics_says
+);
+scene_tests!(
+    rock_tall_tips,
+    Scene::Rock { height: 2.0 },
+    rocks_as_mechanics_says
 );
 
 /// The yardstick itself.
@@ -397,6 +417,18 @@ mod harness {
             Rep::Primitive,
             Rep::Primitive,
         ));
+        for height in [0.5, 2.0] {
+            rocks_as_mechanics_says(&run(Scene::Rock { height }, Rep::Primitive, Rep::Primitive));
+        }
+    }
+
+    /// The rocking check can fail: parry's default `TriMesh` holds the tall
+    /// block on the tessellated dome (the internal edges around the top
+    /// catch it), which mechanics says must tip.
+    #[test]
+    fn rock_check_catches_a_block_held_by_internal_edges() {
+        let r = run(Scene::Rock { height: 2.0 }, Rep::TriMesh, Rep::TriMesh);
+        assert!(!r.pass, "parry's TriMesh let the tall block tip: {r}");
     }
 
     /// The checks can fail: a cube on a ramp steeper than its friction

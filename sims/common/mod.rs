@@ -21,7 +21,8 @@ pub struct SimArgs {
     #[arg(long, default_value_t = 215)]
     pub steps: usize,
     /// Comma-separated shapes to run (default: all of them): parry
-    /// (parry's TriMesh), a codec's name (a decode cache, if the codec has
+    /// (parry's TriMesh), parry-fixed (the same with FIX_INTERNAL_EDGES,
+    /// not run by default), a codec's name (a decode cache, if the codec has
     /// one, holds the whole tree), or a cached codec's name with -10pct
     /// (a cache of 10 % of the decompressed tree).
     /// A cbvh name may end in -pairs or -patches to fix its contact mode
@@ -220,7 +221,7 @@ pub fn run_specs(args: &SimArgs) -> Result<Vec<RunSpec>, String> {
     for name in &args.shapes {
         let explicit = name.ends_with("-pairs") || name.ends_with("-patches");
         let first = RunSpec::parse(name, modes[0])?;
-        if explicit || first.kind == ShapeKind::Parry {
+        if explicit || first.kind.is_parry() {
             specs.push(first);
         } else {
             for m in &modes {

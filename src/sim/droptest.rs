@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use parry3d::math::{Pose as PPose, Vector};
 use parry3d::query::{DefaultQueryDispatcher, PersistentQueryDispatcher};
-use parry3d::shape::{Shape, SharedShape};
+use parry3d::shape::{Shape, SharedShape, TriMeshFlags};
 use rapier3d::geometry::{ContactData, ContactManifoldData};
 use rapier3d::prelude::{
     ColliderBuilder, ColliderHandle, NarrowPhase, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle,
@@ -31,6 +31,11 @@ pub enum ShapeKind {
     /// parry's own `TriMesh`, with parry's default dispatcher: the baseline
     /// (`parry`).
     Parry,
+    /// parry's `TriMesh` with `TriMeshFlags::FIX_INTERNAL_EDGES` on both
+    /// meshes (`parry-fixed`): parry's own internal-edge handling, the
+    /// reference for contacts in motion. Not in [`ShapeKind::all`] (not a
+    /// timing baseline); name it in `--shapes`.
+    ParryFixed,
     /// A cbvh codec with cbvh's dispatcher, its decode cache (if it has
     /// one) holding the whole tree (named as the codec: `plain`, `racbvh`).
     Cbvh(CodecKind),
@@ -58,16 +63,24 @@ impl ShapeKind {
     pub fn name(self) -> String {
         match self {
             ShapeKind::Parry => "parry".into(),
+            ShapeKind::ParryFixed => "parry-fixed".into(),
             ShapeKind::Cbvh(k) => k.name().into(),
             ShapeKind::CbvhTenthCache(k) => format!("{}-10pct", k.name()),
         }
+    }
+
+    /// Whether this is one of parry's `TriMesh` runs (no cbvh, no contact
+    /// modes).
+    pub fn is_parry(self) -> bool {
+        matches!(self, ShapeKind::Parry | ShapeKind::ParryFixed)
     }
 }
 
 impl FromStr for ShapeKind {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        let all = ShapeKind::all();
+        let mut all = ShapeKind::all();
+        all.insert(1, ShapeKind::ParryFixed);
         all.iter()
             .copied()
             .find(|k| k.name() == s.trim())
@@ -196,7 +209,9 @@ impl RunSpec {
     /// the per-triangle-pair mode (`plain`, `plain-pairs`, `racbvh`, ...).
     pub fn name(&self) -> String {
         match (self.kind, self.mode) {
-            (ShapeKind::Parry, _) | (_, ContactMode::Patches(_)) => self.kind.name(),
+            (ShapeKind::Parry | ShapeKind::ParryFixed, _) | (_, ContactMode::Patches(_)) => {
+                self.kind.name()
+            }
             (_, ContactMode::PerTrianglePair) => format!("{}-pairs", self.kind.name()),
         }
     }
@@ -215,9 +230,10 @@ impl RunSpec {
         let kind: ShapeKind = base
             .parse()
             .map_err(|e: String| format!("{e} (optionally followed by -pairs or -patches)"))?;
-        if kind == ShapeKind::Parry && mode.is_some() {
+        if kind.is_parry() && mode.is_some() {
             return Err(format!(
-                "{s:?}: parry's TriMesh has no contact modes; use \"parry\""
+                "{s:?}: parry's TriMesh has no contact modes; use \"{}\"",
+                kind.name()
             ));
         }
         Ok(RunSpec {
@@ -482,9 +498,16 @@ enum Shapes {
 
 fn make_shapes(kind: ShapeKind, scene: &DropScene) -> Result<Shapes, String> {
     let (codec, small_cache) = match kind {
-        ShapeKind::Parry => {
-            let a = parry_trimesh(&scene.dropped).map_err(|e| format!("parry TriMesh: {e:?}"))?;
-            let b = parry_trimesh(&scene.base).map_err(|e| format!("parry TriMesh: {e:?}"))?;
+        ShapeKind::Parry | ShapeKind::ParryFixed => {
+            let mut a =
+                parry_trimesh(&scene.dropped).map_err(|e| format!("parry TriMesh: {e:?}"))?;
+            let mut b = parry_trimesh(&scene.base).map_err(|e| format!("parry TriMesh: {e:?}"))?;
+            if kind == ShapeKind::ParryFixed {
+                for t in [&mut a, &mut b] {
+                    t.set_flags(TriMeshFlags::FIX_INTERNAL_EDGES)
+                        .map_err(|e| format!("parry TriMesh flags: {e:?}"))?;
+                }
+            }
             let bytes = [
                 trimesh_bytes_by_part(&a).iter().map(|p| p.1).sum(),
                 trimesh_bytes_by_part(&b).iter().map(|p| p.1).sum(),
@@ -578,7 +601,7 @@ pub fn run_replaying(
     };
     let counters = ContactCounters::shared();
     let timed = match kind {
-        ShapeKind::Parry => None,
+        ShapeKind::Parry | ShapeKind::ParryFixed => None,
         _ => Some(
             Timed::new(
                 Dispatcher::new(spec.mode)
@@ -712,7 +735,7 @@ pub fn run_replaying(
             }
         }
         let contact_pairs = match spec.mode {
-            ContactMode::Patches(_) if kind != ShapeKind::Parry => tri_contacts as usize,
+            ContactMode::Patches(_) if !kind.is_parry() => tri_contacts as usize,
             _ => manifolds,
         };
         // The papers' interference figure at this step's pose.
@@ -768,7 +791,7 @@ pub fn run_replaying(
     };
     let replay_ms = along.map(|t| {
         let ms = match kind {
-            ShapeKind::Parry => {
+            ShapeKind::Parry | ShapeKind::ParryFixed => {
                 replay_along(&DefaultQueryDispatcher, t, &*s_base, &*s_drop, rounds)
             }
             _ => replay_along(
@@ -798,7 +821,7 @@ pub fn run_replaying(
     let drop_scale = body.mass() * world.gravity.length() * size;
     Ok(RunReport {
         shape: spec.name(),
-        contact_mode: if kind == ShapeKind::Parry {
+        contact_mode: if kind.is_parry() {
             "parry".into()
         } else {
             spec.mode.name().into()

@@ -19,6 +19,10 @@
 //!   dropped on a flat ground rests at half its side, a stack of cubes
 //!   stands, a cube over a table's edge stays or tips off depending on
 //!   which side of the edge its centre is.
+//! - [`Scene::Rock`]: a flat-bottomed block balanced on a dome (the
+//!   rocking stone): it rocks back when its centre of mass is lower above
+//!   its base than the dome's radius and tips off when higher, the drop
+//!   test's statue on the flat rotor's nose dome in miniature.
 //!
 //! Every body starts at rest, placed at its contact pose (the slopes, the
 //! stack, the table) or just above the surface (the drop, the bowl), and
@@ -32,7 +36,8 @@
 //! The ground and the body each take a [`Rep`]: a parry primitive, parry's
 //! `TriMesh` (default flags or `FIX_INTERNAL_EDGES`), or a [`CbvhShape`] of
 //! a codec in one of the two contact modes ([`CbvhMode`]). Meshes are made
-//! here ([`ramp_mesh`], [`cube_mesh`], [`icosphere_mesh`], [`bowl_mesh`]),
+//! here ([`ramp_mesh`], [`cube_mesh`], [`box_mesh`], [`icosphere_mesh`],
+//! [`bowl_mesh`], [`dome_mesh`]),
 //! every triangle wound counter-clockwise seen from outside (from above for
 //! the ramp, from the bowl's inside).
 //!
@@ -111,6 +116,18 @@ pub const BOWL_SECONDS: f32 = 10.0;
 pub const REST_SECONDS: f32 = 3.0;
 /// Height of the dropped cube's bottom above the ground at the start (m).
 pub const DROP_GAP: f32 = 0.05;
+/// Radius of the dome of [`Scene::Rock`] (m).
+pub const DOME_RADIUS: f32 = 1.0;
+/// Segments around the dome (its rings are a quarter as many: 4° apart).
+pub const DOME_SEGMENTS: usize = 96;
+/// Tilt [`Scene::Rock`]'s block starts at, rolled over the dome (degrees).
+pub const ROCK_START_DEG: f32 = 8.0;
+/// Length of the rocking run (s).
+pub const ROCK_SECONDS: f32 = 4.0;
+/// A rocking block that tips ends tilted more than this (degrees).
+pub const TIPPED_DEG: f32 = 45.0;
+/// A rocking block that holds stays tilted less than this (degrees).
+pub const ROCK_HOLD_DEG: f32 = 20.0;
 
 /// A ramp's directions: the plane through the origin with `normal`, tilted
 /// from the horizontal about the x axis.
@@ -191,12 +208,18 @@ pub fn ramp_mesh(angle_deg: f32, cells_per_side: usize, size: f32) -> Mesh {
 /// vertices, 12 triangles wound outward.
 pub fn cube_mesh(side: f32) -> Mesh {
     let h = 0.5 * side;
+    box_mesh(Vector::splat(h))
+}
+
+/// A closed axis-aligned box of half extents `half` centred on the origin:
+/// 8 vertices, 12 triangles wound outward.
+pub fn box_mesh(half: Vector) -> Mesh {
     let vertices = (0..8)
         .map(|k| {
             [
-                if k & 1 == 0 { -h } else { h },
-                if k & 2 == 0 { -h } else { h },
-                if k & 4 == 0 { -h } else { h },
+                if k & 1 == 0 { -half.x } else { half.x },
+                if k & 2 == 0 { -half.y } else { half.y },
+                if k & 4 == 0 { -half.z } else { half.z },
             ]
         })
         .collect();
@@ -317,6 +340,20 @@ pub fn bowl_mesh(radius: f32, segments: usize) -> Mesh {
         }
     }
     orient(Mesh::new(vertices, triangles), |c| centre - c)
+}
+
+/// An open hemispherical dome: the upper half of the sphere of radius
+/// `radius` centred on the origin, its top at `(0, radius, 0)` (the fan
+/// vertex) and its rim at `y = 0`; [`bowl_mesh`]'s tessellation turned
+/// upside down, wound counter-clockwise seen from outside.
+pub fn dome_mesh(radius: f32, segments: usize) -> Mesh {
+    let bowl = bowl_mesh(radius, segments);
+    let vertices = bowl
+        .vertices
+        .iter()
+        .map(|v| [v[0], radius - v[1], v[2]])
+        .collect();
+    orient(Mesh::new(vertices, bowl.triangles), |c| c)
 }
 
 /// The smallest distance from the centre of [`bowl_mesh`]`(radius,
@@ -588,6 +625,21 @@ pub enum Scene {
         /// Cells per side of the ground mesh.
         cells: usize,
     },
+    /// The rocking stone: a block of base [`CUBE_SIDE`] × [`CUBE_SIDE`]
+    /// whose centre of mass is `height` dome radii above its flat base,
+    /// balanced on a hemispherical dome of radius [`DOME_RADIUS`] (parry's
+    /// ball, or [`dome_mesh`]), started rolled [`ROCK_START_DEG`] off the
+    /// top, friction [`ROLL_FRICTION`]. Rolled by φ without slipping, the
+    /// centre of mass sits `(h − R) φ` beyond the contact point, so the
+    /// block rocks back when `h < R` (it swings back through upright and
+    /// stays tilted less than [`ROCK_HOLD_DEG`]) and tips off when `h > R`
+    /// (it ends tilted more than [`TIPPED_DEG`]), however finely the dome
+    /// is tessellated.
+    Rock {
+        /// Height of the block's centre of mass above its base, in dome
+        /// radii.
+        height: f32,
+    },
 }
 
 /// The moving body of a scene.
@@ -595,6 +647,8 @@ pub enum Scene {
 enum Body {
     Cube,
     Sphere(f32),
+    /// A box of these half extents.
+    Block(Vector),
 }
 
 impl Body {
@@ -602,6 +656,7 @@ impl Body {
         match self {
             Body::Cube => cube_mesh(CUBE_SIDE),
             Body::Sphere(r) => icosphere_mesh(r, SPHERE_SUBDIVISIONS),
+            Body::Block(half) => box_mesh(half),
         }
     }
 
@@ -612,6 +667,7 @@ impl Body {
                 Ok(SharedShape::cuboid(h, h, h))
             }
             (Rep::Primitive, Body::Sphere(r)) => Ok(SharedShape::ball(r)),
+            (Rep::Primitive, Body::Block(h)) => Ok(SharedShape::cuboid(h.x, h.y, h.z)),
             _ => rep.mesh_shape(&self.mesh()),
         }
     }
@@ -635,6 +691,7 @@ impl Body {
 enum Ground {
     Plane { angle_deg: f32, cells: usize },
     Bowl,
+    Dome,
 }
 
 /// What a body did along a slope.
@@ -725,6 +782,8 @@ struct Track {
     t: Vec<f32>,
     com: Vec<Vector>,
     vel: Vec<Vector>,
+    /// The body's own `+y` axis in the world.
+    up: Vec<Vector>,
 }
 
 impl Track {
@@ -732,6 +791,14 @@ impl Track {
         self.t.push(t);
         self.com.push(com_of(b));
         self.vel.push(b.linvel());
+        self.up.push(*b.rotation() * Vector::Y);
+    }
+
+    /// Angles (degrees) between the body's `+y` axis and the world's.
+    fn tilts(&self) -> impl Iterator<Item = f32> + '_ {
+        self.up
+            .iter()
+            .map(|u| u.dot(Vector::Y).clamp(-1.0, 1.0).acos().to_degrees())
     }
 
     /// Largest distance from the first sample.
@@ -794,6 +861,10 @@ fn add_ground(
         (Ground::Bowl, Rep::Primitive) => return Err(SlideError::NoPrimitive("a bowl".into())),
         (Ground::Bowl, _) => {
             ColliderBuilder::new(rep.mesh_shape(&bowl_mesh(BOWL_RADIUS, BOWL_SEGMENTS))?)
+        }
+        (Ground::Dome, Rep::Primitive) => ColliderBuilder::ball(DOME_RADIUS),
+        (Ground::Dome, _) => {
+            ColliderBuilder::new(rep.mesh_shape(&dome_mesh(DOME_RADIUS, DOME_SEGMENTS))?)
         }
     };
     let fixed = world.bodies.insert(RigidBodyBuilder::fixed());
@@ -916,13 +987,15 @@ impl Scene {
                 overhang: 0.1,
                 cells: 1,
             },
+            Scene::Rock { height: 0.5 },
+            Scene::Rock { height: 2.0 },
         ]);
         all
     }
 
     /// The name in reports: `slide-40deg-64x64`, `roll-15deg-2tri`,
     /// `bowl`, `rest-2tri`, `stack5-2tri`, `table-stays-2tri`,
-    /// `table-tips-2tri`.
+    /// `table-tips-2tri`, `rock-0.5r`.
     pub fn name(&self) -> String {
         match *self {
             Scene::Slide {
@@ -932,6 +1005,7 @@ impl Scene {
                 angle_deg, cells, ..
             } => format!("roll-{angle_deg}deg-{}", cells_name(cells)),
             Scene::Bowl { .. } => "bowl".into(),
+            Scene::Rock { height } => format!("rock-{height}r"),
             Scene::Rest { cells } => format!("rest-{}", cells_name(cells)),
             Scene::Stack { count, cells } => format!("stack{count}-{}", cells_name(cells)),
             Scene::TableEdge { overhang, cells } => format!(
@@ -974,6 +1048,7 @@ impl Scene {
             Scene::TableEdge { overhang, cells } => {
                 table_edge(&mut world, overhang, cells, ground, body)?
             }
+            Scene::Rock { height } => rock(&mut world, height, ground, body)?,
         };
         let rel_error = o
             .relative
@@ -1025,7 +1100,7 @@ fn slope_run(
     )?;
     let frame = SlopeFrame::new(angle_deg);
     let rotation = match body {
-        Body::Cube => frame.rotation,
+        Body::Cube | Body::Block(_) => frame.rotation,
         Body::Sphere(_) => Rotation::IDENTITY,
     };
     let reach = body.reach(body_rep, rotation, -frame.normal);
@@ -1345,6 +1420,66 @@ fn table_edge(
             relative: false,
             criterion: format!("stays (moves < {STAY_LIMIT} m)"),
             pass: max_travel < STAY_LIMIT,
+            max_travel,
+            final_speed,
+            slope: None,
+        }
+    })
+}
+
+fn rock(
+    world: &mut PhysicsWorld,
+    height: f32,
+    ground: Rep,
+    body: Rep,
+) -> Result<Outcome, SlideError> {
+    add_ground(world, Ground::Dome, ground, ROLL_FRICTION)?;
+    let r = DOME_RADIUS;
+    let half = Vector::new(0.5 * CUBE_SIDE, height * r, 0.5 * CUBE_SIDE);
+    let block = Body::Block(half);
+    // Rolled by φ without slipping from the top: the contact is at angle φ
+    // on the dome, the base's centre R φ back along the base from it.
+    let phi = ROCK_START_DEG.to_radians();
+    let (s, c) = phi.sin_cos();
+    let (normal, tangent) = (Vector::new(s, c, 0.0), Vector::new(c, -s, 0.0));
+    let base_centre = normal * r - tangent * (r * phi);
+    let rotation = Rotation::from_rotation_z(-phi);
+    let h = add_body(
+        world,
+        block.shape(body)?,
+        Pose::from_parts(base_centre + normal * half.y, rotation),
+        ROLL_FRICTION,
+        0.0,
+    );
+    let track = simulate(world, &[h], ROCK_SECONDS).remove(0);
+    let max_tilt = track.tilts().fold(0.0, f32::max);
+    let final_tilt = track.tilts().last().unwrap_or(f32::NAN);
+    let (max_travel, final_speed) = (track.max_travel(), track.final_speed());
+    Ok(if height < 1.0 {
+        // rapier's integrator adds a little energy to rocking (parry's own
+        // cuboid on its ball swings from 8° to 13° in 4 s), so "rocks back"
+        // is: it swings back through upright and stays well short of
+        // running off its base (at R φ = half its width, 28.6°).
+        let rocked_back = track.up.iter().any(|u| u.x * track.up[0].x < 0.0);
+        Outcome {
+            quantity: "largest tilt (deg)",
+            measured: max_tilt,
+            expected: ROCK_START_DEG,
+            relative: false,
+            criterion: format!("rocks back through upright, tilt < {ROCK_HOLD_DEG} deg"),
+            pass: rocked_back && max_tilt < ROCK_HOLD_DEG,
+            max_travel,
+            final_speed,
+            slope: None,
+        }
+    } else {
+        Outcome {
+            quantity: "final tilt (deg)",
+            measured: final_tilt,
+            expected: 90.0,
+            relative: false,
+            criterion: format!("tips off (ends tilted > {TIPPED_DEG} deg)"),
+            pass: final_tilt > TIPPED_DEG,
             max_travel,
             final_speed,
             slope: None,
