@@ -27,9 +27,13 @@
 //! - it is an *active* edge (seen from the side the triangle faces) and
 //!   `n` leans out across it, or a corner with an active edge, near the
 //!   other triangle, and `n` leans out over it, in both cases not more
-//!   than 120° from the face's outward normal (a far corner of a large
+//!   than about 96° from the face's outward normal (past 90° it points into
+//!   the solid behind the face, the few degrees over keep a box tilting on
+//!   the ground meeting it along its side faces' bottom edges; at a sharp
+//!   edge the triangle on its other side, paired with the same body,
+//!   covers the rest of the edge's wedge). A far corner of a large
 //!   triangle, like a 2-triangle ramp's own corners, is not where the two
-//!   meet: the contact lies on the inactive diagonal or face between);
+//!   meet: the contact lies on the inactive diagonal or face between;
 //! - it is an *inactive* edge or corner (a flat or concave one, inside a
 //!   smooth surface) and `n` is within the cone angle of the face's
 //!   outward normal: a body sliding over a tessellated plane meets the plane, not
@@ -155,8 +159,13 @@ impl<'a> Side<'a> {
         let facing = n.dot(self.out);
         let within_cone = facing >= cone_cos;
         let active = |k: usize| self.active & (1 << k) != 0;
-        // Not more than 120 degrees from the outward normal.
-        let outward = facing >= -0.5;
+        // Not more than about 96 degrees from the outward normal: a normal
+        // past 90 points into the solid behind this face (at a sharp edge
+        // the neighbouring triangle, paired with the same body, covers the
+        // rest of the edge's wedge). The few degrees over 90 keep a box's
+        // side face, tilting a little on the ground it stands on, meeting
+        // the ground along its bottom edge.
+        let outward = facing >= -0.1;
         let m = |k: usize| {
             (self.t[(k + 1) % 3] - self.t[k])
                 .cross(self.raw)

@@ -1,0 +1,282 @@
+//! Oriented contacts as properties over random poses (see
+//! `cbvh::contact::orient`):
+//!
+//! - between two closed meshes, no manifold's normal points into either
+//!   mesh's solid at its triangle: some triangle around it (it, or one
+//!   sharing a corner with it) faces along the normal, to within the 6°
+//!   the rule lets a normal lean past a face's plane at an active edge (a
+//!   box tilting on the ground meets it along its side faces' edges; see
+//!   `cbvh::contact::orient`);
+//! - against a flat tessellated plane, every normal is the plane's own
+//!   (within the flat angle of the edge flags), however a body meets the
+//!   internal edges between the plane's triangles, and the same poses with
+//!   every edge marked active do produce normals off the plane (the check
+//!   can fail).
+//!
+//! Both contact modes, two codecs.
+
+use cbvh::build::{BuildOptions, build};
+use cbvh::codec::{AnyCodec, AnyOptions, CodecKind};
+use cbvh::contact::EdgeFlags;
+use cbvh::mesh::Mesh;
+use cbvh::parry::{CbvhShape, ContactMode, Dispatcher};
+use cbvh::scene::{Kind, generate};
+use cbvh::sim::slide::{box_mesh, icosphere_mesh, ramp_mesh};
+use parry3d::math::{Pose, Rotation, Vector};
+use parry3d::query::{ContactManifold, PersistentQueryDispatcher};
+use parry3d::shape::Shape;
+use proptest::prelude::*;
+
+const MODES: [ContactMode; 2] = [
+    ContactMode::Patches(cbvh::contact::PatchOptions {
+        max_angle_deg: 5.0,
+        gap_fraction: 0.1,
+        motion_factor: None,
+    }),
+    ContactMode::PerTrianglePair,
+];
+
+fn shape(mesh: &Mesh, kind: CodecKind) -> CbvhShape {
+    CbvhShape::build(mesh, &BuildOptions::default(), kind, &AnyOptions::default())
+        .expect("small meshes build")
+}
+
+fn manifolds(
+    mode: ContactMode,
+    pos12: &Pose,
+    g1: &dyn Shape,
+    g2: &dyn Shape,
+) -> Vec<ContactManifold<(), ()>> {
+    let mut ms = Vec::new();
+    Dispatcher::new(mode)
+        .then_default()
+        .contact_manifolds(pos12, g1, g2, 0.02, &mut ms, &mut None)
+        .expect("cbvh pairs are supported");
+    ms.retain(|m| !m.points.is_empty());
+    ms
+}
+
+/// For each triangle id of `s` (as its codec numbers them), the unit face
+/// normals of the triangles sharing a corner with it (itself included),
+/// wound as stored, times `outward`.
+fn neighbourhood_normals(s: &CbvhShape) -> Vec<Vec<Vector>> {
+    let n = s.triangle_count();
+    let outward = s.edge_flags().outward();
+    let tris: Vec<[Vector; 3]> = (0..n as u32)
+        .map(|i| {
+            let t = s.parry_triangle(i);
+            [t.a, t.b, t.c]
+        })
+        .collect();
+    let key = |v: Vector| (v.x.to_bits(), v.y.to_bits(), v.z.to_bits());
+    let mut at_corner: std::collections::HashMap<_, Vec<u32>> = Default::default();
+    for (i, t) in tris.iter().enumerate() {
+        for v in t {
+            at_corner.entry(key(*v)).or_default().push(i as u32);
+        }
+    }
+    let normal = |i: u32| {
+        let [a, b, c] = tris[i as usize];
+        (b - a).cross(c - a).normalize_or_zero() * outward
+    };
+    tris.iter()
+        .map(|t| {
+            let mut ids: Vec<u32> = t.iter().flat_map(|v| at_corner[&key(*v)].clone()).collect();
+            ids.sort_unstable();
+            ids.dedup();
+            ids.into_iter().map(normal).collect()
+        })
+        .collect()
+}
+
+/// The largest `n · f` over the neighbourhood's face normals: negative
+/// when `n` points into the solid at every triangle around.
+fn facing(normals: &[Vector], n: Vector) -> f32 {
+    normals
+        .iter()
+        .map(|f| f.dot(n))
+        .fold(f32::NEG_INFINITY, f32::max)
+}
+
+fn pose(t: [f32; 3], r: [f32; 3]) -> Pose {
+    Pose::from_parts(
+        Vector::from_array(t),
+        Rotation::from_euler(glam::EulerRot::XYZ, r[0], r[1], r[2]),
+    )
+}
+
+struct Closed {
+    name: &'static str,
+    shapes: Vec<(CbvhShape, Vec<Vec<Vector>>)>,
+}
+
+/// The closed meshes of the first property, in the plain and hcc codecs.
+fn closed_meshes() -> Vec<Closed> {
+    let statue = generate(Kind::Statue, 3000, 3, &mut |_, _| {}).expect("generates");
+    let (lo, hi) = statue.bounds().expect("a statue has vertices");
+    let size = (0..3).map(|k| hi[k] - lo[k]).fold(0.0f32, f32::max);
+    let centre: Vec<f32> = (0..3).map(|k| 0.5 * (lo[k] + hi[k])).collect();
+    let statue = Mesh::new(
+        statue
+            .vertices
+            .iter()
+            .map(|v| std::array::from_fn(|k| (v[k] - centre[k]) / size))
+            .collect(),
+        statue.triangles.clone(),
+    );
+    let meshes = [
+        ("cube", box_mesh(Vector::new(0.4, 0.3, 0.5))),
+        ("icosphere", icosphere_mesh(0.5, 2)),
+        ("statue", statue),
+    ];
+    meshes
+        .into_iter()
+        .map(|(name, m)| Closed {
+            name,
+            shapes: [CodecKind::Plain, CodecKind::Hcc]
+                .into_iter()
+                .map(|k| {
+                    let s = shape(&m, k);
+                    assert!(s.edge_flags().is_closed(), "{name} is closed");
+                    let n = neighbourhood_normals(&s);
+                    (s, n)
+                })
+                .collect(),
+        })
+        .collect()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// No normal points into either closed mesh's solid at its triangle,
+    /// for overlapping, touching and nearly touching random poses.
+    #[test]
+    fn no_normal_points_into_a_closed_mesh(
+        a in 0usize..3,
+        b in 0usize..3,
+        codec in 0usize..2,
+        mode in 0usize..2,
+        dir in (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0),
+        dist in 0.3f32..1.0,
+        rot in (-3.2f32..3.2, -3.2f32..3.2, -3.2f32..3.2),
+    ) {
+        thread_local! {
+            static MESHES: Vec<Closed> = closed_meshes();
+        }
+        MESHES.with(|meshes| -> Result<(), TestCaseError> {
+            let (s1, n1) = &meshes[a].shapes[codec];
+            let (s2, n2) = &meshes[b].shapes[codec];
+            let d = Vector::new(dir.0, dir.1, dir.2).normalize_or(Vector::X) * dist;
+            let pos12 = pose(d.to_array(), [rot.0, rot.1, rot.2]);
+            for m in manifolds(MODES[mode], &pos12, s1, s2) {
+                let f1 = facing(&n1[m.subshape1 as usize], m.local_n1);
+                let f2 = facing(&n2[m.subshape2 as usize], m.local_n2);
+                // cos 96° = −0.105.
+                prop_assert!(
+                    f1 >= -0.105 && f2 >= -0.105,
+                    "{} vs {} ({:?}, {}): normal {:?} / {:?} into the surface \
+                     (best facing {f1:.3} on triangle {}, {f2:.3} on triangle {})",
+                    meshes[a].name, meshes[b].name, MODES[mode].name(), codec,
+                    m.local_n1, m.local_n2, m.subshape1, m.subshape2
+                );
+            }
+            Ok(())
+        })?;
+    }
+}
+
+/// A small deterministic generator (the poses of the plane test).
+struct Lcg(u64);
+
+impl Lcg {
+    fn unit(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.unit()
+    }
+}
+
+/// Over `poses` random poses of `body` touching the plane (its lowest
+/// corner from 5 mm above to 2 cm below it, its centre far from the
+/// plane's rim), the largest angle in degrees between a manifold's normal
+/// out of the plane and the plane's normal, and how many manifolds there
+/// were.
+fn worst_angle_on_plane(plane: &CbvhShape, body: &CbvhShape, mode: ContactMode) -> (f32, usize) {
+    let mut rng = Lcg(7);
+    let (mut worst, mut count) = (0.0f32, 0);
+    for _ in 0..150 {
+        let rot = Rotation::from_euler(
+            glam::EulerRot::XYZ,
+            rng.range(-3.2, 3.2),
+            rng.range(-3.2, 3.2),
+            rng.range(-3.2, 3.2),
+        );
+        let low = (0..body.triangle_count() as u32)
+            .flat_map(|i| {
+                let t = body.parry_triangle(i);
+                [t.a, t.b, t.c]
+            })
+            .map(|v| (rot * v).y)
+            .fold(f32::INFINITY, f32::min);
+        let depth = rng.range(-0.005, 0.02);
+        let at = Vector::new(rng.range(-1.0, 1.0), -low - depth, rng.range(-1.0, 1.0));
+        let pos12 = Pose::from_parts(at, rot);
+        for m in manifolds(mode, &pos12, plane, body) {
+            count += 1;
+            let cos = m.local_n1.dot(Vector::Y).clamp(-1.0, 1.0);
+            worst = worst.max(cos.acos().to_degrees());
+        }
+    }
+    (worst, count)
+}
+
+/// Internal edges of a flat tessellated plane give the plane's normal; with
+/// every edge active they do not (so the check can fail).
+#[test]
+fn internal_edges_of_a_flat_plane_give_the_plane_normal() {
+    // A 4 × 4 plane of 16 × 16 cells (cells of 0.25), wound upward.
+    let plane_mesh = ramp_mesh(0.0, 16, 4.0);
+    let bodies = [
+        ("cube", box_mesh(Vector::new(0.3, 0.2, 0.35))),
+        ("icosphere", icosphere_mesh(0.4, 2)),
+    ];
+    for kind in [CodecKind::Plain, CodecKind::Hcc] {
+        let plane = shape(&plane_mesh, kind);
+        let bvh = build(&plane_mesh, &BuildOptions::default(), &|_, _| {}).expect("builds");
+        let codec =
+            AnyCodec::encode(kind, &bvh, &plane_mesh, &AnyOptions::default()).expect("encodes");
+        let all_active =
+            CbvhShape::with_edges(codec, EdgeFlags::all_active(plane_mesh.triangles.len()));
+        for (name, m) in &bodies {
+            let body = shape(m, kind);
+            for mode in MODES {
+                let (worst, count) = worst_angle_on_plane(&plane, &body, mode);
+                println!(
+                    "{kind} {name} {}: {count} manifolds, worst {worst:.3} deg",
+                    mode.name()
+                );
+                assert!(count > 100, "{kind} {name} {}: few contacts", mode.name());
+                assert!(
+                    worst <= 5.01,
+                    "{kind} {name} {}: a normal {worst:.2} deg off the plane",
+                    mode.name()
+                );
+            }
+        }
+        // The same poses with every edge active: the cube's corners and
+        // edges catch on the plane's internal edges.
+        let body = shape(&bodies[0].1, kind);
+        let (worst, _) = worst_angle_on_plane(&all_active, &body, MODES[1]);
+        println!("{kind} cube on the all-active plane: worst {worst:.3} deg");
+        assert!(
+            worst > 10.0,
+            "{kind}: all-active edges should give off-plane normals ({worst:.2} deg)"
+        );
+    }
+}
