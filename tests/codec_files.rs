@@ -235,8 +235,10 @@ fn cli_and_sims_use_codec_files_with_no_mesh_anywhere() {
     ]);
     assert!(ok, "{err}");
     let mut bytes = std::fs::read(&bad).unwrap();
-    let n = bytes.len();
-    bytes[n - 100] ^= 4; // in the mesh sections
+    // In the mesh sections (checked by verify): the triangles section's
+    // last bytes, before the edge flags (section table at 184, entry 4).
+    let flags_at = u64::from_le_bytes(bytes[280..288].try_into().unwrap()) as usize;
+    bytes[flags_at - 100] ^= 4;
     std::fs::write(&bad, &bytes).unwrap();
     let (ok, _, err) = cbvh(&["info", bad.to_str().unwrap()]);
     assert!(!ok && err.contains("verify failed"), "{err}");
@@ -385,14 +387,16 @@ fn skipping_verify_never_gives_triangles_from_damaged_mesh_bytes() {
     let bytes = rac.to_bytes();
     let dm = rac.decoded_mesh();
     let want = hits(&rac, &dm);
-    // The mesh sections are the last two; the vertices' offset is in the
-    // section table (bytes 184 + 2 × 24 of the header).
+    // The mesh sections come before the edge flags, which end the file;
+    // their offsets are in the section table (bytes 184 + k × 24 of the
+    // header).
     let mesh_at = u64::from_le_bytes(bytes[232..240].try_into().unwrap()) as usize;
+    let flags_at = u64::from_le_bytes(bytes[280..288].try_into().unwrap()) as usize;
     let mut rng = Rng(17);
     let mut panics = 0;
     for _ in 0..60 {
         let mut bad = bytes.clone();
-        let at = mesh_at + rng.below(bytes.len() - mesh_at);
+        let at = mesh_at + rng.below(flags_at - mesh_at);
         bad[at] ^= 1 << rng.below(8);
         let Ok(t) = RacBvh::from_bytes(&bad, 1 << 20) else {
             continue;

@@ -23,6 +23,7 @@ use std::path::PathBuf;
 use cbvh::build::{BuildOptions, CanonicalBvh, Layout, build};
 use cbvh::codec::common::MassProps;
 use cbvh::codec::{AnyCodec, ByteSize, Codec, CodecFileError, OpenOptions};
+use cbvh::contact::EdgeFlags;
 use cbvh::geom::{Aabb, Pose, Ray};
 use cbvh::query::{self, RayHit};
 use cbvh::scene::{Kind, generate};
@@ -272,6 +273,57 @@ pub fn round_trip<C: Codec>(v: &Variants<C>) {
     }
 }
 
+/// The edge flags: computed when encoding from the codec's own triangles
+/// (its ids, its vertex precision) and equal to a fresh computation by id
+/// ([`EdgeFlags::compute`] over [`NodeCursor::triangle`], not the
+/// traversal the encoder used); read back unchanged from the bytes and
+/// from the file, with any cache budget. A closed mesh, a multi-part one
+/// and an open soup, every option set.
+pub fn edge_flags_round_trip<C: Codec>(v: &Variants<C>) {
+    let meshes = [
+        generate(Kind::Statue, 1500, 6, &mut |_, _| {}).unwrap(),
+        generate(Kind::Turbine, 1500, 6, &mut |_, _| {}).unwrap(),
+        soup(6, 400, 3.0),
+    ];
+    for (m, mesh) in meshes.iter().enumerate() {
+        let bvh = tree(mesh, Layout::CacheEfficient, 1 + m % 2);
+        for (k, (o, _)) in v.all().enumerate() {
+            let c = encode::<C>(&bvh, mesh, o);
+            let e = c.edge_flags();
+            let n = c.triangle_count();
+            let fresh = EdgeFlags::compute(n, |id| NodeCursor::triangle(&c, id));
+            assert_eq!(e.len(), n, "{}: mesh {m}", C::KIND);
+            assert_eq!(
+                e.as_slice(),
+                fresh.as_slice(),
+                "{}: mesh {m}, {o:?}",
+                C::KIND
+            );
+            // The counters and the volume too, bit for bit.
+            assert_eq!(e, &fresh, "{}: mesh {m}, {o:?}", C::KIND);
+            let bytes = c.to_bytes();
+            for budget in [usize::MAX, 1] {
+                let o = OpenOptions {
+                    verify: true,
+                    cache_budget_bytes: budget,
+                };
+                let back = C::from_bytes(&bytes, &o).unwrap();
+                assert_eq!(
+                    back.edge_flags(),
+                    e,
+                    "{}: from bytes, budget {budget}",
+                    C::KIND
+                );
+            }
+            let path = temp(&format!("{}-edges-{m}-{k}.bin", C::KIND));
+            c.save(&path).unwrap();
+            let any = AnyCodec::open(&path, &OpenOptions::default()).unwrap();
+            assert_eq!(any.edge_flags(), e, "{}: through the registry", C::KIND);
+            std::fs::remove_file(&path).unwrap();
+        }
+    }
+}
+
 /// Meshes at the edges of what a builder and a codec take.
 fn edge_meshes() -> Vec<(&'static str, Mesh)> {
     let mut out: Vec<(&'static str, Mesh)> = Vec::new();
@@ -340,6 +392,8 @@ pub fn edge_cases<C: Codec>(v: &Variants<C>) {
                 let back = C::from_bytes(&c.to_bytes(), &OpenOptions::default()).unwrap();
                 back.verify().unwrap();
                 assert_eq!(back.decoded_mesh(), dm, "{name}");
+                assert_eq!(back.edge_flags(), c.edge_flags(), "{name}");
+                assert_eq!(c.edge_flags().len(), mesh.triangles.len(), "{name}");
                 assert_eq!(hits(&back, &dm), hits(&c, &dm), "{name}");
             }
         }
@@ -378,6 +432,7 @@ pub fn empty_mesh<C: Codec>(v: &Variants<C>) {
         back.verify().unwrap();
         assert_eq!(back.triangle_count(), 0);
         assert_eq!(back.to_bytes(), c.to_bytes());
+        assert!(back.edge_flags().is_empty() && c.edge_flags().is_empty());
     }
 }
 
@@ -469,6 +524,11 @@ macro_rules! codec_suite {
             #[test]
             fn round_trip_through_files_and_bytes() {
                 round_trip(&variants());
+            }
+
+            #[test]
+            fn edge_flags_are_stored_and_read_back() {
+                edge_flags_round_trip(&variants());
             }
 
             #[test]

@@ -419,10 +419,10 @@ fn more_trees_than_handles_number_is_refused() {
     let (_, h) = hcc(&mesh, 1);
     let mut bytes = h.to_bytes();
     // The header's counts start at byte 16: high-level nodes, then trees;
-    // the header (384 bytes) ends with its checksum.
+    // the header (408 bytes) ends with its checksum.
     bytes[20..24].copy_from_slice(&(MAX_TREES as u32 + 1).to_le_bytes());
-    let sum = xxh3_64(&bytes[..376]);
-    bytes[376..384].copy_from_slice(&sum.to_le_bytes());
+    let sum = xxh3_64(&bytes[..400]);
+    bytes[400..408].copy_from_slice(&sum.to_le_bytes());
     let e = HccBvh::from_bytes(&bytes).expect_err("a file with too many trees was accepted");
     assert!(e.to_string().contains("low-level trees"), "{e}");
 }

@@ -192,7 +192,7 @@ impl Lcg {
 }
 
 const TABLE: usize = 140;
-const HEADER_LEN: usize = 340;
+const HEADER_LEN: usize = 364;
 
 fn u64_at(b: &[u8], at: usize) -> u64 {
     u64::from_le_bytes(b[at..at + 8].try_into().unwrap())
@@ -207,7 +207,7 @@ fn section(b: &[u8], k: usize) -> (usize, usize) {
 /// Rewrites every section checksum and the header's so that damage
 /// inside the sections reaches the decoder (a forged file).
 fn reframe(b: &mut [u8]) {
-    for k in 0..8 {
+    for k in 0..9 {
         let (off, len) = section(b, k);
         let h = xxh3_64(&b[off..off + len]);
         let at = TABLE + 24 * k + 16;

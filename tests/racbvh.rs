@@ -80,7 +80,7 @@ fn round_trip_matches_the_canonical_tree_in_every_layout() {
         let parts = rac.bytes_by_part();
         assert_eq!(
             parts.iter().map(|p| p.0).collect::<Vec<_>>(),
-            ["bvh_tree", "bvh_bv", "meta", "mesh"]
+            ["bvh_tree", "bvh_bv", "meta", "mesh", "edge-flags"]
         );
     }
 }
@@ -264,7 +264,7 @@ fn container_errors_and_random_access_on_damaged_bytes() {
         RacBvh::from_bytes(b"nonsense bytes", 1).unwrap_err(),
         RacError::Format(FormatError::Truncated {
             section: "header",
-            need: 288,
+            need: 312,
             have: 14
         })
     );

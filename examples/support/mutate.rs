@@ -26,6 +26,9 @@ use cbvh::geom::{Aabb, Ray};
 use glam::Vec3A;
 use xxhash_rust::xxh3::xxh3_64;
 
+/// Sections of the plain and RACBVH files (the last one the edge flags).
+const SECTIONS: usize = 5;
+
 /// A small deterministic generator.
 pub struct Rng(pub u64);
 
@@ -219,9 +222,9 @@ impl Subject {
     /// garbage), so that an attack reaches the checks behind them.
     pub fn reseal(&self, b: &mut [u8]) {
         if self.codec == "plain" {
-            reseal(b, 192, 88, None);
+            reseal(b, 216, 88, None);
         } else {
-            reseal(b, 288, 184, Some(20));
+            reseal(b, 312, 184, Some(20));
         }
     }
 
@@ -231,7 +234,7 @@ impl Subject {
         let len = self.bytes.len();
         let mut rows = Vec::new();
         // Truncations.
-        let cuts: Vec<Vec<u8>> = [0, 1, 7, 8, 100, 191, 192, 287, 288]
+        let cuts: Vec<Vec<u8>> = [0, 1, 7, 8, 100, 215, 216, 311, 312]
             .into_iter()
             .chain((0..n).map(|_| rng.below(len)))
             .chain([len - 1])
@@ -343,7 +346,7 @@ impl Subject {
     }
 
     fn reseal_header_only(&self, b: &mut [u8]) {
-        let h = if self.codec == "plain" { 192 } else { 288 };
+        let h = if self.codec == "plain" { 216 } else { 312 };
         let sum = xxh3_64(&b[..h - 8]);
         b[h - 8..h].copy_from_slice(&sum.to_le_bytes());
     }
@@ -365,7 +368,7 @@ impl Subject {
         for &c in counts {
             out.extend(u32s(c, &[0, 1, u32::MAX, 1 << 31, (1 << 31) - 1, 1 << 24]));
         }
-        for k in 0..4 {
+        for k in 0..SECTIONS {
             let off = table + 24 * k;
             for v in [len, len + 1, u64::MAX, u64::MAX - 7, 0, 8] {
                 out.push((off, v.to_le_bytes().to_vec()));
@@ -401,7 +404,7 @@ impl Subject {
     /// Plain trees with one structural defect each, checksums recomputed.
     fn corrupt_plain_trees(&self, n: usize, rng: &mut Rng) -> Vec<Vec<u8>> {
         let nodes = u32::from_le_bytes(self.bytes[16..20].try_into().unwrap()) as usize;
-        let at = |i: usize| 192 + 32 * i;
+        let at = |i: usize| 216 + 32 * i;
         let word = |b: &[u8], i: usize, w: usize| {
             u32::from_le_bytes(b[at(i) + 4 * w..at(i) + 4 * w + 4].try_into().unwrap())
         };
@@ -496,7 +499,7 @@ fn reseal(b: &mut [u8], header: usize, table: usize, meta: Option<usize>) {
             }
         }
     }
-    for k in 0..4 {
+    for k in 0..SECTIONS {
         if let Some(r) = range(b, k) {
             let h = xxh3_64(&b[r]);
             b[table + 24 * k + 16..table + 24 * k + 24].copy_from_slice(&h.to_le_bytes());

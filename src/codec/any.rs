@@ -4,8 +4,8 @@
 //!   [`CodecKind::name`], parsed with `FromStr`): the names the CLI, the
 //!   sims and the JSON reports use.
 //! - [`AnyCodec`]: an encoded codec, whichever it is, with what consumers
-//!   need of it (sizes, mass, verify, save, the decoded mesh, header
-//!   fields), encoded by kind ([`AnyCodec::encode`], each codec's options
+//!   need of it (sizes, mass, edge flags, verify, save, the decoded mesh,
+//!   header fields), encoded by kind ([`AnyCodec::encode`], each codec's options
 //!   in [`AnyOptions`]) or opened from any codec file by its magic
 //!   ([`AnyCodec::open`]).
 //! - [`with_codec!`](crate::with_codec): binds the concrete codec inside an
@@ -28,6 +28,7 @@ use super::hcc::ooc::HccOocBvh;
 use super::plain::PlainBvh;
 use super::racbvh::RacBvh;
 use crate::build::CanonicalBvh;
+use crate::contact::EdgeFlags;
 use crate::cursor::NodeCursor;
 use crate::mesh::Mesh;
 
@@ -458,6 +459,12 @@ impl AnyCodec {
     /// Mass properties at density 1, as stored with the codec.
     pub fn mass(&self) -> MassProps {
         crate::with_codec!(self, |c| Codec::mass(c))
+    }
+
+    /// The active-edge flags of the triangles by id, as the codec stores
+    /// them (see [`Codec::edge_flags`]).
+    pub fn edge_flags(&self) -> &EdgeFlags {
+        crate::with_codec!(self, |c| Codec::edge_flags(c))
     }
 
     /// The decode cache's counters (see [`Codec::cache_stats`]).

@@ -8,6 +8,7 @@ use super::any::CodecKind;
 use super::common::MassProps;
 use super::common::page_cache::CacheStats;
 use crate::build::CanonicalBvh;
+use crate::contact::EdgeFlags;
 use crate::cursor::NodeCursor;
 use crate::mesh::Mesh;
 
@@ -71,6 +72,12 @@ pub trait Codec: NodeCursor + ByteSize + Send + Sync + Sized + 'static {
     /// Mass properties at density 1, computed from the original mesh when
     /// encoded and stored with the codec.
     fn mass(&self) -> MassProps;
+
+    /// The active-edge flags of the triangles by id (the ids the cursor
+    /// reports), computed once from the codec's own triangles when encoded
+    /// ([`edges::of_cursor`](super::common::edges::of_cursor)) and stored
+    /// in its file ([`edges`](super::common::edges)).
+    fn edge_flags(&self) -> &EdgeFlags;
 
     /// Proves everything a query relies on (the second validation tier:
     /// one parent per node, nested boxes, leaves containing their

@@ -33,7 +33,13 @@
 //!
 //! One byte a triangle in memory. Computing takes two sorts of three
 //! entries a triangle (welding the corners, then pairing the edges), in
-//! parallel on rayon's threads: about 48 bytes a triangle while it runs.
+//! parallel on rayon's threads: about 48 bytes a triangle while it runs,
+//! and about a second per million triangles. Codecs therefore compute the
+//! flags once, when they encode, and store them in their files
+//! ([`crate::codec::common::edges`]); a shape opened from a file reads
+//! them ([`from_flags`](EdgeFlags::from_flags)) instead of computing them.
+
+use std::sync::Arc;
 
 use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
@@ -48,9 +54,12 @@ pub const BACK: u8 = 0b111_000;
 pub const ALL_ACTIVE: u8 = FRONT | BACK;
 
 /// The flags of a mesh's triangles, by triangle id. See the module docs.
-#[derive(Clone, Debug, Default)]
+///
+/// Cloning is cheap: the flags are shared (a codec and the shapes made
+/// from it hold the same bytes).
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct EdgeFlags {
-    flags: Vec<u8>,
+    flags: Arc<[u8]>,
     /// Edges with one triangle.
     pub boundary_edges: u64,
     /// Edges with more than two triangles.
@@ -144,18 +153,29 @@ impl EdgeFlags {
             vertex_of[*corner as usize] = (positions.len() - 1) as u32;
         }
         drop(corners);
-        let signed_volume = (0..count)
+        let volume = |t: usize| {
+            if !normals[t].is_finite() {
+                return 0.0;
+            }
+            let p = |k: usize| {
+                let q = positions[vertex_of[t * 3 + k] as usize];
+                DVec3::new(q.x as f64, q.y as f64, q.z as f64)
+            };
+            p(0).dot(p(1).cross(p(2))) / 6.0
+        };
+        // Summed in fixed chunks, then in order: the same bits whatever
+        // the threads do (codecs store the volume; encoding twice gives
+        // the same file).
+        const CHUNK: usize = 1 << 14;
+        let signed_volume = (0..count.div_ceil(CHUNK))
             .into_par_iter()
-            .map(|t| {
-                if !normals[t].is_finite() {
-                    return 0.0;
-                }
-                let p = |k: usize| {
-                    let q = positions[vertex_of[t * 3 + k] as usize];
-                    DVec3::new(q.x as f64, q.y as f64, q.z as f64)
-                };
-                p(0).dot(p(1).cross(p(2))) / 6.0
+            .map(|c| {
+                (c * CHUNK..count.min(c * CHUNK + CHUNK))
+                    .map(volume)
+                    .sum::<f64>()
             })
+            .collect::<Vec<f64>>()
+            .into_iter()
             .sum();
         // Half-edges by their welded ends, the lower first; the low bit
         // of the value says whether the edge runs from the higher end.
@@ -225,16 +245,34 @@ impl EdgeFlags {
             }
             start = end;
         }
-        out.flags = flags;
+        out.flags = flags.into();
         out.signed_volume = signed_volume;
         out
+    }
+
+    /// Flags as stored (a codec's file): `flags[id]` is triangle `id`'s
+    /// byte. `None` if a byte has bits 6–7 set. The counters are zero (and
+    /// the volume 0): set the public fields as stored.
+    pub fn from_flags(flags: Vec<u8>) -> Option<Self> {
+        if flags.iter().fold(0, |a, &f| a | f) & !ALL_ACTIVE != 0 {
+            return None;
+        }
+        Some(Self {
+            flags: flags.into(),
+            ..Self::default()
+        })
+    }
+
+    /// Every triangle's flags, by id.
+    pub fn as_slice(&self) -> &[u8] {
+        &self.flags
     }
 
     /// The flags of a triangle whose edges are all active from both sides,
     /// for `count` triangles: contacts then behave as without flags.
     pub fn all_active(count: usize) -> Self {
         Self {
-            flags: vec![ALL_ACTIVE; count],
+            flags: vec![ALL_ACTIVE; count].into(),
             boundary_edges: 3 * count as u64,
             ..Self::default()
         }
@@ -257,7 +295,7 @@ impl EdgeFlags {
         self.flags.is_empty()
     }
 
-    /// Bytes held.
+    /// Bytes held (shared by every clone).
     pub fn bytes(&self) -> usize {
         self.flags.len()
     }
@@ -389,6 +427,37 @@ mod tests {
         assert!(n0.y > 0.0, "front faces up");
         assert_eq!(f.get(0) & 0b010, 0);
         assert_eq!(f.get(0) & 0b010_000, 0b010_000);
+    }
+
+    /// Codecs store the flags and the volume: encoding twice must give
+    /// the same bytes, whatever rayon's threads do.
+    #[test]
+    fn computing_twice_gives_the_same_bits() {
+        // A bumpy grid of 2 × 200 × 200 triangles: several chunks of the
+        // volume's sum.
+        let n = 201u32;
+        let v: Vec<[f32; 3]> = (0..n * n)
+            .map(|i| {
+                let (x, y) = (i % n, i / n);
+                [x as f32, ((x * 7 + y * 13) % 5) as f32 * 0.1, y as f32]
+            })
+            .collect();
+        let t: Vec<[u32; 3]> = (0..n - 1)
+            .flat_map(|y| {
+                (0..n - 1).flat_map(move |x| {
+                    let i = y * n + x;
+                    [[i, i + n, i + 1], [i + 1, i + n, i + n + 1]]
+                })
+            })
+            .collect();
+        let a = flags_of(&v, &t);
+        for _ in 0..4 {
+            let b = flags_of(&v, &t);
+            assert_eq!(a, b);
+            assert_eq!(a.signed_volume.to_bits(), b.signed_volume.to_bits());
+        }
+        let back = EdgeFlags::from_flags(a.as_slice().to_vec()).unwrap();
+        assert_eq!(back.as_slice(), a.as_slice());
     }
 
     #[test]

@@ -8,7 +8,8 @@
 //!   (normals within a few degrees, near each other), each at most four
 //!   points that keep the patch's support area;
 //! - [`edges`]: active edges, one byte a triangle computed once from the
-//!   mesh: which edges are real (convex or boundary) seen from each side;
+//!   mesh (when a codec encodes it; codec files store them): which edges
+//!   are real (convex or boundary) seen from each side;
 //! - [`orient`]: oriented normals: out of A's surface into B's, on an axis
 //!   both triangles accept given the side they face and their edge flags;
 //! - [`motion`]: the prediction distance bounded by how far each region of

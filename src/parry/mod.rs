@@ -23,7 +23,8 @@
 //!   [`crate::contact::orient`]) as parry normal constraints, where parry's
 //!   convex-convex code computes the contact: a cbvh triangle against a
 //!   convex shape, and the per-triangle-pair mode. A [`CbvhShape`] holds its
-//!   edge flags and which sides it takes contacts on ([`Sides`]).
+//!   edge flags (its codec's, stored in every codec file) and which sides it
+//!   takes contacts on ([`Sides`]).
 //! - [`trimesh`]: parry's own `TriMesh` built from a [`Mesh`](crate::Mesh),
 //!   the baseline every comparison is made against, with its memory counted
 //!   by part the same way cbvh's codecs count theirs.

@@ -48,7 +48,8 @@ pub enum ShapeBuildError {
 
 struct Inner {
     codec: AnyCodec,
-    /// Active edges, by triangle id ([`EdgeFlags`]).
+    /// Active edges, by triangle id ([`EdgeFlags`]): the codec's (shared,
+    /// not copied) or the ones given to [`CbvhShape::with_edges`].
     edges: EdgeFlags,
     aabb: Aabb,
     /// Mass properties at density 1.
@@ -184,25 +185,18 @@ impl CbvhShape {
     }
 
     /// Wraps an encoded codec (built, or opened from its file), with the
-    /// mass properties it stores; its active edges are computed from its
-    /// triangles as it holds them (its ids, its vertex precision), in one
-    /// traversal of its tree.
+    /// mass properties and the active edges it stores
+    /// ([`AnyCodec::edge_flags`]: computed when it was encoded from its
+    /// triangles as it holds them, its ids and its vertex precision, and
+    /// read from its file when opened; nothing is computed here).
     pub fn new(codec: AnyCodec) -> Self {
-        let edges = with_codec!(&codec, |c| {
-            let everything = Aabb::new(Vec3A::splat(f32::MIN), Vec3A::splat(f32::MAX));
-            EdgeFlags::from_visit(c.triangle_count(), |f| {
-                let mut stats = TraversalStats::default();
-                query::overlap(c, &everything, &mut stats, |id, t| {
-                    f(id, t);
-                    std::ops::ControlFlow::Continue(())
-                });
-            })
-        });
+        let edges = codec.edge_flags().clone();
         Self::with_edges(codec, edges)
     }
 
-    /// Wraps an encoded codec with its triangles' edge flags (computed from
-    /// the same mesh, ids as the codec's).
+    /// Wraps an encoded codec with other edge flags than the ones it
+    /// stores (computed from the same triangles with another flat angle,
+    /// say; ids as the codec's).
     pub fn with_edges(codec: AnyCodec, edges: EdgeFlags) -> Self {
         let unit_mass = parry_mass(&codec.mass());
         let aabb = with_codec!(&codec, |c| c.root().1);
@@ -232,7 +226,8 @@ impl CbvhShape {
         self.sides
     }
 
-    /// The active edges of the triangles, by id.
+    /// The active edges of the triangles, by id: the codec's, or the ones
+    /// given to [`with_edges`](Self::with_edges).
     pub fn edge_flags(&self) -> &EdgeFlags {
         &self.inner.edges
     }

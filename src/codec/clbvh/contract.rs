@@ -9,6 +9,7 @@ use super::{ClBvh, ClBvhCompact, ClError, ClOptions, CompactOptions, LeafKind, f
 use crate::build::CanonicalBvh;
 use crate::codec::common::{FormatError, MassProps};
 use crate::codec::{Codec, CodecKind, OpenOptions};
+use crate::contact::EdgeFlags;
 use crate::cursor::NodeCursor;
 use crate::mesh::Mesh;
 
@@ -62,6 +63,10 @@ impl Codec for ClBvh {
 
     fn mass(&self) -> MassProps {
         ClBvh::mass(self)
+    }
+
+    fn edge_flags(&self) -> &EdgeFlags {
+        ClBvh::edge_flags(self)
     }
 
     fn verify(&self) -> Result<(), ClError> {
@@ -125,6 +130,10 @@ impl Codec for ClBvhCompact {
 
     fn mass(&self) -> MassProps {
         self.0.mass()
+    }
+
+    fn edge_flags(&self) -> &EdgeFlags {
+        self.0.edge_flags()
     }
 
     fn verify(&self) -> Result<(), ClError> {

@@ -24,6 +24,7 @@ use crate::codec::ByteSize;
 use crate::codec::common::MassProps;
 use crate::codec::common::huge::huge;
 use crate::codec::common::quant::Grid;
+use crate::contact::EdgeFlags;
 use crate::geom::Aabb;
 use crate::mesh::Mesh;
 
@@ -227,7 +228,7 @@ impl ClBvh {
                 e.inner[idx].set(k, r, &bvh.nodes[kid as usize].aabb());
             }
         }
-        Ok(ClBvh {
+        let mut out = ClBvh {
             options: *options,
             inner: huge(e.inner),
             arena: huge(e.arena),
@@ -242,7 +243,10 @@ impl ClBvh {
             slot_of: e.slot_of,
             blocks: e.blocks,
             mass: MassProps::of_mesh(mesh),
-        })
+            edges: EdgeFlags::default(),
+        };
+        out.edges = crate::codec::common::edges::of_cursor(&out);
+        Ok(out)
     }
 
     /// The options the tree was encoded with.
@@ -253,6 +257,11 @@ impl ClBvh {
     /// Mass properties at density 1 (computed from the mesh when built).
     pub fn mass(&self) -> MassProps {
         self.mass
+    }
+
+    /// Active edges by triangle id (stored in the file).
+    pub fn edge_flags(&self) -> &EdgeFlags {
+        &self.edges
     }
 
     /// The regular inner multi-nodes.
@@ -326,6 +335,7 @@ impl ByteSize for ClBvh {
                 "triangle slots",
                 self.slot_of.len() * 4 + self.blocks.len() * 8,
             ),
+            ("edge-flags", self.edges.bytes()),
         ]
     }
 }

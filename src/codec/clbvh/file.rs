@@ -2,13 +2,13 @@
 //! [`ClBvh::save`], [`ClBvh::open`]; [`ClBvh::verify`] is in `verify.rs`.
 //!
 //! # Layout
-//! All integers little-endian. A 264-byte header, then six sections back to
-//! back in this order, ending the file. Checksums are xxh3-64.
+//! All integers little-endian. A 288-byte header, then seven sections
+//! back to back in this order, ending the file. Checksums are xxh3-64.
 //!
 //! | bytes | field |
 //! |---|---|
 //! | 0–7 | magic: `CBVHCLB\0` fast leaves, `CBVHCLC\0` compact leaves |
-//! | 8–11 | version (1) |
+//! | 8–11 | version (2; version 1 had no edge flags) |
 //! | 12–15 | flags: bit 1 multi-leaf nodes; others 0 |
 //! | 16–19 | leaf size `M` |
 //! | 20–23 | root [`ChildRef`](super::ChildRef) |
@@ -17,12 +17,14 @@
 //! | 52–55 | triangle count |
 //! | 56–107 | mass properties at density 1 ([`MassProps`]) |
 //! | 108–111 | zero |
-//! | 112–255 | section table: (offset u64, length u64, checksum u64) for inner nodes (224 B each), arena (u32 words), vertices (12 B), triangles (12 B; fast), slots (u32; compact), blocks (2 × u32; compact) |
-//! | 256–263 | checksum of bytes 0–255 |
+//! | 112–279 | section table: (offset u64, length u64, checksum u64) for inner nodes (224 B each), arena (u32 words), vertices (12 B), triangles (12 B; fast), slots (u32; compact), blocks (2 × u32; compact), edge flags |
+//! | 280–287 | checksum of bytes 0–279 |
 //!
 //! A section length that is not a whole number of its entries is an error;
 //! the triangle and slot sections hold one entry a triangle (the one the
-//! variant does not use is empty).
+//! variant does not use is empty). The edge flags are the section every
+//! codec file ends with ([`edges`]), by
+//! triangle id, decoded by [`from_bytes`](ClBvh::from_bytes).
 
 use std::path::Path;
 
@@ -30,21 +32,23 @@ use xxhash_rust::xxh3::xxh3_64;
 
 use super::node::InnerNode;
 use super::{ClBvh, ClError, ClOptions, LeafKind};
-use crate::codec::common::container::{check_header, section_entry, write_sections};
+use crate::codec::common::container::{check_header, section_entry, version, write_sections};
+use crate::codec::common::edges;
 use crate::codec::common::huge::huge;
 use crate::codec::common::le::{u32_at, word_bytes, words};
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps, atomic_write};
 use crate::geom::Aabb;
 
 /// The file version this build writes and reads.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 /// The magic of a CLBVH file with fast leaves.
 pub const MAGIC: [u8; 8] = *b"CBVHCLB\0";
 /// The magic of a CLBVH file with compact leaves.
 pub const MAGIC_COMPACT: [u8; 8] = *b"CBVHCLC\0";
-const HEADER_LEN: usize = 264;
 const TABLE: usize = 112;
-const SECTIONS: usize = 6;
+const SECTIONS: usize = 7;
+const HEADER_LEN: usize = TABLE + 24 * SECTIONS + 8;
+const _: () = assert!(HEADER_LEN == 288);
 const NAMES: [&str; SECTIONS] = [
     "inner nodes",
     "arena",
@@ -52,8 +56,10 @@ const NAMES: [&str; SECTIONS] = [
     "triangles",
     "slots",
     "blocks",
+    edges::SECTION,
 ];
-const ELEM: [u64; SECTIONS] = [224, 4, 12, 12, 4, 8];
+/// Bytes of a section's entries (the edge flags are a byte stream).
+const ELEM: [u64; SECTIONS] = [224, 4, 12, 12, 4, 8, 1];
 
 fn header_err(field: &'static str, why: impl Into<String>) -> ClError {
     FormatError::header(field, why).into()
@@ -70,6 +76,7 @@ impl ClBvh {
             word_bytes(self.triangles.iter().flatten().copied()),
             word_bytes(self.slot_of.iter().copied()),
             word_bytes(self.blocks.iter().flatten().copied()),
+            edges::encode(&self.edges),
         ];
         let mut out = Vec::with_capacity(HEADER_LEN + sections.iter().map(Vec::len).sum::<usize>());
         out.extend_from_slice(match self.options.leaves {
@@ -135,14 +142,15 @@ impl ClBvh {
         } else {
             (LeafKind::Fast, &MAGIC)
         };
-        check_header(b, HEADER_LEN, magic, "CLBVH")?;
-        let version = u32_at(b, 8);
-        if version != VERSION {
+        if let Some(found) = version(b, magic)
+            && found != VERSION
+        {
             return Err(ClError::Version {
-                found: version,
+                found,
                 supported: VERSION,
             });
         }
+        check_header(b, HEADER_LEN, magic, "CLBVH")?;
         let flags = u32_at(b, 12);
         if flags & !2 != 0 || u32_at(b, 108) != 0 {
             return Err(header_err("flags", "reserved bits are set"));
@@ -239,6 +247,7 @@ impl ClBvh {
             n
         });
         let w = |c: &[u8], k: usize| u32_at(c, 4 * k);
+        let edges = edges::decode(&b[ranges[6].clone()], tris as u64)?;
         Ok(ClBvh {
             options,
             inner: huge(inner),
@@ -262,6 +271,7 @@ impl ClBvh {
                 .map(|c| [w(c, 0), w(c, 1)])
                 .collect(),
             mass,
+            edges,
         })
     }
 }

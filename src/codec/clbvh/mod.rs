@@ -92,6 +92,7 @@ mod verify;
 
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
+use crate::contact::EdgeFlags;
 use crate::geom::Aabb;
 use crate::mesh::Mesh;
 
@@ -185,6 +186,8 @@ pub struct ClBvh {
     /// Compact: `(first slot, word offset)` of each leaf block, by slot.
     blocks: Vec<[u32; 2]>,
     mass: MassProps,
+    /// Active edges by triangle id, computed when encoded.
+    edges: EdgeFlags,
 }
 
 /// Settings of the compact variant ([`ClBvhCompact`]).

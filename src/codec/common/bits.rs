@@ -160,7 +160,12 @@ impl<'a> BitReader<'a> {
 
     /// Whether more bits were consumed than the stream holds.
     pub fn overran(&self) -> bool {
-        self.byte as u64 * 8 - u64::from(self.count) > self.limit
+        self.bits_read() > self.limit
+    }
+
+    /// Bits consumed so far (past the end included).
+    pub fn bits_read(&self) -> u64 {
+        self.byte as u64 * 8 - u64::from(self.count)
     }
 }
 

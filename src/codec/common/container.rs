@@ -14,7 +14,12 @@
 //! | 24 per section | the section table: offset u64, length u64, checksum u64 |
 //! | the header's last 8 | checksum of every header byte before it |
 //!
-//! The sections follow the header back to back, in table order.
+//! The sections follow the header back to back, in table order. Every
+//! codec's version field is bytes 8–11; it is read before the header is
+//! checked ([`version`]), because another version's header may be of
+//! another length (the edge-flags section, [`edges`](super::edges), added
+//! a table entry to every codec's header, and a version to each): a file
+//! of another version is reported as such, not as damaged.
 
 use xxhash_rust::xxh3::xxh3_64;
 
@@ -41,6 +46,15 @@ pub fn write_sections(out: &mut Vec<u8>, header_len: usize, sections: &[&[u8]]) 
     for s in sections {
         out.extend_from_slice(s);
     }
+}
+
+/// The version field (bytes 8–11) of `b` if it starts with `magic`, read
+/// before anything else is checked (see the module docs).
+pub fn version(b: &[u8], magic: &[u8; 8]) -> Option<u32> {
+    if b.len() < 12 || b[..8] != *magic {
+        return None;
+    }
+    Some(super::le::u32_at(b, 8))
 }
 
 /// Checks that `b` holds a whole header of `header_len` bytes that starts

@@ -21,11 +21,15 @@
 //!   fields, checksum mismatches, values out of range, corrupted codes.
 //! - [`atomic_write`] (`save.rs`): atomic file saves.
 //! - [`mass`]: the stored mass properties.
+//! - [`edges`]: the edge-flags section every codec file ends with (the
+//!   active edges of [`EdgeFlags`](crate::contact::EdgeFlags), computed
+//!   when encoding, coded through per-context static dictionaries).
 //! - [`MAGIC_PREFIX`]: how every codec file starts.
 
 pub mod bits;
 pub mod container;
 pub mod dict;
+pub mod edges;
 mod error;
 pub mod huge;
 pub mod le;

@@ -7,6 +7,7 @@ use super::{HccBvh, HccError, HccOptions, file};
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
 use crate::codec::{ByteSize, Codec, CodecKind, OpenOptions};
+use crate::contact::EdgeFlags;
 use crate::cursor::NodeCursor;
 use crate::mesh::Mesh;
 
@@ -35,6 +36,10 @@ impl Codec for HccBvh {
 
     fn mass(&self) -> MassProps {
         HccBvh::mass(self)
+    }
+
+    fn edge_flags(&self) -> &EdgeFlags {
+        HccBvh::edge_flags(self)
     }
 
     fn verify(&self) -> Result<(), HccError> {

@@ -16,6 +16,7 @@ use super::{HccOptions, HccStats, MAX_LEAF_TRIANGLES};
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
 use crate::codec::common::bits::BitWriter;
+use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 
 /// An i-HCCMesh: the high-level tree and every low-level tree's header,
@@ -47,6 +48,10 @@ pub struct HccBvh {
     /// Vertices of the input mesh.
     pub(super) mesh_vertices: u32,
     pub(super) mass: MassProps,
+    /// Active edges by triangle id (the ids the cursor reports): computed
+    /// when encoded, read from the file (or the o-HCCMesh's) when opened;
+    /// empty in a one-tree page of the out-of-core o-HCCMesh.
+    pub(super) edges: EdgeFlags,
     pub(super) stats: HccStats,
 }
 
@@ -259,6 +264,7 @@ impl HccBvh {
             triangle_count: mesh.triangles.len() as u32,
             mesh_vertices: mesh.vertices.len() as u32,
             mass: MassProps::of_mesh(mesh),
+            edges: EdgeFlags::default(),
             stats: HccStats::default(),
         };
         let mut s = Scratch {
@@ -326,6 +332,7 @@ impl HccBvh {
         out.stats.tree_vertices = s.stored.len();
         out.stats.mesh_vertices = used.iter().filter(|&&u| u).count();
         out.stats.high_nodes = out.high.len();
+        out.edges = crate::codec::common::edges::of_cursor(&out);
         Ok(out)
     }
 

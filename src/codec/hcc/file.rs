@@ -4,13 +4,13 @@
 //!
 //! # Layout
 //! All integers little-endian; the frame (section table, checksums) is the
-//! shared one of [`container`]. A 384-byte header, then ten sections back
-//! to back, ending the file.
+//! shared one of [`container`]. A 408-byte header, then eleven sections
+//! back to back, ending the file.
 //!
 //! | bytes | field |
 //! |---|---|
 //! | 0–7 | magic `CBVHHCC\0` |
-//! | 8–11 | version (2) |
+//! | 8–11 | version (3; version 2 had no edge flags) |
 //! | 12–15 | flags: bit 0 multi-triangle leaves, bit 1 quantized vertices, bit 2 vertex ids kept, bit 3 tree order (no triangle id map; the `ids` section empty); others 0 |
 //! | 16–35 | counts: high-level nodes, low-level trees, node words, inter-connections, stored vertices |
 //! | 36–39 | triangle count |
@@ -18,8 +18,8 @@
 //! | 44–47 | bits per quantized coordinate (0 for `f32` vertices) |
 //! | 48–83 | quantization grid origin, step and measured error, 3 × f32 each (zeros for `f32` vertices) |
 //! | 84–135 | mass properties at density 1 ([`MassProps`]) |
-//! | 136–375 | section table (offset, length, checksum) of the ten sections below |
-//! | 376–383 | checksum of bytes 0–375 |
+//! | 136–399 | section table (offset, length, checksum) of the eleven sections below |
+//! | 400–407 | checksum of bytes 0–399 |
 //!
 //! Sections, in order: high-level nodes ([`HighNode`], 32 bytes each),
 //! low-level headers ([`TreeHeader`], 16 bytes), node words (`u32`),
@@ -27,12 +27,17 @@
 //! runs), packed runs' [`VertexTree`]s (16 bytes per tree; quantized
 //! only), triangle blocks (multi-triangle leaves only), each tree's first
 //! block byte (`u32`; multi only), the `ids` section and the `vertex ids`
-//! section (when kept; layouts in `ids.rs`). The leaf rank/select bits
-//! and the id map's running counts are rebuilt on load, in one pass.
+//! section (when kept; layouts in `ids.rs`), and the edge flags, the
+//! section every codec file ends with
+//! ([`edges`]), by triangle id (the ids the
+//! cursor reports: the input's, or tree order without the id map). The
+//! leaf rank/select bits and the id map's running counts are rebuilt on
+//! load, in one pass.
 //!
 //! # Validation
 //! [`from_bytes`](HccBvh::from_bytes) checks the header, the section
-//! table, every checksum and the frames of the variable-length sections;
+//! table, every checksum and the frames of the variable-length sections,
+//! and decodes the edge flags;
 //! [`verify`](HccBvh::verify) walks every low-level tree with checked
 //! reads and proves what queries rely on.
 
@@ -44,19 +49,19 @@ use super::ids::{IdMap, VertexIds};
 use super::node::{HighNode, MAX_TREES, TreeHeader};
 use super::vertices::{Quantized, VertexTree, Vertices};
 use super::{HccBvh, HccError, HccStats};
-use crate::codec::common::container;
 use crate::codec::common::le::{f32x3_at, u32_at, word_bytes, words};
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps, atomic_write};
+use crate::codec::common::{container, edges};
 
 /// The file version this build writes and reads.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 /// The i-HCCMesh file's magic.
 pub const MAGIC: [u8; 8] = *b"CBVHHCC\0";
 const MASS_AT: usize = 84;
 const TABLE: usize = MASS_AT + MASS_BYTES;
-const SECTIONS: usize = 10;
+const SECTIONS: usize = 11;
 const HEADER_LEN: usize = TABLE + 24 * SECTIONS + 8;
-const _: () = assert!(HEADER_LEN == 384);
+const _: () = assert!(HEADER_LEN == 408);
 const NAMES: [&str; SECTIONS] = [
     "high-level nodes",
     "headers",
@@ -68,6 +73,7 @@ const NAMES: [&str; SECTIONS] = [
     "block starts",
     "ids",
     "vertex ids",
+    edges::SECTION,
 ];
 const FLAG_MULTI: u32 = 1;
 const FLAG_QUANTIZED: u32 = 2;
@@ -154,6 +160,7 @@ impl HccBvh {
             &starts,
             &ids,
             &vids,
+            &edges::encode(&self.edges),
         ];
         container::write_sections(&mut out, HEADER_LEN, &sections);
         out
@@ -181,14 +188,15 @@ impl HccBvh {
     /// variable-length sections. Never panics. Call
     /// [`verify`](Self::verify) before querying bytes you did not write.
     pub fn from_bytes(b: &[u8]) -> Result<HccBvh, HccError> {
-        container::check_header(b, HEADER_LEN, &MAGIC, "i-HCCMesh")?;
-        let version = u32_at(b, 8);
-        if version != VERSION {
+        if let Some(found) = container::version(b, &MAGIC)
+            && found != VERSION
+        {
             return Err(HccError::Version {
-                found: version,
+                found,
                 supported: VERSION,
             });
         }
+        container::check_header(b, HEADER_LEN, &MAGIC, "i-HCCMesh")?;
         let flags = u32_at(b, 12);
         if flags > FLAG_MULTI | FLAG_QUANTIZED | FLAG_VERTEX_IDS | FLAG_TREE_ORDER {
             return Err(header_err("flags", "reserved bits are set"));
@@ -235,6 +243,7 @@ impl HccBvh {
             fixed(multi, 4 * trees),
             if tree_order { Some(0) } else { None },
             if has_vids { None } else { Some(0) },
+            None,
         ];
         let mut at = HEADER_LEN as u64;
         let mut ranges: [std::ops::Range<usize>; SECTIONS] = Default::default();
@@ -335,6 +344,7 @@ impl HccBvh {
         } else {
             None
         };
+        let edges = edges::decode(sec(10), u64::from(triangle_count))?;
         let mut out = HccBvh {
             high,
             headers,
@@ -351,6 +361,7 @@ impl HccBvh {
             triangle_count,
             mesh_vertices,
             mass,
+            edges,
             stats: HccStats::default(),
         };
         out.build_leaf_ranks();

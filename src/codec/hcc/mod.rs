@@ -141,6 +141,7 @@ pub use error::HccError;
 
 use crate::codec::ByteSize;
 use crate::codec::common::MassProps;
+use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 use node::{HighNode, TreeHeader};
 
@@ -290,6 +291,11 @@ impl HccBvh {
         self.mass
     }
 
+    /// Active edges by triangle id (stored in the file).
+    pub fn edge_flags(&self) -> &EdgeFlags {
+        &self.edges
+    }
+
     /// Whether leaves hold several triangles.
     pub fn is_multi(&self) -> bool {
         self.multi
@@ -373,6 +379,7 @@ impl ByteSize for HccBvh {
         if let Some(v) = &self.vertex_ids {
             parts.push(("vertex-ids", v.bytes()));
         }
+        parts.push(("edge-flags", self.edges.bytes()));
         parts
     }
 }

@@ -7,6 +7,7 @@ use super::{PlainBvh, PlainError, file};
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
 use crate::codec::{Codec, CodecKind, OpenOptions};
+use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 
 impl Codec for PlainBvh {
@@ -30,6 +31,10 @@ impl Codec for PlainBvh {
 
     fn mass(&self) -> MassProps {
         PlainBvh::mass(self)
+    }
+
+    fn edge_flags(&self) -> &EdgeFlags {
+        PlainBvh::edge_flags(self)
     }
 
     fn verify(&self) -> Result<(), PlainError> {

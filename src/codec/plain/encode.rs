@@ -6,7 +6,9 @@ use crate::build::{CanonicalBvh, LEAF_FLAG};
 use crate::codec::ByteSize;
 use crate::codec::common::FormatError;
 use crate::codec::common::MassProps;
+use crate::codec::common::edges;
 use crate::codec::common::huge::huge;
+use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 
 /// The uncompressed BVH with its mesh.
@@ -22,6 +24,8 @@ pub struct PlainBvh {
     pub(super) leaf_ids: Vec<u32>,
     /// Mass properties at density 1, computed from the mesh.
     pub(super) mass: MassProps,
+    /// Active edges by triangle id, computed when encoded.
+    pub(super) edges: EdgeFlags,
 }
 
 impl PlainBvh {
@@ -87,7 +91,7 @@ impl PlainBvh {
                 right,
             }
         });
-        Ok(Self {
+        let mut out = Self {
             nodes: huge(nodes),
             vertices: huge(mesh.vertices.iter().copied()),
             triangles: huge(mesh.triangles.iter().copied()),
@@ -97,7 +101,10 @@ impl PlainBvh {
                 bvh.leaf_triangles.clone()
             },
             mass: MassProps::of_mesh(mesh),
-        })
+            edges: EdgeFlags::default(),
+        };
+        out.edges = edges::of_cursor(&out);
+        Ok(out)
     }
 
     /// Height of the tree (a single leaf has height 1), in O(nodes). On a
@@ -134,6 +141,11 @@ impl PlainBvh {
         self.mass
     }
 
+    /// Active edges by triangle id (stored in the file).
+    pub fn edge_flags(&self) -> &EdgeFlags {
+        &self.edges
+    }
+
     /// The nodes, root first.
     pub fn nodes(&self) -> &[PlainNode] {
         &self.nodes
@@ -157,6 +169,7 @@ impl ByteSize for PlainBvh {
             ("vertices", self.vertices.len() * 12),
             ("triangles", self.triangles.len() * 12),
             ("leaf_ids", self.leaf_ids.len() * 4),
+            ("edge-flags", self.edges.bytes()),
         ]
     }
 }

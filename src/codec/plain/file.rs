@@ -2,13 +2,13 @@
 //! [`PlainBvh::save`], [`PlainBvh::open`] and [`PlainBvh::verify`].
 //!
 //! # Layout
-//! All integers little-endian. A 192-byte header, then four sections back
+//! All integers little-endian. A 216-byte header, then five sections back
 //! to back in this order, ending the file. Checksums are xxh3-64.
 //!
 //! | bytes | field |
 //! |---|---|
 //! | 0–7 | magic `CBVHPLN\0` |
-//! | 8–11 | version (1) |
+//! | 8–11 | version (2; version 1 had no edge flags) |
 //! | 12–15 | flags (0) |
 //! | 16–19 | node count (≥ 1) |
 //! | 20–23 | vertex count |
@@ -16,15 +16,17 @@
 //! | 28–31 | leaf-id count (0: one triangle per leaf, stored in the leaf) |
 //! | 32–83 | mass properties at density 1 ([`MassProps`]) |
 //! | 84–87 | zero |
-//! | 88–183 | section table: (offset u64, length u64, checksum u64) for nodes, vertices, triangles, leaf ids |
-//! | 184–191 | checksum of bytes 0–183 |
+//! | 88–207 | section table: (offset u64, length u64, checksum u64) for nodes, vertices, triangles, leaf ids, edge flags |
+//! | 208–215 | checksum of bytes 0–207 |
 //!
 //! Nodes are [`PlainNode`]s (32 bytes), vertices 3 × f32, triangles
-//! 3 × u32, leaf ids u32.
+//! 3 × u32, leaf ids u32; the edge flags are the section every codec file
+//! ends with ([`edges`]), by triangle id.
 //!
 //! # Validation
 //! [`from_bytes`](PlainBvh::from_bytes) checks the header, the section
-//! table and every checksum (the bytes are copied into memory anyway);
+//! table and every checksum (the bytes are copied into memory anyway), and
+//! decodes the edge flags;
 //! [`verify`](PlainBvh::verify) proves what queries rely on. A tree that
 //! was not verified may make a query panic or loop; the CLI, the sims and
 //! [`crate::codec::AnyCodec::open`] verify by default.
@@ -35,18 +37,20 @@ use xxhash_rust::xxh3::xxh3_64;
 
 use super::node::PlainNode;
 use super::{PlainBvh, PlainError};
-use crate::codec::common::container;
 use crate::codec::common::huge::huge;
 use crate::codec::common::le::{u32_at, words};
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps, atomic_write};
+use crate::codec::common::{container, edges};
 
 /// The file version this build writes and reads.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 /// The plain file's magic.
 pub const MAGIC: [u8; 8] = *b"CBVHPLN\0";
-const HEADER_LEN: usize = 192;
+const SECTIONS: usize = 5;
 const TABLE: usize = 88;
-const NAMES: [&str; 4] = ["nodes", "vertices", "triangles", "leaf ids"];
+const HEADER_LEN: usize = TABLE + 24 * SECTIONS + 8;
+const _: () = assert!(HEADER_LEN == 216);
+const NAMES: [&str; SECTIONS] = ["nodes", "vertices", "triangles", "leaf ids", edges::SECTION];
 
 fn header_err(field: &'static str, why: impl Into<String>) -> PlainError {
     FormatError::header(field, why).into()
@@ -80,6 +84,7 @@ impl PlainBvh {
             .flat_map(|v| v.to_le_bytes())
             .collect();
         let ids: Vec<u8> = self.leaf_ids.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let flags = edges::encode(&self.edges);
         let mut out = Vec::with_capacity(HEADER_LEN + nodes.len() + verts.len() + tris.len());
         out.extend_from_slice(&MAGIC);
         for v in [
@@ -95,7 +100,7 @@ impl PlainBvh {
         out.extend_from_slice(&self.mass.to_bytes());
         out.extend_from_slice(&0u32.to_le_bytes());
         debug_assert_eq!(out.len(), TABLE);
-        let sections: [&[u8]; 4] = [&nodes, &verts, &tris, &ids];
+        let sections: [&[u8]; SECTIONS] = [&nodes, &verts, &tris, &ids, &flags];
         container::write_sections(&mut out, HEADER_LEN, &sections);
         out
     }
@@ -124,14 +129,15 @@ impl PlainBvh {
     /// allocates more than the bytes given. Call [`verify`](Self::verify)
     /// before querying bytes you did not write yourself.
     pub fn from_bytes(b: &[u8]) -> Result<PlainBvh, PlainError> {
-        container::check_header(b, HEADER_LEN, &MAGIC, "plain BVH")?;
-        let version = u32_at(b, 8);
-        if version != VERSION {
+        if let Some(found) = container::version(b, &MAGIC)
+            && found != VERSION
+        {
             return Err(PlainError::Version {
-                found: version,
+                found,
                 supported: VERSION,
             });
         }
+        container::check_header(b, HEADER_LEN, &MAGIC, "plain BVH")?;
         if u32_at(b, 12) != 0 || u32_at(b, 84) != 0 {
             return Err(header_err("flags", "reserved bits are set"));
         }
@@ -147,8 +153,8 @@ impl PlainBvh {
         })?;
         let elem = [32u64, 12, 12, 4];
         let mut at = HEADER_LEN as u64;
-        let mut ranges: [std::ops::Range<usize>; 4] = Default::default();
-        for k in 0..4 {
+        let mut ranges: [std::ops::Range<usize>; SECTIONS] = Default::default();
+        for k in 0..SECTIONS {
             let (off, len, hash) = container::section_entry(b, TABLE, k);
             if off != at {
                 return Err(header_err(
@@ -156,13 +162,14 @@ impl PlainBvh {
                     format!("the section starts at {off}, not right after the previous one ({at})"),
                 ));
             }
-            if len != u64::from(counts[k]) * elem[k] {
+            // The edge flags are variable-length: bounded by the file.
+            if k < elem.len() && len != u64::from(counts[k]) * elem[k] {
                 return Err(header_err(
                     NAMES[k],
                     format!("{len} bytes for {} entries", counts[k]),
                 ));
             }
-            let end = off + len; // both below 2^40: no overflow
+            let end = off.saturating_add(len); // the others below 2^40
             if end > b.len() as u64 {
                 return Err(FormatError::Truncated {
                     section: NAMES[k],
@@ -199,12 +206,14 @@ impl PlainBvh {
         let triangles = b[ranges[2].clone()]
             .chunks_exact(12)
             .map(|c| [w(c, 0), w(c, 1), w(c, 2)]);
+        let edges = edges::decode(&b[ranges[4].clone()], u64::from(counts[2]))?;
         Ok(PlainBvh {
             nodes: huge(nodes),
             vertices: huge(vertices),
             triangles: huge(triangles),
             leaf_ids: huge(words(&b[ranges[3].clone()])),
             mass,
+            edges,
         })
     }
 

@@ -6,6 +6,7 @@ use super::{RacBvh, RacError, RacOptions, file};
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
 use crate::codec::{Codec, CodecKind, OpenOptions};
+use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 
 impl Codec for RacBvh {
@@ -38,6 +39,10 @@ impl Codec for RacBvh {
 
     fn mass(&self) -> MassProps {
         RacBvh::mass(self)
+    }
+
+    fn edge_flags(&self) -> &EdgeFlags {
+        RacBvh::edge_flags(self)
     }
 
     fn verify(&self) -> Result<(), RacError> {

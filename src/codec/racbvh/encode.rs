@@ -310,7 +310,7 @@ impl RacBvh {
         header.bv_bits = bv_bits;
         header.compression_seconds = start.elapsed().as_secs_f64();
         let mesh_hash = super::file::mesh_hash(&pmesh);
-        let rac = RacBvh::assemble(
+        let mut rac = RacBvh::assemble(
             header,
             Store::Owned(data),
             meta,
@@ -321,6 +321,10 @@ impl RacBvh {
         );
         // Packed here, in memory: nothing to check before the first query.
         let _ = rac.mesh_ok.set(Ok(()));
+        // From the tree as stored (quantized vertices); the traversal's
+        // clusters are not kept, so the tree starts with a cold cache.
+        rac.edges = crate::codec::common::edges::of_cursor(&rac);
+        rac.clear_cache();
         Ok(rac)
     }
 }

@@ -1,13 +1,13 @@
 //! The RACBVH container: [`RacBvh::to_bytes`] and [`RacBvh::from_bytes`].
 //!
 //! # Layout
-//! All integers little-endian. A 288-byte header, then four sections.
+//! All integers little-endian. A 312-byte header, then five sections.
 //! Checksums are xxh3-64.
 //!
 //! | bytes | field |
 //! |---|---|
 //! | 0–7 | magic `CBVHRAC\0` |
-//! | 8–11 | version (3) |
+//! | 8–11 | version (4; version 3 had no edge flags) |
 //! | 12–15 | flags: bit 0 empty tree, bit 1 lossless vertices |
 //! | 16–19 | cluster bits `k` (clusters of `2^k` nodes, 8..=14) |
 //! | 20–23 | box quantization bits (8..=24) |
@@ -23,8 +23,8 @@
 //! | 124–127 | zero |
 //! | 128–179 | mass properties at density 1 ([`MassProps`]), so that a shape needs no mesh |
 //! | 180–183 | zero |
-//! | 184–279 | section table: (offset u64, length u64, checksum u64) for meta, clusters, vertices, triangles |
-//! | 280–287 | checksum of bytes 0–279 |
+//! | 184–303 | section table: (offset u64, length u64, checksum u64) for meta, clusters, vertices, triangles, edge flags |
+//! | 304–311 | checksum of bytes 0–303 |
 //!
 //! The meta section holds one 20-byte entry per cluster: the cluster's
 //! offset in the clusters section (u64), its node count (u32) and the
@@ -32,7 +32,10 @@
 //! frame-of-reference arrays (x, y, z), the triangles section one (three
 //! vertex indices per triangle); see [`super::mesh`]. The mesh's checksum (checked by
 //! [`RacBvh::verify`]) is the checksum of the vertices section's checksum
-//! followed by the triangles section's.
+//! followed by the triangles section's. The edge flags are the section
+//! every codec file ends with ([`edges`]), by
+//! triangle id; unlike the mesh's, their checksum is checked and they are
+//! decoded when the file is opened (they are read whole anyway).
 
 use std::ops::Range;
 use std::path::Path;
@@ -43,19 +46,21 @@ use xxhash_rust::xxh3::xxh3_64;
 
 use super::mesh::{MeshParams, PackedMesh};
 use super::{ClusterMeta, Header, RacBvh, RacError};
-use crate::codec::common::container;
 use crate::codec::common::le::{f32x3_at, u32_at, u64_at};
 use crate::codec::common::packed::bits_for;
 use crate::codec::common::quant::Grid;
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps, Store};
+use crate::codec::common::{container, edges};
 
 /// The container version this build writes and reads.
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 /// The RACBVH file's magic.
 pub const MAGIC: [u8; 8] = *b"CBVHRAC\0";
-const HEADER_LEN: usize = 288;
 /// Where the section table starts.
 const TABLE: usize = 184;
+const SECTIONS: usize = 5;
+const HEADER_LEN: usize = TABLE + 24 * SECTIONS + 8;
+const _: () = assert!(HEADER_LEN == 312);
 /// Bytes of one meta-table entry.
 pub(super) const META_ENTRY: usize = 20;
 
@@ -124,7 +129,8 @@ impl RacBvh {
             meta.extend_from_slice(&e.nodes.to_le_bytes());
             meta.extend_from_slice(&e.hash.to_le_bytes());
         }
-        let sections: [&[u8]; 4] = [&meta, &self.data, &m.vertices, &m.triangles];
+        let flags = edges::encode(&self.edges);
+        let sections: [&[u8]; SECTIONS] = [&meta, &self.data, &m.vertices, &m.triangles, &flags];
         container::write_sections(&mut out, HEADER_LEN, &sections);
         out
     }
@@ -166,11 +172,12 @@ impl RacBvh {
         make: &dyn Fn(Range<usize>) -> Store,
         cache_budget_bytes: usize,
     ) -> Result<RacBvh, RacError> {
-        container::check_header(b, HEADER_LEN, &MAGIC, "RACBVH")?;
-        let version = u32_at(b, 8);
-        if version != VERSION {
+        if let Some(version) = container::version(b, &MAGIC)
+            && version != VERSION
+        {
             return Err(RacError::Version(version));
         }
+        container::check_header(b, HEADER_LEN, &MAGIC, "RACBVH")?;
         let flags = u32_at(b, 12);
         if flags & !3 != 0 {
             return Err(header_err("flags", format!("unknown flags {flags:#x}")));
@@ -257,10 +264,10 @@ impl RacBvh {
                 "a value is not finite or the mass is negative",
             )
         })?;
-        let names = ["meta", "clusters", "vertices", "triangles"];
-        let mut sections: [&[u8]; 4] = [&[]; 4];
-        let mut ranges: [Range<usize>; 4] = Default::default();
-        let mut hashes = [0u64; 4];
+        let names = ["meta", "clusters", "vertices", "triangles", edges::SECTION];
+        let mut sections: [&[u8]; SECTIONS] = [&[]; SECTIONS];
+        let mut ranges: [Range<usize>; SECTIONS] = Default::default();
+        let mut hashes = [0u64; SECTIONS];
         for (k, name) in names.into_iter().enumerate() {
             let (off, len, hash) = container::section_entry(b, TABLE, k);
             hashes[k] = hash;
@@ -349,7 +356,14 @@ impl RacBvh {
             make(ranges[3].clone()),
         )?;
         let mesh_hash = combine(hashes[2], hashes[3]);
-        Ok(RacBvh::assemble(
+        if xxh3_64(sections[4]) != hashes[4] {
+            return Err(FormatError::Checksum {
+                section: edges::SECTION,
+            }
+            .into());
+        }
+        let edges = edges::decode(sections[4], u64::from(triangle_count))?;
+        let mut rac = RacBvh::assemble(
             header,
             make(ranges[1].clone()),
             meta,
@@ -357,6 +371,8 @@ impl RacBvh {
             mesh_hash,
             mass,
             cache_budget_bytes,
-        ))
+        );
+        rac.edges = edges;
+        Ok(rac)
     }
 }

@@ -4,6 +4,7 @@
 use super::{CacheStats, RacError, RacStats, cache, decode, file, mesh};
 use crate::codec::common::Store;
 use crate::codec::common::quant::{Grid, QBox};
+use crate::contact::EdgeFlags;
 
 /// Everything global a cluster's decoder needs.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -57,6 +58,9 @@ pub struct RacBvh {
     /// by `verify`), so a caller who skips `verify` still never gets
     /// triangles from damaged mesh bytes.
     pub(super) mesh_ok: std::sync::OnceLock<Result<(), RacError>>,
+    /// Active edges by triangle id: computed when encoded (set after
+    /// [`assemble`](Self::assemble)), read from the file when opened.
+    pub(super) edges: EdgeFlags,
     pub(super) cache: cache::ClusterCache,
     /// Identifies this tree in the threads' pins.
     pub(super) id: u64,
@@ -92,6 +96,7 @@ impl RacBvh {
             mesh,
             mass,
             mesh_ok: std::sync::OnceLock::new(),
+            edges: EdgeFlags::default(),
             cache: cache::ClusterCache::new(budget, max_cluster),
             id: crate::codec::common::page_cache::next_owner(),
         }
@@ -150,6 +155,11 @@ impl RacBvh {
     /// encoded, stored in the file).
     pub fn mass(&self) -> crate::codec::common::MassProps {
         self.mass
+    }
+
+    /// Active edges by triangle id (stored in the file).
+    pub fn edge_flags(&self) -> &EdgeFlags {
+        &self.edges
     }
 
     /// The vertex indices of stored triangle `t` (for smooth shading).
@@ -226,6 +236,7 @@ impl crate::codec::ByteSize for RacBvh {
             ("bvh_bv", bv.min(self.data.len())),
             ("meta", self.meta.len() * file::META_ENTRY),
             ("mesh", self.mesh.bytes()),
+            ("edge-flags", self.edges.bytes()),
         ]
     }
 }

@@ -10,6 +10,7 @@ use super::{HccOocBvh, Mode, OocError, OocOptions, file};
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
 use crate::codec::{ByteSize, Codec, CodecKind, OpenOptions};
+use crate::contact::EdgeFlags;
 use crate::cursor::{Children, NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Ray, Triangle};
 use crate::mesh::Mesh;
@@ -149,6 +150,10 @@ impl Codec for HccOocBvh {
             Mode::Whole { hcc, .. } => hcc.mass(),
             Mode::Paged(p) => p.mass(),
         }
+    }
+
+    fn edge_flags(&self) -> &EdgeFlags {
+        HccOocBvh::edge_flags(self)
     }
 
     /// Pre-loaded: the i-HCCMesh's verification. Out of core: every tree

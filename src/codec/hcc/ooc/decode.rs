@@ -12,17 +12,18 @@ use super::super::{HccBvh, HccStats};
 use super::OocError;
 use super::encode;
 use super::file::{
-    self, Header, SEC_BOXES, SEC_DICTS, SEC_FIRSTS, SEC_HIGH, SEC_IDS, SEC_STARTS, SEC_TREES,
-    SEC_VIDS, SECTIONS,
+    self, Header, SEC_BOXES, SEC_DICTS, SEC_EDGES, SEC_FIRSTS, SEC_HIGH, SEC_IDS, SEC_STARTS,
+    SEC_TREES, SEC_VIDS, SECTIONS,
 };
 use super::model::{
     Adjacency, CONTEXTS, CTX_CORNER, CTX_LEAF, CTX_TEMPLATE, Layout, MAX_CORNER_SYM,
     MAX_TEMPLATE_SYM, RankCache, SYM_NEW, centre, plan, predicted,
 };
 use super::rebuild::Rebuild;
-use crate::codec::common::FormatError;
 use crate::codec::common::bits::{BitReader, unzigzag};
 use crate::codec::common::static_dict::{StaticDecoder, StaticDict};
+use crate::codec::common::{FormatError, edges};
+use crate::contact::EdgeFlags;
 
 /// Everything reused from tree to tree.
 #[derive(Default)]
@@ -223,6 +224,7 @@ impl Out {
             triangle_count: self.triangles,
             mesh_vertices: vertices.0,
             mass: h.mass,
+            edges: EdgeFlags::default(),
             stats,
         };
         hcc.rank_leaf_bits();
@@ -452,7 +454,10 @@ pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
         ));
     }
     let maps = id_maps(&h, &sec)?;
-    Ok(out.into_hcc(high, maps, &h, (h.mesh_vertices, h.used_vertices)))
+    let edges = edges::decode(sec[SEC_EDGES], u64::from(h.triangles))?;
+    let mut hcc = out.into_hcc(high, maps, &h, (h.mesh_vertices, h.used_vertices));
+    hcc.edges = edges;
+    Ok(hcc)
 }
 
 /// The next symbol of context `ctx` in tree `k`'s stream.

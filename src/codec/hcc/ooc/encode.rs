@@ -14,6 +14,7 @@ use super::model::{
     centre, part_of, plan, predicted, template_symbol,
 };
 use crate::codec::common::bits::{BitWriter, zigzag};
+use crate::codec::common::edges;
 use crate::codec::common::static_dict::{StaticDict, StaticEncoder};
 use crate::hash::FastMap;
 
@@ -42,6 +43,8 @@ pub struct OocSizes {
     pub ids: usize,
     /// The vertex id map (when kept).
     pub vertex_ids: usize,
+    /// The edge flags ([`edges`](crate::codec::common::edges)).
+    pub edge_flags: usize,
 }
 
 impl OocSizes {
@@ -58,6 +61,7 @@ impl OocSizes {
             ("padding", self.padding),
             ("ids", self.ids as f64),
             ("vertex-ids", self.vertex_ids as f64),
+            ("edge-flags", self.edge_flags as f64),
         ]
     }
 
@@ -460,6 +464,7 @@ pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
         grid: [q.origin, q.step, q.error],
         mass: hcc.mass,
     };
+    let flags = edges::encode(&hcc.edges);
     let sections: [&[u8]; SECTIONS] = [
         &dict_bytes,
         &high,
@@ -469,6 +474,7 @@ pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
         &vids,
         &boxes,
         &firsts,
+        &flags,
     ];
     let bytes = file::write(&header, &sections);
     let coded: u64 = part_bits.iter().sum();
@@ -483,6 +489,7 @@ pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
         padding: (streams.len() as u64 * 8 - coded) as f64 / 8.0,
         ids: ids.len(),
         vertex_ids: vids.len(),
+        edge_flags: flags.len(),
     };
     debug_assert_eq!(sizes.total() as usize, bytes.len());
     Ok((bytes, sizes))

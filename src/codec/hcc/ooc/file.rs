@@ -6,19 +6,19 @@ use xxhash_rust::xxh3::xxh3_64;
 use super::super::node::MAX_TREES;
 use super::OocError;
 use crate::codec::common::le::{f32x3_at, u32_at};
-use crate::codec::common::{FormatError, MASS_BYTES, MassProps, container};
+use crate::codec::common::{FormatError, MASS_BYTES, MassProps, container, edges};
 
 /// The file version this build writes and reads.
-pub const VERSION: u32 = 6;
+pub const VERSION: u32 = 7;
 /// The o-HCCMesh file's magic.
 pub const MAGIC: [u8; 8] = *b"CBVHHCO\0";
 const MASS_AT: usize = 88;
 pub const TABLE: usize = MASS_AT + MASS_BYTES;
 /// Number of sections.
-pub const SECTIONS: usize = 8;
+pub const SECTIONS: usize = 9;
 /// Bytes of the header.
 pub const HEADER_LEN: usize = TABLE + 24 * SECTIONS + 8;
-const _: () = assert!(HEADER_LEN == 340);
+const _: () = assert!(HEADER_LEN == 364);
 /// Section names, in file order.
 pub const NAMES: [&str; SECTIONS] = [
     "dictionaries",
@@ -29,6 +29,7 @@ pub const NAMES: [&str; SECTIONS] = [
     "vertex ids",
     "high-level boxes",
     "tree firsts",
+    edges::SECTION,
 ];
 /// Section index of the dictionaries.
 pub const SEC_DICTS: usize = 0;
@@ -46,6 +47,8 @@ pub const SEC_VIDS: usize = 5;
 pub const SEC_BOXES: usize = 6;
 /// Section index of each tree's first triangle and first stored vertex.
 pub const SEC_FIRSTS: usize = 7;
+/// Section index of the edge flags.
+pub const SEC_EDGES: usize = 8;
 const FLAG_VERTEX_IDS: u32 = 1;
 const FLAG_TREE_ORDER: u32 = 2;
 const FLAG_MULTI: u32 = 4;
@@ -129,14 +132,15 @@ pub fn parse(b: &[u8]) -> Result<(Header, [&[u8]; SECTIONS]), OocError> {
 /// set (on-demand decoding reads a tree's bytes only when it needs them;
 /// the checksum of the whole section would read the whole file).
 pub fn parse_with(b: &[u8], streams: bool) -> Result<(Header, [&[u8]; SECTIONS]), OocError> {
-    container::check_header(b, HEADER_LEN, &MAGIC, "o-HCCMesh")?;
-    let version = u32_at(b, 8);
-    if version != VERSION {
+    if let Some(found) = container::version(b, &MAGIC)
+        && found != VERSION
+    {
         return Err(OocError::Version {
-            found: version,
+            found,
             supported: VERSION,
         });
     }
+    container::check_header(b, HEADER_LEN, &MAGIC, "o-HCCMesh")?;
     let flags = u32_at(b, 12);
     if flags > FLAG_VERTEX_IDS | FLAG_TREE_ORDER | FLAG_MULTI {
         return Err(header_err("flags", "reserved bits are set"));

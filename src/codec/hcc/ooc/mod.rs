@@ -118,13 +118,13 @@
 //! # Layout
 //!
 //! All integers little-endian; the frame is the shared one of
-//! [`container`](crate::codec::common::container). A 340-byte header, then
-//! eight sections back to back, ending the file.
+//! [`container`](crate::codec::common::container). A 364-byte header, then
+//! nine sections back to back, ending the file.
 //!
 //! | bytes | field |
 //! |---|---|
 //! | 0–7 | magic `CBVHHCO\0` |
-//! | 8–11 | version (6: version 5 interleaved each new vertex's residuals with its triangle's corners, version 4 stored the trees' starts and firsts as `u32`, version 3 also the high-level boxes as `f32`, version 2's dictionaries had no split, version 1 had no high-level boxes nor tree firsts) |
+//! | 8–11 | version (7: version 6 had no edge flags, version 5 interleaved each new vertex's residuals with its triangle's corners, version 4 stored the trees' starts and firsts as `u32`, version 3 also the high-level boxes as `f32`, version 2's dictionaries had no split, version 1 had no high-level boxes nor tree firsts) |
 //! | 12–15 | flags: bit 0 vertex ids kept, bit 1 tree order (no triangle id map), bit 2 multi-triangle leaves; others 0 |
 //! | 16–35 | counts of the i-HCCMesh: high-level nodes, low-level trees, node words, inter-connections, stored vertices |
 //! | 36–39 | triangle count |
@@ -133,8 +133,8 @@
 //! | 48–51 | bits per grid coordinate (1–24) |
 //! | 52–87 | grid origin, step and measured error, 3 × f32 each |
 //! | 88–139 | mass properties at density 1 |
-//! | 140–331 | section table (offset, length, checksum) of the eight sections |
-//! | 332–339 | checksum of bytes 0–331 |
+//! | 140–355 | section table (offset, length, checksum) of the nine sections |
+//! | 356–363 | checksum of bytes 0–355 |
 //!
 //! Sections, in order:
 //! - *dictionaries*: the 14 contexts' dictionaries back to back in one bit
@@ -168,7 +168,11 @@
 //!   rank and first stored vertex, so that a tree decoded alone numbers
 //!   its triangles and vertices as the whole model does. Laid out as the
 //!   tree starts, with two columns: the two widths (6 bits each), then
-//!   per tree its two counts.
+//!   per tree its two counts;
+//! - *edge flags*: the section every codec file ends with
+//!   ([`edges`](crate::codec::common::edges)), by triangle id (tree order
+//!   by default), computed by the i-HCCMesh encoder from its quantized
+//!   triangles and decoded whole when the file is opened, in both modes.
 //!
 //! # Validation
 //! [`HccOocBvh::from_bytes`] checks the frame and every checksum, then
@@ -205,6 +209,7 @@ use crate::build::CanonicalBvh;
 use crate::codec::ByteSize;
 use crate::codec::common::page_cache::CacheStats;
 use crate::codec::common::{Store, atomic_write};
+use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 use paged::Paged;
 
@@ -392,6 +397,16 @@ impl HccOocBvh {
         match &self.mode {
             Mode::Whole { hcc, .. } => Some(hcc),
             Mode::Paged(_) => None,
+        }
+    }
+
+    /// Active edges by triangle id, read from the file when opened (in
+    /// both modes: out of core, they stay in memory beside the high-level
+    /// tree).
+    pub fn edge_flags(&self) -> &EdgeFlags {
+        match &self.mode {
+            Mode::Whole { hcc, .. } => hcc.edge_flags(),
+            Mode::Paged(p) => p.edge_flags(),
         }
     }
 

@@ -5,8 +5,10 @@
 //! What stays in memory besides the cache is what the paper keeps
 //! uncompressed: the high-level tree with its boxes (decoded from the
 //! file's `high-level boxes` section at open), each tree's first triangle
-//! and first stored vertex, the contexts' decoders, and the id maps when
-//! the file has them.
+//! and first stored vertex, the contexts' decoders, the id maps when
+//! the file has them, and the edge flags (a byte a triangle; contacts
+//! read them for any triangle they touch, so they are decoded whole at
+//! open, not per tree).
 //!
 //! A high-level leaf's child handle is an *unopened* root (its box is the
 //! stored high-level box): the tree is decoded when a traversal enters the
@@ -34,12 +36,13 @@ use super::super::pair::outer;
 use super::super::{HccBvh, HccNode};
 use super::OocError;
 use super::decode::{Coder, high_tree, id_maps, stored_boxes, tree_stream, tree_table};
-use super::file::{self, SEC_BOXES, SEC_DICTS, SEC_HIGH, SEC_TREES, SECTIONS};
+use super::file::{self, SEC_BOXES, SEC_DICTS, SEC_EDGES, SEC_HIGH, SEC_TREES, SECTIONS};
 use crate::codec::ByteSize;
 use crate::codec::common::page_cache::{
     self, CacheStats, LiveToken, Page, PageCache, Pins, no_pins,
 };
-use crate::codec::common::{FormatError, MassProps, Store};
+use crate::codec::common::{FormatError, MassProps, Store, edges};
+use crate::contact::EdgeFlags;
 use crate::geom::{Aabb, Triangle};
 use crate::mesh::Mesh;
 use xxhash_rust::xxh3::xxh3_64;
@@ -75,6 +78,8 @@ pub(super) struct Paged {
     starts: Vec<u32>,
     ids: Option<IdMap>,
     vertex_ids: Option<VertexIds>,
+    /// Active edges by triangle id, read whole at open.
+    edges: EdgeFlags,
     cache: PageCache<TreePage>,
     owner: u64,
 }
@@ -100,6 +105,8 @@ pub(super) fn decoded_estimate(h: &file::Header) -> usize {
         + words.div_ceil(64) * 12
         + h.interconnections as usize * 4
         + (h.stored_vertices as usize * 3 * h.bits as usize).div_ceil(8)
+        // The edge flags, a byte a triangle.
+        + h.triangles as usize
 }
 
 impl Paged {
@@ -127,6 +134,7 @@ impl Paged {
         // Trees are numbered as the high-level leaves are met depth-first.
         debug_assert_eq!(leaf_of_tree.len() + 1, firsts.len());
         let (ids, vertex_ids) = id_maps(&h, &sec)?;
+        let edges = edges::decode(sec[SEC_EDGES], u64::from(h.triangles))?;
         let range = |s: &[u8]| {
             let at = s.as_ptr() as usize - b.as_ptr() as usize;
             at..at + s.len()
@@ -141,6 +149,7 @@ impl Paged {
             starts,
             ids,
             vertex_ids,
+            edges,
             cache: PageCache::new(budget, max_page),
             owner: page_cache::next_owner(),
             file,
@@ -330,6 +339,11 @@ impl Paged {
         self.coder.h.mass
     }
 
+    /// Active edges by triangle id.
+    pub(super) fn edge_flags(&self) -> &EdgeFlags {
+        &self.edges
+    }
+
     /// The mesh as stored, decoded tree by tree (the same mesh the
     /// pre-loaded mode's [`HccBvh::decoded_mesh`] gives).
     pub(super) fn decoded_mesh(&self) -> Mesh {
@@ -493,6 +507,7 @@ impl Paged {
                 "vertex-ids",
                 self.vertex_ids.as_ref().map_or(0, VertexIds::bytes),
             ),
+            ("edge-flags", self.edges.bytes()),
             ("o-hccmesh-file", self.file.len()),
         ]
     }
