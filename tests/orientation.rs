@@ -7,6 +7,11 @@
 //!   the rule lets a normal lean past a face's plane at an active edge (a
 //!   box tilting on the ground meets it along its side faces' edges; see
 //!   `cbvh::contact::orient`);
+//! - in the patch mode, no two manifolds push one point both ways (normals within 25° of
+//!   opposite, at the same contact point: the two manifolds of the old
+//!   contacts on a 2-triangle ramp); a thin part squeezed from both sides
+//!   has contacts millimetres apart with opposite normals, rightly, and
+//!   so does a triangle straddling it;
 //! - against a flat tessellated plane, every normal is the plane's own
 //!   (within the flat angle of the edge flags), however a body meets the
 //!   internal edges between the plane's triangles, and the same poses with
@@ -56,37 +61,56 @@ fn manifolds(
     ms
 }
 
-/// For each triangle id of `s` (as its codec numbers them), the unit face
-/// normals of the triangles sharing a corner with it (itself included),
-/// wound as stored, times `outward`.
-fn neighbourhood_normals(s: &CbvhShape) -> Vec<Vec<Vector>> {
-    let n = s.triangle_count();
-    let outward = s.edge_flags().outward();
-    let tris: Vec<[Vector; 3]> = (0..n as u32)
-        .map(|i| {
-            let t = s.parry_triangle(i);
-            [t.a, t.b, t.c]
-        })
-        .collect();
-    let key = |v: Vector| (v.x.to_bits(), v.y.to_bits(), v.z.to_bits());
-    let mut at_corner: std::collections::HashMap<_, Vec<u32>> = Default::default();
-    for (i, t) in tris.iter().enumerate() {
-        for v in t {
-            at_corner.entry(key(*v)).or_default().push(i as u32);
+/// A closed mesh's triangles around each of its triangles (those sharing
+/// a corner with it, itself included), by the ids its codec gives them,
+/// and every triangle's unit face normal, wound as stored, times
+/// `outward`.
+struct Around {
+    ids: Vec<Vec<u32>>,
+    normals: Vec<Vector>,
+}
+
+impl Around {
+    fn of(s: &CbvhShape) -> Self {
+        let n = s.triangle_count();
+        let outward = s.edge_flags().outward();
+        let tris: Vec<[Vector; 3]> = (0..n as u32)
+            .map(|i| {
+                let t = s.parry_triangle(i);
+                [t.a, t.b, t.c]
+            })
+            .collect();
+        let key = |v: Vector| (v.x.to_bits(), v.y.to_bits(), v.z.to_bits());
+        let mut at_corner: std::collections::HashMap<_, Vec<u32>> = Default::default();
+        for (i, t) in tris.iter().enumerate() {
+            for v in t {
+                at_corner.entry(key(*v)).or_default().push(i as u32);
+            }
         }
+        let ids = tris
+            .iter()
+            .map(|t| {
+                let mut ids: Vec<u32> =
+                    t.iter().flat_map(|v| at_corner[&key(*v)].clone()).collect();
+                ids.sort_unstable();
+                ids.dedup();
+                ids
+            })
+            .collect();
+        let normals = tris
+            .iter()
+            .map(|[a, b, c]| (*b - *a).cross(*c - *a).normalize_or_zero() * outward)
+            .collect();
+        Self { ids, normals }
     }
-    let normal = |i: u32| {
-        let [a, b, c] = tris[i as usize];
-        (b - a).cross(c - a).normalize_or_zero() * outward
-    };
-    tris.iter()
-        .map(|t| {
-            let mut ids: Vec<u32> = t.iter().flat_map(|v| at_corner[&key(*v)].clone()).collect();
-            ids.sort_unstable();
-            ids.dedup();
-            ids.into_iter().map(normal).collect()
-        })
-        .collect()
+
+    /// The face normals around triangle `t`.
+    fn normals_around(&self, t: u32) -> Vec<Vector> {
+        self.ids[t as usize]
+            .iter()
+            .map(|k| self.normals[*k as usize])
+            .collect()
+    }
 }
 
 /// The largest `n · f` over the neighbourhood's face normals: negative
@@ -98,6 +122,37 @@ fn facing(normals: &[Vector], n: Vector) -> f32 {
         .fold(f32::NEG_INFINITY, f32::max)
 }
 
+/// Two manifolds whose normals are within 25° of opposite and that lie in
+/// one region: on the same or neighbouring triangles of either shape
+/// (`near1`, `near2`), or with contact points (on shape 1) within `gap` of
+/// each other. That region is given to the solver as pushed both ways.
+fn opposed_in_one_region(
+    ms: &[ContactManifold<(), ()>],
+    near1: impl Fn(u32, u32) -> bool,
+    near2: impl Fn(u32, u32) -> bool,
+    gap: f32,
+) -> Option<(usize, usize)> {
+    let close = |a: &ContactManifold<(), ()>, b: &ContactManifold<(), ()>| {
+        a.points.iter().any(|p| {
+            b.points
+                .iter()
+                .any(|q| (p.local_p1 - q.local_p1).length() <= gap)
+        })
+    };
+    for i in 0..ms.len() {
+        for j in i + 1..ms.len() {
+            let (a, b) = (&ms[i], &ms[j]);
+            let opposed = a.local_n1.dot(b.local_n1) < -(25f32.to_radians().cos());
+            let region =
+                near1(a.subshape1, b.subshape1) || near2(a.subshape2, b.subshape2) || close(a, b);
+            if opposed && region {
+                return Some((i, j));
+            }
+        }
+    }
+    None
+}
+
 fn pose(t: [f32; 3], r: [f32; 3]) -> Pose {
     Pose::from_parts(
         Vector::from_array(t),
@@ -107,7 +162,7 @@ fn pose(t: [f32; 3], r: [f32; 3]) -> Pose {
 
 struct Closed {
     name: &'static str,
-    shapes: Vec<(CbvhShape, Vec<Vec<Vector>>)>,
+    shapes: Vec<(CbvhShape, Around)>,
 }
 
 /// The closed meshes of the first property, in the plain and hcc codecs.
@@ -138,7 +193,7 @@ fn closed_meshes() -> Vec<Closed> {
                 .map(|k| {
                     let s = shape(&m, k);
                     assert!(s.edge_flags().is_closed(), "{name} is closed");
-                    let n = neighbourhood_normals(&s);
+                    let n = Around::of(&s);
                     (s, n)
                 })
                 .collect(),
@@ -169,9 +224,28 @@ proptest! {
             let (s2, n2) = &meshes[b].shapes[codec];
             let d = Vector::new(dir.0, dir.1, dir.2).normalize_or(Vector::X) * dist;
             let pos12 = pose(d.to_array(), [rot.0, rot.1, rot.2]);
-            for m in manifolds(MODES[mode], &pos12, s1, s2) {
-                let f1 = facing(&n1[m.subshape1 as usize], m.local_n1);
-                let f2 = facing(&n2[m.subshape2 as usize], m.local_n2);
+            let ms = manifolds(MODES[mode], &pos12, s1, s2);
+            // The patch mode only: the per-pair mode still gives two pairs
+            // sharing a triangle opposite normals at the same points (one
+            // at -5 mm, one at +5 mm, statue on statue), an open problem.
+            let patches = matches!(MODES[mode], ContactMode::Patches(_));
+            if let Some((i, j)) = opposed_in_one_region(&ms, |_, _| false, |_, _| false, 1e-6)
+                .filter(|_| patches)
+            {
+                prop_assert!(
+                    false,
+                    "{} vs {} ({:?}, {}): manifolds {i} and {j} oppose each other in one \
+                     region:\n  {:?} on {}/{} at {:?}\n  {:?} on {}/{} at {:?}",
+                    meshes[a].name, meshes[b].name, MODES[mode].name(), codec,
+                    ms[i].local_n1, ms[i].subshape1, ms[i].subshape2,
+                    ms[i].points.iter().map(|p| (p.local_p1, p.dist)).collect::<Vec<_>>(),
+                    ms[j].local_n1, ms[j].subshape1, ms[j].subshape2,
+                    ms[j].points.iter().map(|p| (p.local_p1, p.dist)).collect::<Vec<_>>()
+                );
+            }
+            for m in ms {
+                let f1 = facing(&n1.normals_around(m.subshape1), m.local_n1);
+                let f2 = facing(&n2.normals_around(m.subshape2), m.local_n2);
                 // cos 96° = −0.105.
                 prop_assert!(
                     f1 >= -0.105 && f2 >= -0.105,
@@ -279,4 +353,54 @@ fn internal_edges_of_a_flat_plane_give_the_plane_normal() {
             "{kind}: all-active edges should give off-plane normals ({worst:.2} deg)"
         );
     }
+}
+
+/// The region check of the first property finds the two manifolds of the
+/// old contacts on a 2-triangle ramp (the ramp's normal and its opposite
+/// at the same points, on the same triangles), and passes manifolds that
+/// push apart at two separate places (a body wedged between two walls, or
+/// a thin plate squeezed from both sides).
+#[test]
+fn opposed_manifolds_in_one_region_are_found() {
+    use parry3d::query::TrackedContact;
+    use parry3d::shape::PackedFeatureId;
+    let manifold = |n: Vector, tri: u32, points: &[Vector]| {
+        let mut m = ContactManifold::<(), ()>::new();
+        m.local_n1 = n;
+        m.local_n2 = -n;
+        m.subshape1 = tri;
+        m.subshape2 = tri;
+        let id = PackedFeatureId::UNKNOWN;
+        m.points = points
+            .iter()
+            .map(|&p| TrackedContact::new(p, p, id, id, 0.0))
+            .collect();
+        m
+    };
+    let square = |y: f32, x: f32| {
+        [(0.0, 0.0), (0.5, 0.0), (0.0, 0.5), (0.5, 0.5)].map(|(a, b)| Vector::new(x + a, y, b))
+    };
+    let same = |t: u32, u: u32| t == u;
+    let up = manifold(Vector::Y, 0, &square(0.0, 0.0));
+    // The ramp's two manifolds: same triangles, same points.
+    let down = manifold(Vector::NEG_Y, 0, &square(0.0, 0.0));
+    assert_eq!(
+        opposed_in_one_region(&[up.clone(), down], same, same, 1e-6),
+        Some((0, 1))
+    );
+    // Other triangles, but the same place.
+    let down = manifold(Vector::NEG_Y, 7, &square(0.0, 0.0)[1..]);
+    assert_eq!(
+        opposed_in_one_region(&[up.clone(), down], same, same, 1e-6),
+        Some((0, 1))
+    );
+    // A wall elsewhere, and a plate's other side 1 cm below.
+    let wall = manifold(Vector::NEG_Y, 3, &square(0.0, 2.0));
+    let under = manifold(Vector::NEG_Y, 4, &square(-0.01, 0.0));
+    assert_eq!(
+        opposed_in_one_region(&[up.clone(), wall, under], same, same, 1e-6),
+        None
+    );
+    let along = manifold(Vector::Y, 0, &square(0.0, 0.0));
+    assert_eq!(opposed_in_one_region(&[up, along], same, same, 1e-6), None);
 }

@@ -451,3 +451,93 @@ mod harness {
         assert!(tipping.max_travel >= STAY_LIMIT && tipping.pass);
     }
 }
+
+/// Friction anchors: a cube resting on a 16 × 16-tessellated 20° ramp,
+/// friction 0.6 (it must stay), watched for 2 s after 0.5 s to settle, in
+/// every cbvh codec and mode of these tests. rapier warm-starts a contact
+/// point only from last step's point with the same feature ids, so each
+/// step's points must keep the ids of the last step's (at least 95 % of
+/// them on average, 75 % at every step), and the cube must creep less than
+/// 0.1 mm along the ramp over the 2 s (friction that holds, not one that
+/// slips a little every step).
+#[test]
+fn resting_contacts_keep_their_feature_ids_and_do_not_creep() {
+    use cbvh::parry::Dispatcher;
+    use cbvh::sim::slide::{SlopeFrame, cube_mesh, ramp_mesh};
+    use rapier3d::prelude::{ColliderBuilder, NarrowPhase, PhysicsWorld, RigidBodyBuilder};
+    use std::collections::HashSet;
+
+    for rep in [PLAIN, PLAIN_PAIRS, HCC, HCC_PAIRS] {
+        let Rep::Cbvh(_, mode) = rep else {
+            unreachable!("cbvh representations")
+        };
+        let mut world = PhysicsWorld {
+            gravity: parry3d::math::Vector::new(0.0, -GRAVITY, 0.0),
+            ..Default::default()
+        };
+        world.narrow_phase =
+            NarrowPhase::with_query_dispatcher(Dispatcher::new(mode.contact_mode()).then_default());
+        let frame = SlopeFrame::new(20.0);
+        let ground = world.bodies.insert(RigidBodyBuilder::fixed());
+        let ground_shape = rep.mesh_shape(&ramp_mesh(20.0, 16, 8.0)).expect("builds");
+        let g = world.colliders.insert_with_parent(
+            ColliderBuilder::new(ground_shape).friction(0.6),
+            ground,
+            &mut world.bodies,
+        );
+        let cube = world.bodies.insert(
+            RigidBodyBuilder::dynamic()
+                .pose(parry3d::math::Pose::from_parts(
+                    frame.normal * 0.5 + frame.downhill * 0.13 + frame.across * 0.29,
+                    frame.rotation,
+                ))
+                .can_sleep(false),
+        );
+        let c = world.colliders.insert_with_parent(
+            ColliderBuilder::new(rep.mesh_shape(&cube_mesh(1.0)).expect("builds"))
+                .density(1.0)
+                .friction(0.6),
+            cube,
+            &mut world.bodies,
+        );
+        for _ in 0..30 {
+            world.step();
+        }
+        let start = world.bodies[cube].translation();
+        let ids = |w: &PhysicsWorld| -> HashSet<(u32, u32, u32, u32)> {
+            let pair = w.contact_pair(g, c).expect("the cube touches the ramp");
+            pair.manifolds()
+                .iter()
+                .flat_map(|m| {
+                    m.points
+                        .iter()
+                        .map(|p| (m.subshape1, m.subshape2, p.fid1.0, p.fid2.0))
+                })
+                .collect()
+        };
+        let mut last = ids(&world);
+        let (mut kept, mut worst) = (Vec::new(), 1.0f32);
+        for _ in 0..120 {
+            world.step();
+            let now = ids(&world);
+            assert!(!now.is_empty(), "{rep}: lost contact");
+            let k = now.intersection(&last).count() as f32 / now.len() as f32;
+            kept.push(k);
+            worst = worst.min(k);
+            last = now;
+        }
+        let mean = kept.iter().sum::<f32>() / kept.len() as f32;
+        let creep = (world.bodies[cube].translation() - start).length();
+        println!(
+            "{rep}: ids kept {:.1} % on average, {:.1} % at worst; creep {:.2e} m",
+            100.0 * mean,
+            100.0 * worst,
+            creep
+        );
+        assert!(
+            mean >= 0.95 && worst >= 0.75,
+            "{rep}: feature ids churn: {kept:?}"
+        );
+        assert!(creep < 1e-4, "{rep}: the cube creeps {creep} m in 2 s");
+    }
+}

@@ -88,6 +88,10 @@ pub struct PatchPoint {
 
 const DIRS: usize = 8;
 
+/// Two patches whose normals are within this angle of opposite, with
+/// meeting bounds, push one region both ways ([`PatchSet::drop_opposed`]).
+pub const OPPOSED_DEG: f32 = 25.0;
+
 /// Up to this many patches, a contact's patch is found by scanning them all
 /// rather than through the normal-cell index: a traversal task usually
 /// holds a few dozen patches, and hashing 27 cells costs more than scanning
@@ -503,8 +507,133 @@ impl PatchSet {
         self.last = 0;
     }
 
+    /// One direction per contact region: of two patches whose normals are
+    /// within [`OPPOSED_DEG`] of opposite and whose points' bounds meet (one
+    /// region pushed both ways, as two features of a deeply
+    /// overlapping pair can give), the one whose normal leans less along
+    /// `toward` (from shape 1's centre toward shape 2's, in shape 1's
+    /// frame: the direction that separates the bodies) is dropped. Returns
+    /// how many patches were dropped. Patches on the two sides of a thin
+    /// plate, or on two walls, have disjoint bounds and both stay (so does
+    /// a triangle of one shape straddling a thin part of the other, pushed
+    /// from both of its sides). The
+    /// pairs of meeting bounds are found by sweeping the patches along x.
+    pub fn drop_opposed(&mut self, toward: Vec3A) -> usize {
+        let n = self.patches.len();
+        if n < 2 {
+            return 0;
+        }
+        let opposed_cos = OPPOSED_DEG.to_radians().cos();
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        order.sort_by(|&a, &b| {
+            let (a, b) = (&self.patches[a as usize], &self.patches[b as usize]);
+            a.bounds.min.x.total_cmp(&b.bounds.min.x)
+        });
+        let mut dropped = vec![false; n];
+        let opposed = |p: &Patch, q: &Patch| -p.normal.dot(q.normal) >= opposed_cos;
+        // The one leaning less toward shape 2 goes (ties: the later).
+        let loser = |i: usize, j: usize| {
+            let (lp, lq) = (
+                self.patches[i].normal.dot(toward),
+                self.patches[j].normal.dot(toward),
+            );
+            if lq > lp || (lq == lp && j < i) { i } else { j }
+        };
+        for (k, &i) in order.iter().enumerate() {
+            let i = i as usize;
+            for &j in &order[k + 1..] {
+                let j = j as usize;
+                let (p, q) = (&self.patches[i], &self.patches[j]);
+                if q.bounds.min.x > p.bounds.max.x {
+                    break;
+                }
+                if dropped[i] || dropped[j] {
+                    continue;
+                }
+                if !opposed(p, q) || !p.bounds.intersects(&q.bounds) {
+                    continue;
+                }
+                dropped[loser(i, j)] = true;
+            }
+        }
+        let count = dropped.iter().filter(|d| **d).count();
+        if count > 0 {
+            let mut k = 0;
+            self.patches.retain(|_| {
+                k += 1;
+                !dropped[k - 1]
+            });
+            self.index.clear();
+            for (k, p) in self.patches.iter().enumerate() {
+                let key = self.key(p.normal);
+                self.index.entry(key).or_default().push(k as u32);
+            }
+            self.last = 0;
+        }
+        count
+    }
+
     /// Triangle pairs in all patches.
     pub fn pair_count(&self) -> usize {
         self.patches.iter().map(|p| p.pairs as usize).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(p: [f32; 3], i: u32) -> PatchPoint {
+        PatchPoint {
+            p1: Vec3A::from(p),
+            p2: Vec3A::from(p),
+            dist: -0.01,
+            i,
+            j: i,
+            feature: 0,
+        }
+    }
+
+    /// Two patches pushing one region both ways keep the one along the
+    /// bodies' separation; opposed patches in separate places (two walls,
+    /// the two faces of a plate) both stay; small and indexed sets agree.
+    #[test]
+    fn opposed_patches_in_one_region_keep_one_direction() {
+        for filler in [0, 100] {
+            let mut set = PatchSet::new(&PatchOptions::default(), 1.0, false);
+            // Patches elsewhere, with other normals, to force the index.
+            for k in 0..filler {
+                let a = k as f32 * 0.06;
+                let n = Vec3A::new(a.cos(), 0.0, a.sin());
+                set.add_point(n, point([10.0 + k as f32, 5.0, 0.0], 1000 + k), true);
+            }
+            let before = set.patches.len();
+            // One region, pushed up and down.
+            set.add_point(Vec3A::Y, point([0.0, 0.0, 0.0], 1), true);
+            set.add_point(Vec3A::Y, point([0.05, 0.0, 0.05], 2), true);
+            set.add_point(Vec3A::NEG_Y, point([0.02, 0.0, 0.02], 3), true);
+            // A plate's two faces 1 cm apart, and two walls 3 apart.
+            set.add_point(Vec3A::Y, point([5.0, 0.01, 0.0], 4), true);
+            set.add_point(Vec3A::NEG_Y, point([5.0, 0.0, 0.0], 5), true);
+            set.add_point(Vec3A::X, point([-3.0, 1.0, 0.0], 6), true);
+            set.add_point(Vec3A::NEG_X, point([0.0, 1.0, 0.0], 7), true);
+            assert_eq!(set.patches.len(), before + 6);
+            assert_eq!(set.drop_opposed(Vec3A::Y), 1, "filler {filler}");
+            let kept: Vec<Vec3A> = set.patches[before..].iter().map(|p| p.normal).collect();
+            assert_eq!(
+                kept,
+                vec![Vec3A::Y, Vec3A::Y, Vec3A::NEG_Y, Vec3A::X, Vec3A::NEG_X],
+                "filler {filler}"
+            );
+            // The index still finds the patches that stayed.
+            set.add_point(Vec3A::Y, point([0.03, 0.0, 0.04], 8), true);
+            assert_eq!(set.patches.len(), before + 5, "filler {filler}");
+            // Toward -y the region keeps its downward patch instead.
+            let mut set = PatchSet::new(&PatchOptions::default(), 1.0, false);
+            set.add_point(Vec3A::Y, point([0.0, 0.0, 0.0], 1), true);
+            set.add_point(Vec3A::NEG_Y, point([0.0, 0.0, 0.0], 3), true);
+            assert_eq!(set.drop_opposed(Vec3A::NEG_Y), 1);
+            assert_eq!(set.patches[0].normal, Vec3A::NEG_Y);
+        }
     }
 }

@@ -116,6 +116,8 @@ pub fn patches(
             merged.merge(set);
         }
     }));
+    let toward = pose.transform_point(s2.local_aabb().center()) - s1.local_aabb().center();
+    merged.drop_opposed(toward);
     if let Some(c) = counters {
         c.add(candidates, contacts, merged.patches.len() as u64);
     }

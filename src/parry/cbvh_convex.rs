@@ -152,6 +152,8 @@ pub fn patches(
         }
         ControlFlow::Continue(())
     });
+    let centre = *pose * convex.compute_local_aabb().center();
+    set.drop_opposed(glam::Vec3A::from(centre.to_array()) - mesh.local_aabb().center());
     if let Some(c) = counters {
         c.add(candidates, contacts, set.patches.len() as u64);
     }

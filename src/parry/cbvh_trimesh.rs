@@ -117,6 +117,7 @@ pub fn patches(
         });
     });
     kernel.flush_into(&mut set);
+    set.drop_opposed(to_mesh(tm.local_aabb().center()) - mesh.local_aabb().center());
     if let Some(c) = counters {
         c.add(
             kernel.stats.pairs,

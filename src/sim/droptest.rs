@@ -399,10 +399,13 @@ pub struct RunReport {
     /// The largest penetration depth of any contact point during the run.
     pub max_penetration: f32,
     /// The largest angle, in degrees, between a manifold's normal out of
-    /// the base and the base's outward surface normal at the manifold's
-    /// triangle (outward for a closed base, toward the dropped body's
-    /// centre for an open one). Near 0 on faces; up to the bend at a convex
-    /// edge; past 90 only for a normal pointing into the base's surface.
+    /// the base and the base's outward surface normal nearest it around
+    /// the manifold's triangle (its own and those of the triangles sharing
+    /// a corner with it; outward for a closed base, toward the dropped
+    /// body's centre for an open one). Near 0 on faces; at a convex edge
+    /// or corner up to half the bend between the faces there, where the
+    /// normal leans between them; past 90 only for a normal pointing into
+    /// the base's surface.
     pub max_normal_angle_deg: f32,
     /// Peak resident memory of the process during this run (building the
     /// shapes and simulating), in bytes, if the platform tells.
@@ -667,6 +670,12 @@ pub fn run_replaying(
     let base_edges = EdgeFlags::compute(scene.base.triangles.len(), |t| {
         crate::geom::triangle_from_arrays(scene.base.triangle_vertices(t as usize))
     });
+    let base_count = match &shapes {
+        Shapes::Cbvh(_, b) => b.triangle_count(),
+        Shapes::Parry(_, b, _) => b
+            .as_shape::<parry3d::shape::TriMesh>()
+            .map_or(0, |t| t.indices().len()),
+    };
     let base_triangle = |id: u32| -> Option<[Vector; 3]> {
         match &shapes {
             Shapes::Cbvh(_, b) => {
@@ -680,6 +689,7 @@ pub fn run_replaying(
             }
         }
     };
+    let around = Neighbourhoods::new(base_count, &base_triangle);
     for step in 0..scene.steps {
         let before = counter.load(Ordering::Relaxed);
         counters.take();
@@ -714,7 +724,10 @@ pub fn run_replaying(
                     } else {
                         (m.local_n2, m.subshape2)
                     };
-                    if let Some(t) = base_triangle(id) {
+                    // The base's outward surface normal nearest `n` among
+                    // the triangles around the manifold's: at an edge or a
+                    // corner the surface has every normal between theirs.
+                    let outward = |t: [Vector; 3]| {
                         let face = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero();
                         let sign = if base_edges.is_closed() {
                             base_edges.outward()
@@ -723,10 +736,16 @@ pub fn run_replaying(
                         } else {
                             1.0
                         };
-                        let cos = (n.dot(face * sign)).clamp(-1.0, 1.0);
-                        if face != Vector::ZERO && n != Vector::ZERO {
-                            max_normal_angle = max_normal_angle.max(cos.acos().to_degrees());
-                        }
+                        face * sign
+                    };
+                    let best = around
+                        .of(id)
+                        .filter_map(|k| base_triangle(k).map(outward))
+                        .filter(|f| *f != Vector::ZERO)
+                        .map(|f| n.dot(f).clamp(-1.0, 1.0))
+                        .fold(None, |a: Option<f32>, c| Some(a.map_or(c, |a| a.max(c))));
+                    if let Some(cos) = best.filter(|_| n != Vector::ZERO) {
+                        max_normal_angle = max_normal_angle.max(cos.acos().to_degrees());
                     }
                 }
                 for p in &m.points {
@@ -863,6 +882,65 @@ pub fn run_replaying(
         height_per_step: heights,
         energy_per_step: energy,
     })
+}
+
+/// The triangles around each triangle of a mesh (those sharing a corner
+/// with it, itself included), for the normal audit: corners matched by
+/// their exact coordinates, in compressed rows (about 30 bytes a triangle).
+struct Neighbourhoods {
+    /// Each triangle's three corner indices.
+    corners: Vec<[u32; 3]>,
+    /// Row starts of `tris` by corner index.
+    start: Vec<u32>,
+    /// The triangles at each corner, row by row.
+    tris: Vec<u32>,
+}
+
+impl Neighbourhoods {
+    fn new(count: usize, triangle: &impl Fn(u32) -> Option<[Vector; 3]>) -> Self {
+        let key = |v: Vector| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+        let mut index = std::collections::HashMap::<[u32; 3], u32>::new();
+        let corners: Vec<[u32; 3]> = (0..count as u32)
+            .map(|i| {
+                let t = triangle(i).unwrap_or([Vector::ZERO; 3]);
+                t.map(|v| {
+                    let next = index.len() as u32;
+                    *index.entry(key(v)).or_insert(next)
+                })
+            })
+            .collect();
+        let mut start = vec![0u32; index.len() + 1];
+        for c in corners.iter().flatten() {
+            start[*c as usize + 1] += 1;
+        }
+        for k in 1..start.len() {
+            start[k] += start[k - 1];
+        }
+        let mut fill = start.clone();
+        let mut tris = vec![0u32; start[index.len()] as usize];
+        for (i, cs) in corners.iter().enumerate() {
+            for c in cs {
+                tris[fill[*c as usize] as usize] = i as u32;
+                fill[*c as usize] += 1;
+            }
+        }
+        Self {
+            corners,
+            start,
+            tris,
+        }
+    }
+
+    /// The triangles around triangle `id` (repeats included), or just `id`
+    /// when it is out of range.
+    fn of(&self, id: u32) -> impl Iterator<Item = u32> + '_ {
+        let cs = self.corners.get(id as usize).copied();
+        let rows = cs.into_iter().flatten().flat_map(move |c| {
+            let (a, b) = (self.start[c as usize], self.start[c as usize + 1]);
+            self.tris[a as usize..b as usize].iter().copied()
+        });
+        std::iter::once(id).chain(rows)
+    }
 }
 
 #[cfg(test)]

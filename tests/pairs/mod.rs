@@ -7,15 +7,18 @@ use std::collections::BTreeMap;
 
 use cbvh::Mesh;
 use cbvh::build::BuildOptions;
-use cbvh::parry::{CbvhShape, ContactMode, Dispatcher, parry_trimesh};
+use cbvh::parry::cbvh_cbvh::pair_facing;
+use cbvh::parry::cones::{EdgeCone, PairRule};
+use cbvh::parry::{CbvhShape, ContactMode, Dispatcher, parry_trimesh, pose_from_parry};
 use cbvh::scene::{Kind, generate};
-use glam::DVec3;
+use glam::{DVec3, Vec3A};
 use parry3d::math::{Pose, Vector};
+use parry3d::query::details::NormalConstraints;
 use parry3d::query::{
     ClosestPoints, Contact, ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher,
     QueryDispatcher,
 };
-use parry3d::shape::{Shape, TriMesh, Triangle};
+use parry3d::shape::{CompositeShape, Shape, TriMesh, Triangle};
 
 /// A mesh as a cbvh shape and as a parry `TriMesh`, with a few surface
 /// points (triangle centroids) and their outward normals.
@@ -167,6 +170,9 @@ pub struct Tally {
     pub intersecting: usize,
     pub disjoint: usize,
     pub within_margin: usize,
+    /// Pairs with parry's unconstrained points that cbvh's constraints
+    /// (back faces, internal edges) leave without any.
+    pub constrained_away: usize,
 }
 
 /// A contact point: both local points, the manifold normal, the distance.
@@ -247,11 +253,20 @@ fn close(a: Vector, b: Vector, tol: f32) -> bool {
 /// agreeing within the tolerance: every point with `strict`, else the
 /// points within the prediction (those rapier's solver uses).
 ///
-/// parry's composite-shape code places some parts by `pos12` inverted twice
-/// (so the last bit of the pose may differ from cbvh's), and a triangle
-/// pair's manifold can jump with that (a clipped point more or less). A
-/// pair whose manifolds differ is therefore checked against parry's own
-/// convex-convex code for those two parts at cbvh's exact pose.
+/// cbvh's per-pair mode hands each triangle pair to parry's convex-convex
+/// code with normal constraints: the oriented-axis rule for two cbvh
+/// triangles (`cbvh::parry::cones::PairRule`), a cbvh triangle's active-edge
+/// cone (`EdgeCone`) against a convex shape or a `TriMesh` triangle. So the
+/// reference of each pair, for every pair parry's own traversal or cbvh's
+/// finds, is parry's convex-convex manifold of those two parts with the
+/// same constraints, at cbvh's exact pose (parry's composite-shape code
+/// places some parts by `pos12` inverted twice, so the last bit of the pose
+/// may differ, and a manifold can jump with that). This checks that cbvh
+/// finds every pair parry's traversal does, names it right in both orders,
+/// and gives the rule the right triangles, flags, frames and facing; the
+/// rule itself is checked against mechanics in `physics.rs` and
+/// `orientation.rs`. How many pairs parry reports that the constraints
+/// drop (back faces, internal edges) is counted in the tally.
 ///
 /// parry's GJK also judges some triangle pairs touching (distance 0,
 /// contact points with a zero normal) that are millimetres apart; a pair
@@ -284,7 +299,15 @@ fn check_manifolds(case: &Case, strict: bool, tally: &mut Tally) {
         for k in want.keys().chain(got.keys()) {
             let (w, g) = (want.get(k), got.get(k));
             let (w, g) = (w.map_or(&[][..], |w| w), g.map_or(&[][..], |g| g));
-            if same_points(w, g, tol) {
+            let mut m = constrained_manifold(case, *k, prediction);
+            m.subshape1 = k.0;
+            m.subshape2 = k.1;
+            let exact = kept(points_of(&[m]));
+            let exact = exact.get(k).map_or(&[][..], |e| e);
+            if same_points(exact, g, tol) {
+                if g.is_empty() && !w.is_empty() {
+                    tally.constrained_away += 1;
+                }
                 continue;
             }
             let parry_wrong = g.is_empty()
@@ -293,35 +316,103 @@ fn check_manifolds(case: &Case, strict: bool, tally: &mut Tally) {
                     .triangle(k.0)
                     .zip(s2.triangle(k.1))
                     .is_some_and(|(t1, t2)| separated_beyond(&t1, &t2, &case.pos12, prediction));
-            if parry_wrong {
-                continue;
-            }
-            let mut m = ContactManifold::<(), ()>::new();
-            s1.with_part(k.0, |p1| {
-                s2.with_part(k.1, |p2| {
-                    DefaultQueryDispatcher.contact_manifold_convex_convex(
-                        &case.pos12,
-                        p1,
-                        p2,
-                        None,
-                        None,
-                        prediction,
-                        &mut m,
-                    )
-                })
-            })
-            .unwrap();
-            m.subshape1 = k.0;
-            m.subshape2 = k.1;
-            let exact = kept(points_of(&[m]));
-            let exact = exact.get(k).map_or(&[][..], |e| e);
             assert!(
-                same_points(exact, g, tol),
-                "contact points of pair {k:?}, {at}:\n  parry {w:?}\n  parry at cbvh's pose {exact:?}\n  cbvh {g:?}"
+                parry_wrong,
+                "contact points of pair {k:?}, {at}:\n  parry unconstrained {w:?}\n  parry with cbvh's constraints at cbvh's pose {exact:?}\n  cbvh {g:?}"
             );
         }
         tally.manifold_pairs += got.len();
     }
+}
+
+/// What is called with a part and its own normal constraints.
+type PartFn<'f> = dyn FnMut(&dyn Shape, Option<&dyn NormalConstraints>) + 'f;
+
+/// A cbvh side's triangle `id` as cbvh's contact code takes it.
+fn cbvh_triangle(m: &Model, id: u32) -> [Vec3A; 3] {
+    let t = m.parry.triangle(id);
+    [t.a, t.b, t.c].map(|v| Vec3A::from(v.to_array()))
+}
+
+/// The centre of a side's box, in its own frame, as cbvh's facing takes it.
+fn centre(side: Side) -> Vector {
+    match side {
+        Side::Cbvh(m) => Vector::from(m.cbvh.local_aabb().center().to_array()),
+        Side::TriMesh(m) => m.parry.local_aabb().center(),
+        Side::Convex(s) => s.compute_local_aabb().center(),
+    }
+}
+
+/// parry's convex-convex manifold of the parts `k` of `case`, with the
+/// normal constraints cbvh's per-pair mode gives parry for them (see
+/// [`check_manifolds`]); a `TriMesh` part brings its own pseudo-normals.
+fn constrained_manifold(case: &Case, k: (u32, u32), prediction: f32) -> ContactManifold<(), ()> {
+    let mut m = ContactManifold::new();
+    let pos12 = case.pos12;
+    let pose = pose_from_parry(&pos12);
+    // The other side's centre in a cbvh side's frame.
+    let toward = |own_is_1: bool| {
+        let c = if own_is_1 {
+            pos12 * centre(case.s2)
+        } else {
+            pos12.inverse() * centre(case.s1)
+        };
+        Vec3A::from(c.to_array())
+    };
+    let cone = |side: Side, id: u32, own_is_1: bool| match side {
+        Side::Cbvh(mm) => EdgeCone::new(
+            &cbvh_triangle(mm, id),
+            mm.cbvh.edge_flags_of(id),
+            mm.cbvh.facing(toward(own_is_1)),
+        ),
+        _ => None,
+    };
+    let run = |p1: &dyn Shape,
+               p2: &dyn Shape,
+               c1: Option<&dyn NormalConstraints>,
+               c2: Option<&dyn NormalConstraints>,
+               m: &mut ContactManifold<(), ()>| {
+        DefaultQueryDispatcher
+            .contact_manifold_convex_convex(&pos12, p1, p2, c1, c2, prediction, m)
+            .unwrap();
+    };
+    match (case.s1, case.s2) {
+        (Side::Cbvh(m1), Side::Cbvh(m2)) => {
+            let rule = PairRule {
+                a: cbvh_triangle(m1, k.0),
+                fa: m1.cbvh.edge_flags_of(k.0),
+                b: cbvh_triangle(m2, k.1).map(|v| pose.transform_point(v)),
+                fb: m2.cbvh.edge_flags_of(k.1),
+                facing: pair_facing(&pose, &m1.cbvh, &m2.cbvh),
+                prediction,
+            };
+            run(
+                &m1.parry.triangle(k.0),
+                &m2.parry.triangle(k.1),
+                Some(&rule),
+                None,
+                &mut m,
+            );
+        }
+        (s1, s2) => {
+            let (k1, k2) = (cone(s1, k.0, true), cone(s2, k.1, false));
+            let c1 = k1.as_ref().map(|c| c as &dyn NormalConstraints);
+            let c2 = k2.as_ref().map(|c| c as &dyn NormalConstraints);
+            // A TriMesh part with its pseudo-normals, any other part bare.
+            let with = |side: Side, id: u32, f: &mut PartFn| match side {
+                Side::TriMesh(t) => t
+                    .parry
+                    .map_part_at(id, &mut |_, part, normals| f(part, normals)),
+                other => other.with_part(id, |part| f(part, None)),
+            };
+            with(s1, k.0, &mut |p1, n1| {
+                with(s2, k.1, &mut |p2, n2| {
+                    run(p1, p2, c1.or(n1), c2.or(n2), &mut m);
+                })
+            });
+        }
+    }
+    m
 }
 
 /// Whether `c` is a contact between the two shapes of `case`: its points
