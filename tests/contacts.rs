@@ -267,7 +267,26 @@ fn patches_cover_every_pair_parry_reports() {
                 .iter()
                 .flat_map(|p| p.members.iter().copied())
                 .collect();
-            let missing: Vec<_> = parry_pairs.difference(&members).collect();
+            // Pairs of a patch dropped for pushing one region against a
+            // kept patch's opposite normal (`PatchSet::drop_opposed`).
+            let dropped: BTreeSet<(u32, u32)> = set
+                .dropped
+                .iter()
+                .flat_map(|p| p.members.iter().copied())
+                .collect();
+            for d in &set.dropped {
+                let cos = cbvh::contact::patch::OPPOSED_DEG.to_radians().cos();
+                assert!(
+                    set.patches
+                        .iter()
+                        .any(|k| -k.normal.dot(d.normal) >= cos && k.bounds.intersects(&d.bounds)),
+                    "a dropped patch opposes no kept one at {pos12:?}"
+                );
+            }
+            let missing: Vec<_> = parry_pairs
+                .difference(&members)
+                .filter(|k| !dropped.contains(k))
+                .collect();
             assert!(
                 missing.is_empty(),
                 "{} of {} parry pairs in no patch at {pos12:?}, e.g. {:?}",
@@ -282,6 +301,7 @@ fn patches_cover_every_pair_parry_reports() {
             let ours = set
                 .patches
                 .iter()
+                .chain(&set.dropped)
                 .map(|p| p.deepest.dist)
                 .fold(f32::INFINITY, f32::min);
             assert!(

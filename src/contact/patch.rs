@@ -303,6 +303,9 @@ pub struct PatchSet {
     index: FastMap<NormalKey, Vec<u32>>,
     /// The patches, in order of creation.
     pub patches: Vec<Patch>,
+    /// The patches [`drop_opposed`](Self::drop_opposed) dropped, when the
+    /// set records its members (tests and analysis).
+    pub dropped: Vec<Patch>,
 }
 
 impl PatchSet {
@@ -320,6 +323,7 @@ impl PatchSet {
             cell: (2.0 * (options.max_angle_deg.to_radians() * 0.5).sin()).max(1e-3),
             index: FastMap::default(),
             patches: Vec::new(),
+            dropped: Vec::new(),
         }
     }
 
@@ -403,6 +407,7 @@ impl PatchSet {
     /// Empties the set, keeping its allocation.
     pub fn clear(&mut self) {
         self.patches.clear();
+        self.dropped.clear();
         self.index.clear();
         self.last = 0;
     }
@@ -558,6 +563,13 @@ impl PatchSet {
         }
         let count = dropped.iter().filter(|d| **d).count();
         if count > 0 {
+            if self.record {
+                self.dropped.extend(
+                    (0..n)
+                        .filter(|&k| dropped[k])
+                        .map(|k| self.patches[k].clone()),
+                );
+            }
             let mut k = 0;
             self.patches.retain(|_| {
                 k += 1;
