@@ -748,13 +748,8 @@ mod tests {
     #[test]
     fn oriented_kernel_equals_the_full_search() {
         use crate::contact::orient::{Facing, oriented_axis};
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut rnd = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-        };
+        let mut rng = crate::scene::rng::Rng::new(0x2545_f491_4f6c_dd1d, 0);
+        let mut rnd = move || rng.range(-1.0, 1.0);
         let (mut hinted, mut contacts) = (0, 0);
         for round in 0..8000 {
             let a: Triangle = [0, 1, 2].map(|_| Vec3A::new(rnd(), rnd() * 0.3, rnd()));

@@ -487,13 +487,8 @@ mod tests {
     /// their cones meet.
     #[test]
     fn shortcuts_never_drop_an_accepted_direction() {
-        let mut state = 0x853c_49e6_748f_ea9bu64;
-        let mut rnd = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-        };
+        let mut rng = crate::scene::rng::Rng::new(0x853c_49e6_748f_ea9b, 0);
+        let mut rnd = move || rng.range(-1.0, 1.0);
         let cone = PairFacing::new(Facing::OneSided(1.0), Facing::OneSided(1.0)).cone_cos;
         let cos_2 = 2.0 * cone * cone - 1.0;
         let (mut accepted, mut both) = (0, 0);

@@ -42,7 +42,7 @@ mod mc;
 mod noise;
 mod parts;
 mod plant;
-mod rng;
+pub(crate) mod rng;
 mod robot;
 mod shapes;
 mod statue;
