@@ -36,4 +36,4 @@ pub use kernel::{
 };
 pub use motion::MotionBound;
 pub use orient::{Facing, PairFacing};
-pub use patch::{Patch, PatchOptions, PatchPoint, PatchSet};
+pub use patch::{Patch, PatchOptions, PatchPoint, PatchSet, Region, opposed_losers};

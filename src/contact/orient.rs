@@ -44,7 +44,11 @@
 //! When neither side touches with its face and one side touches with an
 //! inactive feature, the normal becomes that side's face normal (A's first),
 //! and the separation is measured along it: the contact is with the smooth
-//! surface the inactive feature lies in. A pair no axis is accepted for
+//! surface the inactive feature lies in. Not where that face normal would
+//! lean more than about 96° from the other side's face normal, into its
+//! solid (the other side touching with an active edge, which takes normals
+//! up to that angle): the accepted axis, within the cone of the face
+//! normal anyway, stays. A pair no axis is accepted for
 //! gives no contact: it would only push into a back face or catch on an
 //! internal edge.
 //!
@@ -411,7 +415,15 @@ pub fn oriented_axis_from(
             .max((t[0] - t[2]).length_squared())
     };
     let limit = plain - slack - 0.25 * longest2(a).min(longest2(b)).sqrt();
-    if ka != Support::Face && kb != Support::Face {
+    // The face normal replaces the accepted axis only where it does not
+    // point into the other side's solid: an active edge of B meeting A's
+    // inactive corner accepts an axis within the cone of A's normal, but
+    // A's normal itself may lean more than the 96° B allows from B's face
+    // normal; the accepted axis stays then. (A body rolling on a
+    // tessellated ground meets it with faces a few degrees apart, and the
+    // ground's normal is taken.)
+    let faces_meet = sa.out.dot(-sb.out) >= OUTWARD_MIN;
+    if ka != Support::Face && kb != Support::Face && faces_meet {
         if ka == Support::Inactive {
             o = OrientedAxis {
                 normal: sa.out,

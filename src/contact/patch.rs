@@ -513,59 +513,29 @@ impl PatchSet {
     }
 
     /// One direction per contact region: of two patches whose normals are
-    /// within [`OPPOSED_DEG`] of opposite and whose points' bounds meet (one
-    /// region pushed both ways, as two features of a deeply
-    /// overlapping pair can give), the one whose normal leans less along
-    /// `toward` (from shape 1's centre toward shape 2's, in shape 1's
-    /// frame: the direction that separates the bodies) is dropped. Returns
-    /// how many patches were dropped. Patches on the two sides of a thin
-    /// plate, or on two walls, have disjoint bounds and both stay (so does
-    /// a triangle of one shape straddling a thin part of the other, pushed
-    /// from both of its sides). The
-    /// pairs of meeting bounds are found by sweeping the patches along x.
+    /// within [`OPPOSED_DEG`] of opposite and whose points' bounds meet,
+    /// one is dropped by [`opposed_losers`] (the rule and its reasons are
+    /// there). Returns how many patches were dropped.
     pub fn drop_opposed(&mut self, toward: Vec3A) -> usize {
-        let n = self.patches.len();
-        if n < 2 {
+        if self.patches.len() < 2 {
             return 0;
         }
-        let opposed_cos = OPPOSED_DEG.to_radians().cos();
-        let mut order: Vec<u32> = (0..n as u32).collect();
-        order.sort_by(|&a, &b| {
-            let (a, b) = (&self.patches[a as usize], &self.patches[b as usize]);
-            a.bounds.min.x.total_cmp(&b.bounds.min.x)
-        });
-        let mut dropped = vec![false; n];
-        let opposed = |p: &Patch, q: &Patch| -p.normal.dot(q.normal) >= opposed_cos;
-        // The one leaning less toward shape 2 goes (ties: the later).
-        let loser = |i: usize, j: usize| {
-            let (lp, lq) = (
-                self.patches[i].normal.dot(toward),
-                self.patches[j].normal.dot(toward),
-            );
-            if lq > lp || (lq == lp && j < i) { i } else { j }
-        };
-        for (k, &i) in order.iter().enumerate() {
-            let i = i as usize;
-            for &j in &order[k + 1..] {
-                let j = j as usize;
-                let (p, q) = (&self.patches[i], &self.patches[j]);
-                if q.bounds.min.x > p.bounds.max.x {
-                    break;
-                }
-                if dropped[i] || dropped[j] {
-                    continue;
-                }
-                if !opposed(p, q) || !p.bounds.intersects(&q.bounds) {
-                    continue;
-                }
-                dropped[loser(i, j)] = true;
-            }
-        }
+        let regions: Vec<Region> = self
+            .patches
+            .iter()
+            .enumerate()
+            .map(|(k, p)| Region {
+                normal: p.normal,
+                bounds: p.bounds,
+                key: k as u64,
+            })
+            .collect();
+        let dropped = opposed_losers(&regions, toward);
         let count = dropped.iter().filter(|d| **d).count();
         if count > 0 {
             if self.record {
                 self.dropped.extend(
-                    (0..n)
+                    (0..dropped.len())
                         .filter(|&k| dropped[k])
                         .map(|k| self.patches[k].clone()),
                 );
@@ -589,6 +559,87 @@ impl PatchSet {
     pub fn pair_count(&self) -> usize {
         self.patches.iter().map(|p| p.pairs as usize).sum()
     }
+}
+
+/// One contact region as [`opposed_losers`] sees it.
+#[derive(Clone, Copy, Debug)]
+pub struct Region {
+    /// Unit normal from shape 1 to shape 2, in shape 1's frame.
+    pub normal: Vec3A,
+    /// Bounds of the region's points on shape 1.
+    pub bounds: Aabb,
+    /// Orders regions of equal standing: of two that lean equally, the
+    /// smaller key stays. Distinct keys make the answer independent of the
+    /// order the regions come in.
+    pub key: u64,
+}
+
+/// Which regions to drop so that no contact region is pushed both ways:
+/// of two regions whose normals are within [`OPPOSED_DEG`] of opposite and
+/// whose bounds meet (as two features of a deeply overlapping pair, or two
+/// triangles sharing an edge, can give), the one whose normal leans less
+/// along `toward` (from shape 1's centre toward shape 2's, in shape 1's
+/// frame: the direction that separates the bodies) is dropped. Regions on
+/// the two sides of a thin plate, or on two walls, have disjoint bounds
+/// and both stay (so does a triangle of one shape straddling a thin part
+/// of the other, pushed from both of its sides). Bounds meet when they do
+/// grown by 10⁻⁵ of their size and distance from the origin (a corner two
+/// pairs report a few float steps apart). The pairs of meeting bounds are
+/// found by sweeping the regions along x, in the order of their lower x
+/// bound and key. The patch mode applies it to patches
+/// ([`PatchSet::drop_opposed`]), the per-pair mode to its manifolds.
+pub fn opposed_losers(regions: &[Region], toward: Vec3A) -> Vec<bool> {
+    let n = regions.len();
+    let mut dropped = vec![false; n];
+    if n < 2 {
+        return dropped;
+    }
+    let opposed_cos = OPPOSED_DEG.to_radians().cos();
+    // Bounds grown by a few float steps of their coordinates: one corner
+    // reported by the pairs of two triangles around it comes out a few
+    // ulps apart, and such bounds meet.
+    let bounds: Vec<Aabb> = regions
+        .iter()
+        .map(|r| {
+            let b = r.bounds;
+            let scale = b.min.abs().max(b.max.abs()).max_element() + b.extent().length();
+            b.loosened(1e-5 * scale)
+        })
+        .collect();
+    let mut order: Vec<u32> = (0..n as u32).collect();
+    order.sort_by(|&a, &b| {
+        let (ka, kb) = (regions[a as usize].key, regions[b as usize].key);
+        let (a, b) = (&bounds[a as usize], &bounds[b as usize]);
+        a.min.x.total_cmp(&b.min.x).then(ka.cmp(&kb))
+    });
+    let opposed = |p: &Region, q: &Region| -p.normal.dot(q.normal) >= opposed_cos;
+    // The one leaning less toward shape 2 goes (ties: the larger key).
+    let loser = |i: usize, j: usize| {
+        let (p, q) = (&regions[i], &regions[j]);
+        let (lp, lq) = (p.normal.dot(toward), q.normal.dot(toward));
+        if lq > lp || (lq == lp && q.key < p.key) {
+            i
+        } else {
+            j
+        }
+    };
+    for (k, &i) in order.iter().enumerate() {
+        let i = i as usize;
+        for &j in &order[k + 1..] {
+            let j = j as usize;
+            if bounds[j].min.x > bounds[i].max.x {
+                break;
+            }
+            if dropped[i] || dropped[j] {
+                continue;
+            }
+            if !opposed(&regions[i], &regions[j]) || !bounds[i].intersects(&bounds[j]) {
+                continue;
+            }
+            dropped[loser(i, j)] = true;
+        }
+    }
+    dropped
 }
 
 #[cfg(test)]

@@ -8,14 +8,16 @@
 
 use std::ops::ControlFlow;
 
-use parry3d::math::{Pose as PPose, Real};
+use parry3d::math::{Pose as PPose, Real, Vector};
 use parry3d::query::{
     ClosestPoints, Contact, ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher,
     PersistentQueryDispatcher, QueryDispatcher, ShapeDistance, ShapeIntersection,
 };
 
 use super::cones::PairRule;
-use super::patches::{ContactCounters, ContactMode, count_pair_manifolds, patch_manifolds};
+use super::patches::{
+    ContactCounters, ContactMode, count_pair_manifolds, drop_opposed_manifolds, patch_manifolds,
+};
 use super::shape::{CbvhShape, pose_from_parry, to_parry_triangle};
 use super::workspace::ManifoldUpdate;
 use crate::contact::{Interference, PairFacing, PairKernel, PatchOptions, PatchSet};
@@ -64,6 +66,8 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
         }
         ContactMode::PerTrianglePair => {
             contact_manifolds(pos12, s1, s2, prediction, manifolds, workspace);
+            let centre = |s: &CbvhShape| Vector::from(s.local_aabb().center().to_array());
+            drop_opposed_manifolds(pos12, centre(s1), centre(s2), manifolds);
             count_pair_manifolds(counters, manifolds);
         }
     }

@@ -6,7 +6,7 @@
 
 use std::ops::ControlFlow;
 
-use parry3d::math::{Pose as PPose, Real};
+use parry3d::math::{Pose as PPose, Real, Vector};
 use parry3d::query::{
     Contact, ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher,
     PersistentQueryDispatcher, QueryDispatcher, ShapeIntersection,
@@ -16,7 +16,9 @@ use parry3d::shape::Shape;
 use parry3d::query::details::NormalConstraints;
 
 use super::cones::EdgeCone;
-use super::patches::{ContactCounters, ContactMode, count_pair_manifolds, patch_manifolds};
+use super::patches::{
+    ContactCounters, ContactMode, count_pair_manifolds, drop_opposed_manifolds, patch_manifolds,
+};
 use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle};
 use super::workspace::ManifoldUpdate;
 use crate::contact::{Facing, PatchOptions, PatchPoint, PatchSet};
@@ -83,6 +85,10 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
             contact_manifolds(
                 pos12, mesh, convex, flipped, prediction, manifolds, workspace,
             );
+            let cm = Vector::from(mesh.local_aabb().center().to_array());
+            let cc = convex.compute_local_aabb().center();
+            let (c1, c2) = if flipped { (cc, cm) } else { (cm, cc) };
+            drop_opposed_manifolds(pos12, c1, c2, manifolds);
             count_pair_manifolds(counters, manifolds);
         }
     }

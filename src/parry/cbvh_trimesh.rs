@@ -10,13 +10,15 @@
 use std::ops::ControlFlow;
 
 use parry3d::bounding_volume::BoundingVolume;
-use parry3d::math::{Pose as PPose, Real};
+use parry3d::math::{Pose as PPose, Real, Vector};
 use parry3d::query::{
     ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher, PersistentQueryDispatcher,
 };
 use parry3d::shape::{CompositeShape, Shape, TriMesh};
 
-use super::patches::{ContactCounters, ContactMode, count_pair_manifolds, patch_manifolds};
+use super::patches::{
+    ContactCounters, ContactMode, count_pair_manifolds, drop_opposed_manifolds, patch_manifolds,
+};
 use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle};
 use super::workspace::ManifoldUpdate;
 use parry3d::query::details::NormalConstraints;
@@ -60,6 +62,10 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
         }
         ContactMode::PerTrianglePair => {
             contact_manifolds(pos12, mesh, tm, flipped, prediction, manifolds, workspace);
+            let cm = Vector::from(mesh.local_aabb().center().to_array());
+            let ct = tm.local_aabb().center();
+            let (c1, c2) = if flipped { (ct, cm) } else { (cm, ct) };
+            drop_opposed_manifolds(pos12, c1, c2, manifolds);
             count_pair_manifolds(counters, manifolds);
         }
     }

@@ -27,7 +27,8 @@ use parry3d::query::{
 };
 use parry3d::shape::PackedFeatureId;
 
-use crate::contact::{MotionBound, PatchOptions, PatchPoint, PatchSet};
+use crate::contact::{MotionBound, PatchOptions, PatchPoint, PatchSet, Region, opposed_losers};
+use crate::geom::Aabb;
 
 /// How the dispatcher turns triangle pairs into contact manifolds.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -232,6 +233,55 @@ pub fn count_pair_manifolds<M, C>(
         let with_points = manifolds.iter().filter(|m| !m.points.is_empty()).count();
         c.add(0, with_points as u64, 0);
     }
+}
+
+/// The per-pair mode's guard against one region pushed both ways, the
+/// rule the patch mode applies to its patches
+/// ([`opposed_losers`](crate::contact::opposed_losers)): of two manifolds
+/// whose normals are within 25° of opposite and whose points' bounds (on
+/// shape 1) meet, as two triangles sharing an edge can give when each
+/// pair's own oriented axis leans over its own active edge, the one
+/// leaning less from shape 1's centre `c1` toward shape 2's centre `c2`
+/// (each in its shape's frame, shape 2 placed by `pos12`) loses its
+/// points. Returns how many did.
+pub fn drop_opposed_manifolds<M, C>(
+    pos12: &PPose,
+    c1: Vector,
+    c2: Vector,
+    manifolds: &mut [ContactManifold<M, C>],
+) -> usize {
+    let with_points: Vec<usize> = (0..manifolds.len())
+        .filter(|&k| !manifolds[k].points.is_empty())
+        .collect();
+    if with_points.len() < 2 {
+        return 0;
+    }
+    let regions: Vec<Region> = with_points
+        .iter()
+        .map(|&k| {
+            let m = &manifolds[k];
+            let first = Vec3A::from(m.points[0].local_p1);
+            let bounds = m.points[1..]
+                .iter()
+                .fold(Aabb::new(first, first), |mut b, p| {
+                    b.grow(Vec3A::from(p.local_p1));
+                    b
+                });
+            Region {
+                normal: Vec3A::from(m.local_n1),
+                bounds,
+                key: (u64::from(m.subshape1) << 32) | u64::from(m.subshape2),
+            }
+        })
+        .collect();
+    let toward = Vec3A::from(*pos12 * c2 - c1);
+    let dropped = opposed_losers(&regions, toward);
+    let mut count = 0;
+    for (&k, _) in with_points.iter().zip(&dropped).filter(|(_, d)| **d) {
+        manifolds[k].points.clear();
+        count += 1;
+    }
+    count
 }
 
 const CODE_MASK: u32 = (1 << 30) - 1;

@@ -197,7 +197,7 @@ fn traverse<A: NodeCursor, B: NodeCursor>(
 ) -> bool {
     let mut stack: Vec<Pending<A::Node, B::Node>> = Vec::with_capacity(128);
     stack.push((start, start_prediction));
-    let mut b_tris: Vec<(u32, Triangle, Triangle, Aabb)> = Vec::new();
+    let mut b_tris: Vec<(u32, Triangle, Triangle, Aabb, f32)> = Vec::new();
     let mut scratch = Scratch::new(&start);
     while let Some((pair, prediction)) = stack.pop() {
         let (na, _, nb, _) = pair;
@@ -207,20 +207,26 @@ fn traverse<A: NodeCursor, B: NodeCursor>(
             b_tris.clear();
             // Keys, not ids: most pairs tested here are not reported, and
             // a codec may pay for each id (see `for_each_triangle_keyed`).
+            // Each triangle of B gets the prediction of its own box, not
+            // of the leaf's: a pair is then found with the same prediction
+            // whatever tree it sits in, so every codec gives the same pairs
+            // (and contacts) under a motion bound.
             b.for_each_triangle_keyed(&nb, |j, tj| {
                 let moved = tj.map(|p| b_to_a.transform_point(p));
-                b_tris.push((j, *tj, moved, Aabb::of_triangle(&moved)));
+                let own = Aabb::of_triangle(&moved);
+                let p = bound.within(&own).min(prediction);
+                b_tris.push((j, *tj, moved, own.loosened(p), p));
             });
             let mut stop = false;
             a.for_each_triangle_keyed(&na, |i, ti| {
                 if stop {
                     return;
                 }
-                let bi = Aabb::of_triangle(ti).loosened(prediction);
-                for (j, tj, moved, bj) in &b_tris {
+                let bi = Aabb::of_triangle(ti);
+                for (j, tj, moved, bj, p) in &b_tris {
                     stats.primitive_tests += 1;
                     if bi.intersects(bj)
-                        && f(a.id_of_key(i), ti, b.id_of_key(*j), tj, moved, prediction).is_break()
+                        && f(a.id_of_key(i), ti, b.id_of_key(*j), tj, moved, *p).is_break()
                     {
                         stop = true;
                         return;

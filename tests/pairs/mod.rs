@@ -9,6 +9,7 @@ use cbvh::Mesh;
 use cbvh::build::BuildOptions;
 use cbvh::parry::cbvh_cbvh::pair_facing;
 use cbvh::parry::cones::{EdgeCone, PairRule};
+use cbvh::parry::patches::drop_opposed_manifolds;
 use cbvh::parry::{CbvhShape, ContactMode, Dispatcher, parry_trimesh, pose_from_parry};
 use cbvh::scene::{Kind, generate};
 use glam::{DVec3, Vec3A};
@@ -173,6 +174,9 @@ pub struct Tally {
     /// Pairs with parry's unconstrained points that cbvh's constraints
     /// (back faces, internal edges) leave without any.
     pub constrained_away: usize,
+    /// Manifolds of the reference that the guard against one region pushed
+    /// both ways empties (`cbvh::parry::patches::drop_opposed_manifolds`).
+    pub opposed_dropped: usize,
 }
 
 /// A contact point: both local points, the manifold normal, the distance.
@@ -266,7 +270,10 @@ fn close(a: Vector, b: Vector, tol: f32) -> bool {
 /// and gives the rule the right triangles, flags, frames and facing; the
 /// rule itself is checked against mechanics in `physics.rs` and
 /// `orientation.rs`. How many pairs parry reports that the constraints
-/// drop (back faces, internal edges) is counted in the tally.
+/// drop (back faces, internal edges) is counted in the tally. Over all
+/// pairs, cbvh then empties one of two manifolds that push one region
+/// both ways (`drop_opposed_manifolds`); the reference goes through the
+/// same guard.
 ///
 /// parry's GJK also judges some triangle pairs touching (distance 0,
 /// contact points with a zero normal) that are millimetres apart; a pair
@@ -287,23 +294,38 @@ fn check_manifolds(case: &Case, strict: bool, tally: &mut Tally) {
             p
         };
         let (s1, s2) = (case.s1, case.s2);
-        let want = kept(manifolds_of(
+        let want = manifolds_of(
             &DefaultQueryDispatcher,
             case,
             s1.parry(),
             s2.parry(),
             prediction,
-        ));
-        let got = kept(manifolds_of(&chain, case, s1.cbvh(), s2.cbvh(), prediction));
+        );
+        let got = manifolds_of(&chain, case, s1.cbvh(), s2.cbvh(), prediction);
+        // The reference of every pair either side finds, then the guard
+        // against one region pushed both ways over all of them, as cbvh
+        // applies it to its manifolds.
+        let mut reference: Vec<ContactManifold<(), ()>> = want
+            .keys()
+            .chain(got.keys())
+            .collect::<std::collections::BTreeSet<_>>()
+            .into_iter()
+            .map(|k| {
+                let mut m = constrained_manifold(case, *k, prediction);
+                m.subshape1 = k.0;
+                m.subshape2 = k.1;
+                m
+            })
+            .collect();
+        tally.opposed_dropped +=
+            drop_opposed_manifolds(&case.pos12, centre(s1), centre(s2), &mut reference);
+        let exact_all = kept(points_of(&reference));
+        let (want, got) = (kept(want), kept(got));
         let at = format!("{}, prediction {prediction}", case.at());
         for k in want.keys().chain(got.keys()) {
             let (w, g) = (want.get(k), got.get(k));
             let (w, g) = (w.map_or(&[][..], |w| w), g.map_or(&[][..], |g| g));
-            let mut m = constrained_manifold(case, *k, prediction);
-            m.subshape1 = k.0;
-            m.subshape2 = k.1;
-            let exact = kept(points_of(&[m]));
-            let exact = exact.get(k).map_or(&[][..], |e| e);
+            let exact = exact_all.get(k).map_or(&[][..], |e| e);
             if same_points(exact, g, tol) {
                 if g.is_empty() && !w.is_empty() {
                     tally.constrained_away += 1;
