@@ -142,10 +142,11 @@ struct Side<'a> {
     active: u8,
 }
 
-impl<'a> Side<'a> {
-    fn new(t: &'a Triangle, flags: u8, facing: Facing) -> Option<Self> {
-        let raw = (t[1] - t[0]).cross(t[2] - t[0]).try_normalize()?;
-        let sign = match facing {
+impl Facing {
+    /// The side triangle `t` (unit winding normal `raw`) faces: `1.0` for
+    /// the side of `raw`, `-1.0` for the other.
+    pub fn sign(&self, t: &Triangle, raw: Vec3A) -> f32 {
+        match *self {
             Facing::OneSided(s) => s,
             Facing::TwoSided { toward } => {
                 let centroid = (t[0] + t[1] + t[2]) * (1.0 / 3.0);
@@ -155,7 +156,14 @@ impl<'a> Side<'a> {
                     1.0
                 }
             }
-        };
+        }
+    }
+}
+
+impl<'a> Side<'a> {
+    fn new(t: &'a Triangle, flags: u8, facing: Facing) -> Option<Self> {
+        let raw = (t[1] - t[0]).cross(t[2] - t[0]).try_normalize()?;
+        let sign = facing.sign(t, raw);
         Some(Self {
             t,
             raw,

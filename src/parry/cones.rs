@@ -39,13 +39,7 @@ impl EdgeCone {
     /// `None` for a triangle without area.
     pub fn new(t: &Triangle, flags: u8, facing: Facing) -> Option<Self> {
         let raw = (t[1] - t[0]).cross(t[2] - t[0]).try_normalize()?;
-        let sign = match facing {
-            Facing::OneSided(s) => s,
-            Facing::TwoSided { toward } => {
-                let c = (t[0] + t[1] + t[2]) * (1.0 / 3.0);
-                if raw.dot(toward - c) < 0.0 { -1.0 } else { 1.0 }
-            }
-        };
+        let sign = facing.sign(t, raw);
         let m = [0, 1, 2].map(|k| (t[(k + 1) % 3] - t[k]).cross(raw).normalize_or_zero());
         Some(Self {
             out: raw * sign,
