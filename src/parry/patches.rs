@@ -260,13 +260,10 @@ pub fn drop_opposed_manifolds<M, C>(
         .iter()
         .map(|&k| {
             let m = &manifolds[k];
-            let first = Vec3A::from(m.points[0].local_p1);
-            let bounds = m.points[1..]
-                .iter()
-                .fold(Aabb::new(first, first), |mut b, p| {
-                    b.grow(Vec3A::from(p.local_p1));
-                    b
-                });
+            let mut bounds = Aabb::EMPTY;
+            for p in &m.points {
+                bounds.grow(Vec3A::from(p.local_p1));
+            }
             Region {
                 normal: Vec3A::from(m.local_n1),
                 bounds,
