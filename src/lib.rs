@@ -17,7 +17,7 @@
 //! - [`sim`]: the rapier harnesses: the drop test behind the sims, and
 //!   scenes with analytic answers that check contacts in motion.
 //! - [`render`]: a Whitted-style ray tracer over any cursor (and parry's `TriMesh`).
-//! - [`plot`]: PNG line plots for the sims.
+//! - `plot` (feature `app`): PNG line plots for the sims.
 //! - [`geom`]: the small geometry types (glam-based) shared by all of them.
 //! - [`logger`]: a minimal stderr logger for the binaries (the library logs
 //!   warnings through the `log` crate).
@@ -36,6 +36,7 @@ mod hash;
 pub mod logger;
 pub mod mesh;
 pub mod parry;
+#[cfg(feature = "app")]
 pub mod plot;
 pub mod query;
 pub mod render;

@@ -39,6 +39,7 @@ pub enum RenderError {
         source: std::io::Error,
     },
     /// The PNG encoder failed.
+    #[cfg(feature = "image-files")]
     #[error("cannot encode {path} as PNG: {source}")]
     Png {
         /// The file.
@@ -47,6 +48,7 @@ pub enum RenderError {
         source: png::EncodingError,
     },
     /// The GIF encoder failed.
+    #[cfg(feature = "image-files")]
     #[error("cannot encode {path} as GIF: {source}")]
     Gif {
         /// The file.

@@ -1,12 +1,17 @@
-//! 8-bit sRGB images and their output: PNG, and for turntables animated
-//! PNG (APNG, lossless) or GIF (256 colours per frame, NeuQuant).
+//! 8-bit sRGB images and, with the `image-files` feature, their output:
+//! PNG, and for turntables animated PNG (APNG, lossless) or GIF (256
+//! colours per frame, NeuQuant).
 
+#[cfg(feature = "image-files")]
 use std::fs::File;
+#[cfg(feature = "image-files")]
 use std::io::BufWriter;
+#[cfg(feature = "image-files")]
 use std::path::Path;
 
 use glam::Vec3A;
 
+#[cfg(feature = "image-files")]
 use super::error::RenderError;
 
 /// An RGB image, 8 bits per channel (sRGB), rows top to bottom.
@@ -109,18 +114,21 @@ impl Image {
         sum as f64 / n.max(1) as f64
     }
 
-    /// Writes the image as an 8-bit RGB PNG.
+    /// Writes the image as an 8-bit RGB PNG (feature `image-files`).
+    #[cfg(feature = "image-files")]
     pub fn save_png(&self, path: impl AsRef<Path>) -> Result<(), RenderError> {
         save_frames(std::slice::from_ref(self), path.as_ref(), None)
     }
 }
 
+#[cfg(feature = "image-files")]
 /// Writes `frames` as an animated PNG looping forever at `fps` frames per
 /// second (viewers without APNG support show the first frame).
 pub fn save_apng(frames: &[Image], path: impl AsRef<Path>, fps: u16) -> Result<(), RenderError> {
     save_frames(frames, path.as_ref(), Some(fps.max(1)))
 }
 
+#[cfg(feature = "image-files")]
 /// The size shared by all `frames`, checked non-zero.
 fn frame_size(frames: &[Image]) -> Result<(u32, u32), RenderError> {
     let first = frames.first().ok_or(RenderError::NoFrames)?;
@@ -145,6 +153,7 @@ fn frame_size(frames: &[Image]) -> Result<(u32, u32), RenderError> {
     Ok(want)
 }
 
+#[cfg(feature = "image-files")]
 fn create(path: &Path) -> Result<BufWriter<File>, RenderError> {
     File::create(path)
         .map(BufWriter::new)
@@ -154,6 +163,7 @@ fn create(path: &Path) -> Result<BufWriter<File>, RenderError> {
         })
 }
 
+#[cfg(feature = "image-files")]
 /// Writes `frames` as a GIF looping forever at about `fps` frames per
 /// second (GIF delays are whole hundredths of a second, at least 2), each
 /// frame quantised to its own 256-colour palette.
@@ -182,6 +192,7 @@ pub fn save_gif(frames: &[Image], path: impl AsRef<Path>, fps: u16) -> Result<()
     Ok(())
 }
 
+#[cfg(feature = "image-files")]
 /// Writes an animation by the file's extension: `.gif` as GIF
 /// ([`save_gif`]), anything else as animated PNG ([`save_apng`]).
 pub fn save_animation(
@@ -200,6 +211,7 @@ pub fn save_animation(
     }
 }
 
+#[cfg(feature = "image-files")]
 fn save_frames(frames: &[Image], path: &Path, fps: Option<u16>) -> Result<(), RenderError> {
     let want = frame_size(frames)?;
     let png_err = |source| RenderError::Png {

@@ -18,8 +18,8 @@
 //! - [`trace`]: the render loop, parallel over tiles with rayon and
 //!   deterministic (the image does not depend on the number of threads),
 //!   turntables, and [`render_meshes`] for the drop-test sims.
-//! - [`image`]: the 8-bit sRGB [`Image`]; PNG output, and animated PNG or
-//!   GIF for turntables.
+//! - [`image`]: the 8-bit sRGB [`Image`]; with the `image-files` feature,
+//!   PNG output, and animated PNG or GIF for turntables.
 //!
 //! Shading normals are area-weighted vertex normals, computed once per
 //! mesh, interpolated with the hit's barycentrics; a triangle touching a
@@ -27,10 +27,12 @@
 //! indices, is shaded with its face normal.
 //!
 //! ```no_run
+//! # #[cfg(feature = "image-files")] {
 //! use cbvh::render::{RenderOptions, render_meshes};
 //! # let mesh = cbvh::Mesh::default();
 //! let image = render_meshes(&[(&mesh, cbvh::geom::Pose::IDENTITY)], &RenderOptions::default())?;
 //! image.save_png("frame.png")?;
+//! # }
 //! # Ok::<(), cbvh::render::RenderError>(())
 //! ```
 
@@ -44,7 +46,9 @@ pub mod trace;
 
 pub use camera::Camera;
 pub use error::RenderError;
-pub use image::{Image, save_animation, save_apng, save_gif};
+pub use image::Image;
+#[cfg(feature = "image-files")]
+pub use image::{save_animation, save_apng, save_gif};
 pub use scene::{Instance, Material, Scene, SceneHit, Surface, VertexNormals};
 pub use shade::{Light, RayCounts, Shading, auto_lights, background};
 pub use target::{CursorTarget, RayTarget, any_target};
