@@ -366,6 +366,31 @@ fn truncated_binary_ply() {
 }
 
 #[test]
+fn binary_stl_with_data_beyond_its_count_is_an_error() {
+    let mut bytes = stl_binary();
+    bytes[80..84].copy_from_slice(&1u32.to_le_bytes());
+    let err = load_bytes(&bytes, Format::Stl, Path::new("short.stl")).unwrap_err();
+    assert!(
+        matches!(
+            &err,
+            MeshError::Malformed {
+                place: Place::Byte(134),
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    assert!(err.to_string().contains("counts 1 triangle(s)"), "{err}");
+    // The file as written, with its count right, still loads.
+    assert_eq!(
+        load_bytes(&stl_binary(), Format::Stl, Path::new("ok.stl"))
+            .unwrap()
+            .triangle_count(),
+        2
+    );
+}
+
+#[test]
 fn truncated_binary_stl() {
     let bytes = stl_binary();
     let cut = &bytes[..bytes.len() - 10];

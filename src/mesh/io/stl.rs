@@ -6,7 +6,9 @@
 //! with `solid`, so the keyword alone decides nothing). Corners with bitwise
 //! equal positions (`-0.0` counted as `0.0`) become one vertex, so the mesh
 //! is indexed. ASCII loops with more than three vertices are
-//! fan-triangulated. Normals and attribute bytes are ignored.
+//! fan-triangulated. Normals and attribute bytes are ignored. A binary
+//! file with data after the triangles its header counts is an error (the
+//! count is short, and the triangles after it would be lost).
 
 use std::collections::hash_map::Entry;
 use std::io::{BufRead, Read};
@@ -107,6 +109,17 @@ fn read_binary<R: BufRead>(reader: R, src: &Src) -> Result<Mesh, MeshError> {
             *corner = welder.index([f(o), f(o + 4), f(o + 8)], place, src)?;
         }
         triangles.push(tri);
+    }
+    // A count short of the data would drop the triangles after it.
+    let end = bytes.offset();
+    if bytes.fill(&mut [0u8]).map_err(|e| src.io(e))? {
+        return Err(src.malformed(
+            Place::Byte(end),
+            format!(
+                "the header counts {n} triangle(s), and data goes on after them (a binary \
+                 STL is 84 + 50 × count = {end} bytes long)"
+            ),
+        ));
     }
     Ok(Mesh::new(welder.vertices, triangles))
 }
