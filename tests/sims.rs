@@ -193,6 +193,26 @@ fn sims_reject_bad_flags_with_a_message() {
     );
     assert!(!ok);
     assert!(stderr.contains("--threads must be at least 1"), "{stderr}");
+    // Bounded before any work: neither a capacity overflow nor a pool of
+    // a hundred thousand threads.
+    for (flag, value) in [("--steps", "18446744073709551615"), ("--threads", "100000")] {
+        let (ok, stderr) = run(
+            env!("CARGO_BIN_EXE_lucy-on-turbine"),
+            &[
+                "--statue-tris",
+                "1000",
+                "--turbine-tris",
+                "1000",
+                flag,
+                value,
+            ],
+        );
+        assert!(!ok, "{flag} {value} accepted");
+        assert!(
+            stderr.contains(&format!("{flag} {value} is more than")),
+            "{stderr}"
+        );
+    }
     let (ok, stderr) = run(
         env!("CARGO_BIN_EXE_lucy-on-turbine"),
         &[

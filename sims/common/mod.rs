@@ -137,6 +137,9 @@ impl std::fmt::Display for Offset {
     }
 }
 
+/// The most steps a run takes: its per-step timings and samples are kept.
+pub const MAX_STEPS: usize = 1_000_000;
+
 /// Checks every flag before anything runs, so that a bad value never ends
 /// a run half-way (or, worse, runs and reports nonsense): steps, width
 /// fraction, gap and offset finite and in range, the cluster size, the
@@ -145,8 +148,22 @@ pub fn validate(args: &SimArgs) -> Result<(), String> {
     if args.steps == 0 {
         return Err("--steps must be at least 1".into());
     }
+    if args.steps > MAX_STEPS {
+        return Err(format!(
+            "--steps {} is more than {MAX_STEPS} (4.6 hours at 60 Hz, each step's timings kept)",
+            args.steps
+        ));
+    }
     if args.threads == Some(0) {
         return Err("--threads must be at least 1".into());
+    }
+    if let Some(t) = args.threads {
+        let machine = std::thread::available_parallelism().map_or(1, |n| n.get());
+        if t > 4 * machine {
+            return Err(format!(
+                "--threads {t} is more than 4 × the {machine} hardware threads of this machine"
+            ));
+        }
     }
     if args.shapes.is_empty() {
         return Err("--shapes names no shape".into());
