@@ -196,17 +196,9 @@ fn sims_reject_bad_flags_with_a_message() {
     // Bounded before any work: neither a capacity overflow nor a pool of
     // a hundred thousand threads.
     for (flag, value) in [("--steps", "18446744073709551615"), ("--threads", "100000")] {
-        let (ok, stderr) = run(
-            env!("CARGO_BIN_EXE_lucy-on-turbine"),
-            &[
-                "--statue-tris",
-                "1000",
-                "--turbine-tris",
-                "1000",
-                flag,
-                value,
-            ],
-        );
+        let small = ["--statue-tris", "1000", "--turbine-tris", "1000"];
+        let args = [&small[..], &[flag, value]].concat();
+        let (ok, stderr) = run(env!("CARGO_BIN_EXE_lucy-on-turbine"), &args);
         assert!(!ok, "{flag} {value} accepted");
         assert!(
             stderr.contains(&format!("{flag} {value} is more than")),
