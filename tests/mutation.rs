@@ -4,6 +4,10 @@
 //! or in the original's answers (or, with checksums recomputed, in a
 //! consistent different file); never a panic or a hang. The long run is
 //! `cargo run --release --example mutate`.
+//!
+//! A test binary of its own, outside `tests/suite`: it installs a global
+//! allocator that records the largest allocation in the process, which the
+//! suite's other tests, running beside it, would inflate.
 
 #[path = "../examples/support/mutate.rs"]
 mod mutate;

@@ -57,7 +57,7 @@
 //!    [`with_codec!`](crate::with_codec); the compiler points at the arm if
 //!    it is missing. The CLI's `--codec`, the sims' `--shapes`, the
 //!    renderer, `cbvh info` and the parry shape then know the codec.
-//! 4. One line in the shared codec test suite (`tests/codec_suite.rs`),
+//! 4. One line in the shared codec test suite (`tests/suite/codec_suite.rs`),
 //!    which runs every test on every codec.
 //! 5. Its name and paper in the README's list of codecs.
 

@@ -28,7 +28,7 @@
 //! add as [`MultiLeafNode::child_box`]; triangles go through the same
 //! [`ray_triangle`] and the same tie rule ([`keep_closer`]). The order in
 //! which nodes are visited may differ from the generic traversal's; the
-//! tie rule makes the closest hit independent of it. `tests/clbvh.rs`
+//! tie rule makes the closest hit independent of it. `tests/suite/clbvh.rs`
 //! checks both hit for hit (distance, triangle and barycentrics, bit for
 //! bit) on random and camera rays over several meshes.
 //!

@@ -15,7 +15,7 @@
 //! are the generic traversal's, so the hit is the same, bit for bit. The
 //! order matters on degenerate triangles (a collinear grid): there the
 //! first of two traversal orders to reach a hit can cull the other's.
-//! `tests/hcc.rs` and `tests/hcc_ooc.rs` (paged trees) check both against
+//! `tests/suite/hcc.rs` and `tests/suite/hcc_ooc.rs` (paged trees) check both against
 //! each other.
 //!
 //! `peers` (1 M statue, 512² camera rays, one thread, AMD EPYC): 3.61 M

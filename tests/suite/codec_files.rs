@@ -3,7 +3,7 @@
 //! same answers and mass properties as the codec built from the mesh; and
 //! the CLI and sims using such files as a new user would.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 use std::process::Command;

@@ -3,7 +3,7 @@
 //! never panics or hangs. (The shared suite in `codec_suite.rs` runs the
 //! queries on the `hcc-ooc` codec.)
 
-mod common;
+use crate::common;
 
 use cbvh::Mesh;
 use cbvh::build::{BuildOptions, CanonicalBvh, Layout, build};

@@ -5,7 +5,7 @@
 //! triangle tests overflow are rejected with the supported range instead of
 //! rendering an empty image.
 
-mod common;
+use crate::common;
 
 use cbvh::build::{BuildOptions, build};
 use cbvh::codec::racbvh::{RacBvh, RacOptions};

@@ -6,7 +6,7 @@
 //! the header, whose length changed); the section is small; and a shape
 //! takes the codec's flags rather than computing them.
 
-mod common;
+use crate::common;
 
 use cbvh::build::{BuildOptions, build};
 use cbvh::codec::common::edges;

@@ -1,7 +1,7 @@
 //! i-HCCMesh (one triangle a leaf, and multi-triangle leaves) against the
 //! canonical tree and brute force, with the shared suite in `common`.
 
-mod common;
+use crate::common;
 
 use cbvh::Mesh;
 use cbvh::build::{BuildOptions, CanonicalBvh, Layout, build};

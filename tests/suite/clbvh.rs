@@ -3,7 +3,7 @@
 //! conservative-box invariant on random, generated, flat, collinear and
 //! far-from-origin meshes.
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeSet;
 use std::ops::ControlFlow;

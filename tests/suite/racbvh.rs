@@ -3,7 +3,7 @@
 //! What every codec must do (brute-force parity, conservative boxes, edge
 //! cases, files, corruption) is in the shared suite, `codec_suite.rs`.
 
-mod common;
+use crate::common;
 
 use cbvh::build::{BuildOptions, CanonicalBvh, Layout, build};
 use cbvh::codec::ByteSize;

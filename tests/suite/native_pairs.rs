@@ -13,7 +13,7 @@
 //! `pos12` where it needs its inverse (or the other way round) finds the
 //! wrong triangles in one of the two orders.
 
-mod pairs;
+use crate::pairs;
 
 use cbvh::Mesh;
 use cbvh::scene::{Kind, generate};

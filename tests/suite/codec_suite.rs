@@ -16,7 +16,7 @@
 //! codec's own API (RACBVH's cache, random access, options) stay in that
 //! codec's test file.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 
