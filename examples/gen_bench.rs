@@ -59,7 +59,7 @@ fn signed_volume(m: &Mesh) -> f64 {
 }
 
 fn write_off(m: &Mesh, path: &str) -> std::io::Result<()> {
-    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+    let mut w = cbvh::atomic::AtomicFile::create(std::path::Path::new(path))?;
     writeln!(w, "OFF\n{} {} 0", m.vertices.len(), m.triangles.len())?;
     for v in &m.vertices {
         writeln!(w, "{} {} {}", v[0], v[1], v[2])?;
@@ -67,7 +67,7 @@ fn write_off(m: &Mesh, path: &str) -> std::io::Result<()> {
     for t in &m.triangles {
         writeln!(w, "3 {} {} {}", t[0], t[1], t[2])?;
     }
-    Ok(())
+    w.commit()
 }
 
 fn main() {

@@ -150,7 +150,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         t0.elapsed().as_secs_f64()
     );
     if let Some(path) = &args.json {
-        std::fs::write(path, serde_json::to_string_pretty(&reports)?)?;
+        cbvh::atomic::atomic_write(
+            path.as_ref(),
+            serde_json::to_string_pretty(&reports)?.as_bytes(),
+        )?;
     }
     Ok(())
 }

@@ -17,8 +17,10 @@
 //! - [`sim`]: the rapier harnesses: the drop test behind the sims, and
 //!   scenes with analytic answers that check contacts in motion.
 //! - [`render`]: a Whitted-style ray tracer over any cursor (and parry's `TriMesh`).
-//! - `plot` (feature `app`): PNG line plots for the sims.
+//! - `app` (feature `app`): the command-line front end of every binary
+//!   (the `cbvh` command and the drop tests), with their plots.
 //! - [`geom`]: the small geometry types (glam-based) shared by all of them.
+//! - [`atomic`]: atomic file saves, for every file the crate writes.
 //! - [`logger`]: a minimal stderr logger for the binaries (the library logs
 //!   warnings through the `log` crate).
 //!
@@ -27,6 +29,9 @@
 //! geometry types (or parry's glam re-exports), and [`codec`] knows neither.
 #![warn(missing_docs)]
 
+#[cfg(feature = "app")]
+pub mod app;
+pub mod atomic;
 pub mod build;
 pub mod codec;
 pub mod contact;
@@ -36,8 +41,6 @@ mod hash;
 pub mod logger;
 pub mod mesh;
 pub mod parry;
-#[cfg(feature = "app")]
-pub mod plot;
 pub mod query;
 pub mod render;
 pub mod sim;

@@ -27,6 +27,7 @@ use super::hcc::HccBvh;
 use super::hcc::ooc::HccOocBvh;
 use super::plain::PlainBvh;
 use super::racbvh::RacBvh;
+use super::settings::{Settings, SettingsError};
 use crate::build::CanonicalBvh;
 use crate::contact::EdgeFlags;
 use crate::cursor::NodeCursor;
@@ -233,6 +234,18 @@ impl CodecKind {
         CodecKind::of_magic(&head)
     }
 
+    /// The keys of the codec's own settings ([`Codec::SETTINGS`]).
+    pub fn settings(self) -> &'static [&'static str] {
+        struct Keys;
+        impl KindVisitor for Keys {
+            type Output = &'static [&'static str];
+            fn visit<C: Registered>(self) -> &'static [&'static str] {
+                C::SETTINGS
+            }
+        }
+        self.visit(Keys)
+    }
+
     /// Whether the codec decodes into a cache under a byte budget
     /// (see [`Codec::cache_budget`]).
     pub fn has_cache(self) -> bool {
@@ -267,6 +280,37 @@ impl std::str::FromStr for CodecKind {
 }
 
 impl AnyOptions {
+    /// The options of the codecs `kinds` from a front end's settings, each
+    /// made and checked by its codec ([`Codec::options_from`]); the other
+    /// codecs keep their defaults (a `--vertex-bits 4` for hcc is no error
+    /// because RACBVH could not take it). A setting naming no codec is an
+    /// error.
+    pub fn from_settings(settings: &Settings, kinds: &[CodecKind]) -> Result<Self, SettingsError> {
+        if let Some((codec, key)) = settings
+            .named_codecs()
+            .find(|(c, _)| c.parse::<CodecKind>().is_err())
+        {
+            return Err(SettingsError::UnknownCodec {
+                codec: codec.into(),
+                key: key.into(),
+                known: CodecKind::names(", "),
+            });
+        }
+        struct Make<'a>(&'a mut AnyOptions, &'a Settings);
+        impl KindVisitor for Make<'_> {
+            type Output = Result<(), SettingsError>;
+            fn visit<C: Registered>(self) -> Result<(), SettingsError> {
+                *C::options_mut(self.0) = C::options_from(self.1)?;
+                Ok(())
+            }
+        }
+        let mut options = AnyOptions::default();
+        for k in kinds {
+            k.visit(Make(&mut options, settings))?;
+        }
+        Ok(options)
+    }
+
     /// These options with every cached codec's cache budget set to `bytes`
     /// (`usize::MAX`: a cache that holds the whole decoded tree).
     pub fn with_cache_budget(mut self, bytes: usize) -> Self {

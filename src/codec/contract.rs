@@ -7,6 +7,7 @@ use super::ByteSize;
 use super::any::CodecKind;
 use super::common::MassProps;
 use super::common::page_cache::CacheStats;
+use super::settings::{Settings, SettingsError};
 use crate::build::CanonicalBvh;
 use crate::contact::EdgeFlags;
 use crate::cursor::NodeCursor;
@@ -34,6 +35,15 @@ pub trait Codec: NodeCursor + ByteSize + Send + Sync + Sized + 'static {
 
     /// What can go wrong encoding, opening, verifying or saving.
     type Error: std::error::Error + Send + Sync + 'static;
+
+    /// The codec's options from a front end's [`Settings`]: the common
+    /// settings it uses and its own `CODEC.KEY=VALUE` keys (listed on its
+    /// options type). An unknown key, a bad value or options the codec
+    /// would reject are errors naming them, before any work.
+    fn options_from(settings: &Settings) -> Result<Self::Options, SettingsError>;
+
+    /// The keys of the codec's own settings (for help texts).
+    const SETTINGS: &'static [&'static str];
 
     /// Encodes `bvh`, built over `mesh`. A value that does not fit the
     /// codec's layout is an error, never a truncation.

@@ -52,14 +52,19 @@
 //!    (the paper's choices and ours).
 //! 2. `impl Codec` in `codec/<name>/contract.rs`, thin: delegating to the
 //!    codec's own methods.
-//! 3. One entry in the `registry!` invocation in [`any`] (variant, type,
+//! 3. Its options from a front end's [`Settings`] (`Codec::options_from`
+//!    and `Codec::SETTINGS`, next to its options type): the common settings
+//!    it uses (leaf size, vertex bits) and its own `CODEC.KEY=VALUE` keys,
+//!    checked there. `cbvh build`, the drop tests and their `--set` then
+//!    take them; no front-end file names a codec's options.
+//! 4. One entry in the `registry!` invocation in [`any`] (variant, type,
 //!    options field, name, summary) and one arm in
 //!    [`with_codec!`](crate::with_codec); the compiler points at the arm if
 //!    it is missing. The CLI's `--codec`, the sims' `--shapes`, the
 //!    renderer, `cbvh info` and the parry shape then know the codec.
-//! 4. One line in the shared codec test suite (`tests/suite/codec_suite.rs`),
+//! 5. One line in the shared codec test suite (`tests/suite/codec_suite.rs`),
 //!    which runs every test on every codec.
-//! 5. Its name and paper in the README's list of codecs.
+//! 6. Its name and paper in the README's list of codecs.
 
 pub mod any;
 pub mod clbvh;
@@ -68,10 +73,12 @@ mod contract;
 pub mod hcc;
 pub mod plain;
 pub mod racbvh;
+pub mod settings;
 
 pub use any::{AnyCodec, AnyOptions, CodecError, CodecFileError, CodecKind, UnknownCodec};
 pub use common::page_cache::CacheStats;
 pub use contract::{Codec, OpenOptions};
+pub use settings::{Settings, SettingsError};
 
 /// Memory of a stored structure, by component.
 pub trait ByteSize {

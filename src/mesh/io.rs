@@ -15,7 +15,7 @@ mod stl;
 
 use std::fmt;
 use std::fs::File;
-use std::io::{self, BufRead, BufReader, BufWriter, Write};
+use std::io::{self, BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 
 use super::{Mesh, MeshError, Place};
@@ -179,8 +179,8 @@ fn read<R: BufRead>(
 }
 
 /// Writes `mesh` to `path`: binary little-endian PLY for `.ply`, OBJ for
-/// `.obj` (extension case-insensitive). The mesh is written as it is,
-/// without validation.
+/// `.obj` (extension case-insensitive), atomically ([`crate::atomic`]).
+/// The mesh is written as it is, without validation.
 ///
 /// # Errors
 /// [`MeshError::UnsupportedWrite`] for any other extension,
@@ -201,14 +201,15 @@ pub fn save(mesh: &Mesh, path: impl AsRef<Path>) -> Result<(), MeshError> {
         path: path.to_path_buf(),
         source,
     };
-    let file = File::create(path).map_err(io_err)?;
-    let mut out = BufWriter::with_capacity(1 << 20, file);
+    // Atomic: a reader never sees half a mesh, and one that has the old
+    // file mapped keeps its pages.
+    let mut out = crate::atomic::AtomicFile::create(path).map_err(io_err)?;
     match format {
         Format::Ply => ply::write(mesh, &mut out),
         _ => obj::write(mesh, &mut out),
     }
     .map_err(io_err)?;
-    out.flush().map_err(io_err)
+    out.commit().map_err(io_err)
 }
 
 /// The extension of `path` as a string (empty when there is none).

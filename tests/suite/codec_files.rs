@@ -308,6 +308,110 @@ fn cli_render_reports_the_decode_cache_of_an_out_of_core_file() {
 /// records `M`, and a larger `M` makes fewer, fuller multi-leaf nodes and
 /// a different file) and every `M` stays lossless: the files answer rays
 /// exactly as plain over the same mesh.
+/// Codec settings reach the codec through `--set CODEC.KEY=VALUE` and the
+/// shorthand flags, the codec checks them before any work, and `--help`
+/// lists every codec's keys from the registry.
+#[test]
+fn cli_codec_settings_come_from_set_and_the_shorthands() {
+    let build = |extra: &[&str]| {
+        let mut args = vec![
+            "build", "--gen", "robot", "--tris", "2000", "--codec", "racbvh", "--json",
+        ];
+        args.extend_from_slice(extra);
+        cbvh(&args)
+    };
+    let nodes = |out: &str| {
+        let v: serde_json::Value = serde_json::from_str(out).unwrap();
+        v["cluster_nodes"].as_u64().unwrap()
+    };
+    let (ok, out, err) = build(&["--set", "racbvh.cluster-nodes=1024"]);
+    assert!(ok, "{err}");
+    assert_eq!(nodes(&out), 1024);
+    // A later setting wins over a shorthand.
+    let (ok, out, err) = build(&[
+        "--cluster-nodes",
+        "512",
+        "--set",
+        "racbvh.cluster-nodes=256",
+    ]);
+    assert!(ok, "{err}");
+    assert_eq!(nodes(&out), 256);
+    let (ok, out, err) = build(&["--cluster-nodes", "512"]);
+    assert!(ok, "{err}");
+    assert_eq!(nodes(&out), 512);
+    for (extra, want) in [
+        (&["--set", "racbvh.cluster-nodes=100"][..], "power of two"),
+        (
+            &["--set", "racbvh.cluster-size=1024"],
+            "racbvh has no setting",
+        ),
+        (&["--set", "zip.level=9"], "no codec named \"zip\""),
+        (&["--set", "racbvh"], "is not CODEC.KEY=VALUE"),
+    ] {
+        let (ok, _, err) = build(extra);
+        assert!(!ok && err.contains(want), "{extra:?}: {err}");
+        assert!(!err.contains("generating"), "{extra:?} ran first: {err}");
+    }
+    // Settings of a codec not being built are not its business: hcc takes
+    // 4-bit vertices although RACBVH could not.
+    let (ok, _, err) = cbvh(&[
+        "build",
+        "--gen",
+        "robot",
+        "--tris",
+        "2000",
+        "--codec",
+        "hcc",
+        "--vertex-bits",
+        "4",
+    ]);
+    assert!(ok, "{err}");
+    let (ok, help, err) = cbvh(&["build", "--help"]);
+    assert!(ok, "{err}");
+    assert!(
+        help.contains("racbvh: cluster-nodes, bits, tri-delta-threshold")
+            && help.contains("clbvh: leaf-size, multi-leaf"),
+        "{help}"
+    );
+}
+
+/// The drop tests are subcommands of `cbvh` too, with the sims' flags.
+#[test]
+fn cbvh_runs_the_drop_tests_as_subcommands() {
+    let (ok, help, err) = cbvh(&["--help"]);
+    assert!(ok, "{err}");
+    assert!(
+        help.contains("lucy-on-turbine") && help.contains("robot-in-plant"),
+        "{help}"
+    );
+    let json = temp("cbvh-drop.json");
+    let (ok, _, err) = cbvh(&[
+        "lucy-on-turbine",
+        "--statue-tris",
+        "1000",
+        "--turbine-tris",
+        "1000",
+        "--steps",
+        "2",
+        "--shapes",
+        "plain,racbvh",
+        "--contacts",
+        "patches",
+        "--set",
+        "racbvh.cluster-nodes=512",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    std::fs::remove_file(&json).ok();
+    assert_eq!(v["runs"].as_array().unwrap().len(), 2, "{v}");
+    assert_eq!(v["scene"]["racbvh_cluster_nodes"], 512, "{v}");
+    let (ok, _, err) = cbvh(&["robot-in-plant", "--steps", "0"]);
+    assert!(!ok && err.contains("--steps must be at least 1"), "{err}");
+}
+
 #[test]
 fn cli_clbvh_leaf_size_changes_the_encoding_and_stays_lossless() {
     let mut files = Vec::new();

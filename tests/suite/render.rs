@@ -700,6 +700,13 @@ fn cli_bad_arguments_give_clear_errors() {
     );
     let (ok, _, e) = run(&["--threads", "0", "-o", o]);
     assert!(!ok && e.contains("--threads"), "{e}");
+    // Bounded against the machine, before any work.
+    let (ok, _, e) = run(&["--threads", "100000", "-o", o]);
+    assert!(!ok && e.contains("--threads 100000 is more than"), "{e}");
+    let (ok, _, e) = run(&["--elevation", "95", "-o", o]);
+    assert!(!ok && e.contains("--elevation 95 must be"), "{e}");
+    let (ok, _, e) = run(&["--azimuth", "nan", "-o", o]);
+    assert!(!ok && e.contains("--azimuth NaN must be"), "{e}");
     let (ok, _, e) = run(&[]);
     assert!(!ok && e.contains("--output"), "{e}");
     let (ok, _, e) = run(&["-o", "/nonexistent-dir-cbvh/x.png"]);

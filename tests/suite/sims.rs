@@ -250,7 +250,13 @@ fn sims_check_every_flag_before_the_first_run() {
     };
     reject(&["--width-fraction", "0"], "--width-fraction 0 must be");
     reject(&["--width-fraction", "NaN"], "--width-fraction NaN must be");
+    reject(&["--width-fraction", "1e30"], "at most 1000 (0.5");
     reject(&["--gap", "-1"], "--gap -1 must be");
+    reject(&["--gap", "1e30"], "must be 0 to 1000");
+    reject(
+        &["--offset", "1e30,0"],
+        "must be two numbers from -1000 to 1000",
+    );
     reject(&["--cluster-nodes", "3"], "power of two");
     reject(&["--offset", "0.1"], "is not X,Z");
     reject(&["--offset", "nan,0"], "not a finite number");

@@ -8,7 +8,7 @@ use std::path::Path;
 use super::{ClBvh, ClBvhCompact, ClError, ClOptions, CompactOptions, LeafKind, file};
 use crate::build::CanonicalBvh;
 use crate::codec::common::{FormatError, MassProps};
-use crate::codec::{Codec, CodecKind, OpenOptions};
+use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError};
 use crate::contact::EdgeFlags;
 use crate::cursor::NodeCursor;
 use crate::mesh::Mesh;
@@ -41,6 +41,12 @@ impl Codec for ClBvh {
     /// [`ClBvhCompact`]).
     type Options = ClOptions;
     type Error = ClError;
+
+    const SETTINGS: &'static [&'static str] = ClOptions::SETTINGS;
+
+    fn options_from(settings: &Settings) -> Result<ClOptions, SettingsError> {
+        ClOptions::from_settings(settings)
+    }
 
     fn encode(bvh: &CanonicalBvh, mesh: &Mesh, options: &ClOptions) -> Result<Self, ClError> {
         ClBvh::encode(
@@ -115,6 +121,12 @@ impl Codec for ClBvhCompact {
     const MAGIC: [u8; 8] = file::MAGIC_COMPACT;
     type Options = CompactOptions;
     type Error = ClError;
+
+    const SETTINGS: &'static [&'static str] = ClOptions::SETTINGS;
+
+    fn options_from(settings: &Settings) -> Result<CompactOptions, SettingsError> {
+        CompactOptions::from_settings(settings)
+    }
 
     fn encode(bvh: &CanonicalBvh, mesh: &Mesh, o: &CompactOptions) -> Result<Self, ClError> {
         ClBvhCompact::encode(bvh, mesh, o)

@@ -92,6 +92,7 @@ mod verify;
 
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
+use crate::codec::settings::{Settings, SettingsError};
 use crate::contact::EdgeFlags;
 use crate::geom::Aabb;
 use crate::mesh::Mesh;
@@ -147,6 +148,23 @@ impl Default for ClOptions {
 pub const COMPACT_LEAF_SIZE: usize = 6;
 
 impl ClOptions {
+    /// The keys of [`ClOptions::from_settings`] (and of
+    /// [`CompactOptions::from_settings`]).
+    pub const SETTINGS: &'static [&'static str] = &["leaf-size", "multi-leaf"];
+
+    /// The options from a front end's settings ([`crate::codec::settings`]):
+    /// `clbvh.leaf-size` (`M`, 1 to [`MAX_LEAF_SIZE`]; unset: 4, or the
+    /// common leaf size if larger) and `clbvh.multi-leaf` (`false`: the
+    /// uncompressed 8-wide reference).
+    pub fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
+        let (leaf_size, multi_leaf) = leaf_settings(s, "clbvh", Self::default().leaf_size)?;
+        Ok(Self {
+            leaf_size,
+            multi_leaf,
+            ..Self::default()
+        })
+    }
+
     /// These settings with `M` raised, if need be, to hold the leaves of a
     /// canonical tree built with up to `leaf` triangles a leaf (the encoder
     /// rejects a tree whose leaves exceed `M`).
@@ -200,6 +218,16 @@ pub struct CompactOptions {
 }
 
 impl CompactOptions {
+    /// As [`ClOptions::from_settings`], with the keys under
+    /// `clbvh-compact` and `M` 6 by default.
+    pub fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
+        let (leaf_size, multi_leaf) = leaf_settings(s, "clbvh-compact", Self::default().leaf_size)?;
+        Ok(Self {
+            leaf_size,
+            multi_leaf,
+        })
+    }
+
     /// As [`ClOptions::holding`].
     pub fn holding(self, leaf: usize) -> Self {
         Self {
@@ -234,4 +262,25 @@ impl ClBvhCompact {
         };
         ClBvh::encode(bvh, mesh, &opts).map(ClBvhCompact)
     }
+}
+
+/// `M` and whether to make multi-leaf nodes, from `codec`'s `leaf-size`
+/// and `multi-leaf` settings: `M` is the setting if given, else
+/// `default_m` raised to the common leaf size (the encoder rejects a
+/// canonical tree whose leaves exceed `M`).
+fn leaf_settings(
+    s: &Settings,
+    codec: &str,
+    default_m: usize,
+) -> Result<(usize, bool), SettingsError> {
+    const KEYS: &[&str] = ClOptions::SETTINGS;
+    s.only(codec, KEYS)?;
+    let m = s.get(codec, KEYS[0])?.unwrap_or(default_m.max(s.leaf_size));
+    if !(1..=MAX_LEAF_SIZE).contains(&m) {
+        return Err(SettingsError::Invalid {
+            codec: codec.into(),
+            reason: format!("leaf size {m} is not allowed: use 1 to {MAX_LEAF_SIZE}"),
+        });
+    }
+    Ok((m, s.get(codec, KEYS[1])?.unwrap_or(true)))
 }

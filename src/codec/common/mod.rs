@@ -19,7 +19,7 @@
 //!   header checksum), written and checked.
 //! - [`FormatError`] (`error.rs`): bad magic, truncation, bad header
 //!   fields, checksum mismatches, values out of range, corrupted codes.
-//! - [`atomic_write`] (`save.rs`): atomic file saves.
+//! - [`atomic_write`]: atomic file saves (from [`crate::atomic`]).
 //! - [`mass`]: the stored mass properties.
 //! - [`edges`]: the edge-flags section every codec file ends with (the
 //!   active edges of [`EdgeFlags`](crate::contact::EdgeFlags), computed
@@ -37,13 +37,12 @@ pub mod mass;
 pub mod packed;
 pub mod page_cache;
 pub mod quant;
-mod save;
 pub mod static_dict;
 mod store;
 
+pub use crate::atomic::atomic_write;
 pub use error::FormatError;
 pub use mass::{MASS_BYTES, MassProps};
-pub use save::atomic_write;
 pub use store::Store;
 
 /// The first four bytes of every cbvh codec file (`CBVHRAC\0`, `CBVHPLN\0`).

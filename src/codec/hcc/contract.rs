@@ -6,7 +6,7 @@ use std::path::Path;
 use super::{HccBvh, HccError, HccOptions, file};
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
-use crate::codec::{ByteSize, Codec, CodecKind, OpenOptions};
+use crate::codec::{ByteSize, Codec, CodecKind, OpenOptions, Settings, SettingsError};
 use crate::contact::EdgeFlags;
 use crate::cursor::NodeCursor;
 use crate::mesh::Mesh;
@@ -18,6 +18,12 @@ impl Codec for HccBvh {
     /// one triangle a leaf (the paper's form) or multi-triangle leaves.
     type Options = HccOptions;
     type Error = HccError;
+
+    const SETTINGS: &'static [&'static str] = HccOptions::SETTINGS;
+
+    fn options_from(settings: &Settings) -> Result<HccOptions, SettingsError> {
+        HccOptions::from_settings(settings)
+    }
 
     fn encode(bvh: &CanonicalBvh, mesh: &Mesh, options: &HccOptions) -> Result<Self, HccError> {
         HccBvh::encode_with(bvh, mesh, options)

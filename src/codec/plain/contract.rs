@@ -6,7 +6,7 @@ use std::path::Path;
 use super::{PlainBvh, PlainError, file};
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
-use crate::codec::{Codec, CodecKind, OpenOptions};
+use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError};
 use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 
@@ -16,6 +16,14 @@ impl Codec for PlainBvh {
     /// The plain codec has nothing to choose.
     type Options = ();
     type Error = PlainError;
+
+    const SETTINGS: &'static [&'static str] = &[];
+
+    /// No settings of its own; it keeps `f32` vertices whatever
+    /// `vertex_bits` says.
+    fn options_from(settings: &Settings) -> Result<(), SettingsError> {
+        settings.only("plain", &[])
+    }
 
     fn encode(bvh: &CanonicalBvh, mesh: &Mesh, _: &()) -> Result<Self, PlainError> {
         PlainBvh::encode(bvh, mesh)

@@ -5,7 +5,7 @@ use std::path::Path;
 use super::{RacBvh, RacError, RacOptions, file};
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
-use crate::codec::{Codec, CodecKind, OpenOptions};
+use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError};
 use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 
@@ -14,6 +14,12 @@ impl Codec for RacBvh {
     const MAGIC: [u8; 8] = file::MAGIC;
     type Options = RacOptions;
     type Error = RacError;
+
+    const SETTINGS: &'static [&'static str] = RacOptions::SETTINGS;
+
+    fn options_from(settings: &Settings) -> Result<RacOptions, SettingsError> {
+        RacOptions::from_settings(settings)
+    }
 
     fn encode(bvh: &CanonicalBvh, mesh: &Mesh, options: &RacOptions) -> Result<Self, RacError> {
         RacBvh::encode(bvh, mesh, options)

@@ -19,6 +19,7 @@ use crate::codec::common::Store;
 use crate::codec::common::bits::{BitWriter, golomb_len, zigzag};
 use crate::codec::common::dict::{DictEncoder, MAX_K, SymbolEncoder};
 use crate::codec::common::quant::{Grid, QBox};
+use crate::codec::settings::{Settings, SettingsError};
 use crate::geom::Aabb;
 use crate::mesh::Mesh;
 
@@ -52,6 +53,31 @@ impl Default for RacOptions {
 }
 
 impl RacOptions {
+    /// The keys of [`RacOptions::from_settings`].
+    pub const SETTINGS: &'static [&'static str] = &["cluster-nodes", "bits", "tri-delta-threshold"];
+
+    /// The options from a front end's settings ([`crate::codec::settings`]):
+    /// `racbvh.cluster-nodes`, `racbvh.bits`, `racbvh.tri-delta-threshold`,
+    /// and the common `vertex_bits` (16 by default, 0 for `f32`). Checked
+    /// as [`RacOptions::validate`] checks them.
+    pub fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
+        const KEYS: &[&str] = RacOptions::SETTINGS;
+        s.only("racbvh", KEYS)?;
+        let d = Self::default();
+        let o = Self {
+            cluster_nodes: s.get("racbvh", KEYS[0])?.unwrap_or(d.cluster_nodes),
+            bits: s.get("racbvh", KEYS[1])?.unwrap_or(d.bits),
+            tri_delta_threshold: s.get("racbvh", KEYS[2])?.unwrap_or(d.tri_delta_threshold),
+            vertex_bits: s.vertex_bits_or(d.vertex_bits),
+            ..d
+        };
+        o.validate().map_err(|e| SettingsError::Invalid {
+            codec: "racbvh".into(),
+            reason: e.to_string(),
+        })?;
+        Ok(o)
+    }
+
     /// Checks every field.
     pub fn validate(&self) -> Result<(), RacError> {
         let c = self.cluster_nodes;

@@ -1,11 +1,10 @@
 //! The image files (feature `image-files`): PNG, and for turntables
 //! animated PNG (APNG, lossless) or GIF (256 colours per frame, NeuQuant).
 
-use std::fs::File;
-use std::io::BufWriter;
 use std::path::Path;
 
 use super::Image;
+use crate::atomic::AtomicFile;
 use crate::render::error::RenderError;
 
 impl Image {
@@ -45,13 +44,20 @@ fn frame_size(frames: &[Image]) -> Result<(u32, u32), RenderError> {
     Ok(want)
 }
 
-fn create(path: &Path) -> Result<BufWriter<File>, RenderError> {
-    File::create(path)
-        .map(BufWriter::new)
-        .map_err(|source| RenderError::Io {
-            path: path.to_path_buf(),
-            source,
-        })
+/// The image file, written atomically ([`crate::atomic`]).
+fn create(path: &Path) -> Result<AtomicFile, RenderError> {
+    AtomicFile::create(path).map_err(|source| RenderError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Makes the written file visible under its name.
+fn commit(file: AtomicFile, path: &Path) -> Result<(), RenderError> {
+    file.commit().map_err(|source| RenderError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Writes `frames` as a GIF looping forever at about `fps` frames per
@@ -70,7 +76,8 @@ pub fn save_gif(frames: &[Image], path: impl AsRef<Path>, fps: u16) -> Result<()
         path: path.to_path_buf(),
         source,
     };
-    let mut enc = gif::Encoder::new(create(path)?, gw, gh, &[]).map_err(gif_err)?;
+    let mut file = create(path)?;
+    let mut enc = gif::Encoder::new(&mut file, gw, gh, &[]).map_err(gif_err)?;
     enc.set_repeat(gif::Repeat::Infinite).map_err(gif_err)?;
     let delay = ((100.0 / fps.max(1) as f32).round() as u16).max(2);
     for f in frames {
@@ -79,7 +86,7 @@ pub fn save_gif(frames: &[Image], path: impl AsRef<Path>, fps: u16) -> Result<()
         enc.write_frame(&frame).map_err(gif_err)?;
     }
     enc.into_inner().map_err(gif_err)?;
-    Ok(())
+    commit(file, path)
 }
 
 /// Writes an animation by the file's extension: `.gif` as GIF
@@ -106,7 +113,8 @@ fn save_frames(frames: &[Image], path: &Path, fps: Option<u16>) -> Result<(), Re
         path: path.to_path_buf(),
         source,
     };
-    let mut enc = png::Encoder::new(create(path)?, want.0, want.1);
+    let mut file = create(path)?;
+    let mut enc = png::Encoder::new(&mut file, want.0, want.1);
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
     enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
@@ -118,5 +126,6 @@ fn save_frames(frames: &[Image], path: &Path, fps: Option<u16>) -> Result<(), Re
     for f in frames {
         writer.write_image_data(&f.data).map_err(png_err)?;
     }
-    writer.finish().map_err(png_err)
+    writer.finish().map_err(png_err)?;
+    commit(file, path)
 }

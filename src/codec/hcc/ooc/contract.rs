@@ -9,7 +9,7 @@ use super::paged::Paged;
 use super::{HccOocBvh, Mode, OocError, OocOptions, file};
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
-use crate::codec::{ByteSize, Codec, CodecKind, OpenOptions};
+use crate::codec::{ByteSize, Codec, CodecKind, OpenOptions, Settings, SettingsError};
 use crate::contact::EdgeFlags;
 use crate::cursor::{Children, NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Ray, Triangle};
@@ -126,6 +126,12 @@ impl Codec for HccOocBvh {
     /// Grid bits and which id maps to keep (default: 16 bits, tree order).
     type Options = OocOptions;
     type Error = OocError;
+
+    const SETTINGS: &'static [&'static str] = OocOptions::SETTINGS;
+
+    fn options_from(settings: &Settings) -> Result<OocOptions, SettingsError> {
+        OocOptions::from_settings(settings)
+    }
 
     fn encode(bvh: &CanonicalBvh, mesh: &Mesh, options: &OocOptions) -> Result<Self, OocError> {
         HccOocBvh::encode_with(bvh, mesh, options)

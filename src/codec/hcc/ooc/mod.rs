@@ -209,6 +209,7 @@ use crate::build::CanonicalBvh;
 use crate::codec::ByteSize;
 use crate::codec::common::page_cache::CacheStats;
 use crate::codec::common::{Store, atomic_write};
+use crate::codec::settings::{Settings, SettingsError};
 use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 use paged::Paged;
@@ -243,6 +244,29 @@ impl Default for OocOptions {
 }
 
 impl OocOptions {
+    /// The keys of [`OocOptions::from_settings`].
+    pub const SETTINGS: &'static [&'static str] = &["vertex-ids", "triangle-ids"];
+
+    /// The options from a front end's settings ([`crate::codec::settings`]):
+    /// `hcc-ooc.vertex-ids`, `hcc-ooc.triangle-ids` (`true`/`false`, both off
+    /// by default: the paper's tree order), and the common `vertex_bits`
+    /// (1 to 24; it always quantizes, so unset or 0 gives 16).
+    pub fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
+        const KEYS: &[&str] = OocOptions::SETTINGS;
+        s.only("hcc-ooc", KEYS)?;
+        let d = Self::default();
+        let vertex_bits = s
+            .vertex_bits_or(Some(d.vertex_bits))
+            .unwrap_or(d.vertex_bits);
+        super::check_vertex_bits("hcc-ooc", Some(vertex_bits))?;
+        Ok(Self {
+            vertex_bits,
+            vertex_ids: s.get("hcc-ooc", KEYS[0])?.unwrap_or(d.vertex_ids),
+            triangle_ids: s.get("hcc-ooc", KEYS[1])?.unwrap_or(d.triangle_ids),
+            ..d
+        })
+    }
+
     /// The i-HCCMesh options this o-HCCMesh codes.
     pub fn hcc(&self) -> HccOptions {
         HccOptions {

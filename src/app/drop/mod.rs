@@ -1,18 +1,20 @@
-//! What both drop-test sims share: options, running every shape, the
-//! table, the JSON report and the plot.
+//! The drop tests (`cbvh lucy-on-turbine`, `cbvh robot-in-plant`, and
+//! the binaries of the same names): the options they share, running every
+//! shape, the table, the JSON report and the plot.
 
-use std::io::IsTerminal;
+pub mod lucy;
+pub mod robot;
+
 use std::path::PathBuf;
 
-use cbvh::Mesh;
-use cbvh::build::BuildOptions;
-use cbvh::codec::clbvh::{ClOptions, CompactOptions};
-use cbvh::codec::racbvh::RacOptions;
-use cbvh::codec::{AnyCodec, AnyOptions, CodecKind, OpenOptions};
-use cbvh::parry::ContactMode;
-use cbvh::scene::Kind;
-use cbvh::sim::droptest::{self, DropScene, Placement, Replay, RunReport, RunSpec, ShapeKind};
-use indicatif::{ProgressBar, ProgressStyle};
+use crate::Mesh;
+use crate::build::BuildOptions;
+use crate::codec::{AnyCodec, CodecKind, OpenOptions};
+use crate::parry::ContactMode;
+use crate::scene::Kind;
+use crate::sim::droptest::{self, DropScene, Placement, Replay, RunReport, RunSpec, ShapeKind};
+
+use super::progress_bar as bar;
 
 /// Options common to the sims.
 #[derive(clap::Args, Debug, Clone)]
@@ -51,9 +53,11 @@ pub struct SimArgs {
     /// Generator seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Width of the dropped mesh as a fraction of the base's width.
-    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
-    pub width_fraction: f32,
+    /// Width of the dropped mesh as a fraction of the base's width
+    /// (default: 0.5 for lucy-on-turbine, 0.1 for robot-in-plant, whose
+    /// robot is small next to its plant).
+    #[arg(long, allow_negative_numbers = true)]
+    pub width_fraction: Option<f32>,
     /// Gap above the base's top, as a fraction of the dropped mesh's height.
     #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
     pub gap: f32,
@@ -64,9 +68,6 @@ pub struct SimArgs {
     /// narrow phase on those steps, so off by default when timing).
     #[arg(long)]
     pub contact_recycling: bool,
-    /// Nodes per cluster of the racbvh shapes (power of two, 256 to 16384).
-    #[arg(long, default_value_t = 4096)]
-    pub cluster_nodes: u32,
     /// Horizontal offset of the drop point, as fractions of the base width:
     /// X,Z (e.g. `--offset -0.2,0.1`).
     #[arg(
@@ -99,13 +100,16 @@ pub struct SimArgs {
     /// 75 k bunny with 3 gives 4.8 M triangles.
     #[arg(long, default_value_t = 0)]
     pub subdivide: u32,
-    /// The most triangles a leaf of the cbvh shapes' trees holds (1, the
-    /// papers' form, by default). Above 1, plain, racbvh and hcc leaves
-    /// hold up to that many (hcc's multi-triangle leaves); CLBVH collapses
-    /// its own leaves from that tree, of up to 4 triangles (compact: 6) or
-    /// this many if more.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
-    pub leaf_size: u16,
+    /// The cbvh shapes' codec settings.
+    #[command(flatten)]
+    pub codecs: super::CodecFlags,
+}
+
+impl SimArgs {
+    /// `--width-fraction`, or 0.5 when a sim has set no default of its own.
+    pub fn width_fraction(&self) -> f32 {
+        self.width_fraction.unwrap_or(0.5)
+    }
 }
 
 /// `--offset X,Z`: two comma-separated numbers, either may be negative.
@@ -140,6 +144,11 @@ impl std::fmt::Display for Offset {
 /// The most steps a run takes: its per-step timings and samples are kept.
 pub const MAX_STEPS: usize = 1_000_000;
 
+/// The largest `--width-fraction`, `--gap` and `--offset` component: a
+/// dropped mesh a thousand times the base's width, or that far away, is no
+/// drop test, and larger fractions only reach the coordinate limit.
+pub const MAX_FRACTION: f32 = 1000.0;
+
 /// Checks every flag before anything runs, so that a bad value never ends
 /// a run half-way (or, worse, runs and reports nonsense): steps, width
 /// fraction, gap and offset finite and in range, the cluster size, the
@@ -168,21 +177,21 @@ pub fn validate(args: &SimArgs) -> Result<(), String> {
     if args.shapes.is_empty() {
         return Err("--shapes names no shape".into());
     }
-    if !(args.width_fraction.is_finite() && args.width_fraction > 0.0) {
+    let width_fraction = args.width_fraction();
+    if !(width_fraction > 0.0 && width_fraction <= MAX_FRACTION) {
         return Err(format!(
-            "--width-fraction {} must be a finite number above 0 (0.5: half the base's width)",
-            args.width_fraction
+            "--width-fraction {width_fraction} must be above 0 and at most {MAX_FRACTION} (0.5: half the base's width)"
         ));
     }
-    if !(args.gap.is_finite() && args.gap >= 0.0) {
+    if !(args.gap >= 0.0 && args.gap <= MAX_FRACTION) {
         return Err(format!(
-            "--gap {} must be a finite number, 0 or more (a fraction of the dropped mesh's height)",
+            "--gap {} must be 0 to {MAX_FRACTION} (a fraction of the dropped mesh's height)",
             args.gap
         ));
     }
-    if args.offset.0.iter().any(|v| !v.is_finite()) {
+    if args.offset.0.iter().any(|v| v.abs() > MAX_FRACTION) {
         return Err(format!(
-            "--offset {} must be two finite numbers",
+            "--offset {} must be two numbers from -{MAX_FRACTION} to {MAX_FRACTION} (fractions of the base's width)",
             args.offset
         ));
     }
@@ -192,12 +201,7 @@ pub fn validate(args: &SimArgs) -> Result<(), String> {
             args.subdivide, args.subdivide
         ));
     }
-    let c = args.cluster_nodes;
-    if !(256..=16384).contains(&c) || !c.is_power_of_two() {
-        return Err(format!(
-            "--cluster-nodes {c} is not allowed: use a power of two in 256..=16384"
-        ));
-    }
+    options(args)?;
     for (flag, path) in [
         ("--json", &args.json),
         ("--plot", &args.plot),
@@ -258,6 +262,19 @@ pub fn run_specs(args: &SimArgs) -> Result<Vec<RunSpec>, String> {
     Ok(specs)
 }
 
+/// The options of the codecs the runs use, from the codec flags.
+fn options(args: &SimArgs) -> Result<crate::codec::AnyOptions, String> {
+    let mut kinds: Vec<CodecKind> = run_specs(args)?
+        .iter()
+        .filter_map(|s| match s.kind {
+            ShapeKind::Cbvh(k) | ShapeKind::CbvhTenthCache(k) => Some(k),
+            ShapeKind::Parry | ShapeKind::ParryFixed => None,
+        })
+        .collect();
+    kinds.dedup();
+    args.codecs.options(&kinds).map_err(|e| e.to_string())
+}
+
 /// A mesh from a file (a mesh, or a cbvh codec file's stored mesh), or
 /// generated.
 pub fn mesh_from(
@@ -277,17 +294,12 @@ pub fn mesh_from(
                 format!("{} ({} file)", p.display(), codec.name()),
             ))
         }
-        Some(p) => cbvh::mesh::load(p)
+        Some(p) => crate::mesh::load(p)
             .map(|m| (m, p.display().to_string()))
             .map_err(|e| e.to_string()),
         None => {
-            let pb = bar(&format!("gen {what}"), 1);
-            let m = cbvh::scene::generate(kind, tris, seed, &mut |d, t| {
-                pb.set_length(t);
-                pb.set_position(d);
-            })
-            .map_err(|e| e.to_string())?;
-            pb.finish_and_clear();
+            let m = super::generate(kind, tris, seed, &format!("gen {what}"))
+                .map_err(|e| e.to_string())?;
             Ok((
                 m,
                 format!("generated {kind} ({tris} requested, seed {seed})"),
@@ -296,26 +308,10 @@ pub fn mesh_from(
     }
 }
 
-fn bar(msg: &str, total: u64) -> ProgressBar {
-    if !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
-    }
-    let pb = ProgressBar::new(total);
-    pb.set_style(
-        ProgressStyle::with_template(
-            "{msg:>14} [{bar:40}] {pos}/{len} {elapsed_precise} eta {eta}",
-        )
-        .expect("static template")
-        .progress_chars("=> "),
-    );
-    pb.set_message(msg.to_string());
-    pb
-}
-
 /// Sizes rayon's global pool from `--threads`. Call it first: mesh
 /// generation and loading already use the pool.
 pub fn init_threads(args: &SimArgs) -> Result<(), String> {
-    cbvh::logger::init_stderr();
+    crate::logger::init_stderr();
     match args.threads {
         Some(0) => Err("--threads must be at least 1".into()),
         Some(t) => rayon::ThreadPoolBuilder::new()
@@ -346,32 +342,32 @@ pub fn run_sim(
         n => (format!("{}, subdivided {n}×", names.0), names.1),
     };
     let placement = Placement {
-        width_fraction: args.width_fraction,
+        width_fraction: args.width_fraction(),
         gap_fraction: args.gap,
         offset_fraction: args.offset.0,
     };
     let scale = droptest::place(&mut dropped, &base, &placement);
+    // A large base times a large fraction can still leave the supported
+    // coordinates: say which flags placed it there.
+    dropped.validate(&names.0).map_err(|e| {
+        format!(
+            "the dropped mesh as placed by --width-fraction {} --gap {} --offset {}: {e}",
+            args.width_fraction(),
+            args.gap,
+            args.offset
+        )
+    })?;
     let (dlo, dhi) = dropped.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
     let (blo, bhi) = base.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
     let statue_size = (0..3).map(|k| dhi[k] - dlo[k]).fold(0.0f32, f32::max);
-    let leaf_size = usize::from(args.leaf_size);
+    let leaf_size = usize::from(args.codecs.leaf_size);
     let scene = DropScene {
         dropped,
         base,
         steps: args.steps,
         dt: 1.0 / 60.0,
         contact_recycling: args.contact_recycling,
-        codec_options: AnyOptions {
-            racbvh: RacOptions {
-                cluster_nodes: args.cluster_nodes,
-                ..Default::default()
-            },
-            // As `cbvh build --leaf-size`: CLBVH's leaves hold at least the
-            // canonical tree's.
-            clbvh: ClOptions::default().holding(leaf_size),
-            clbvh_compact: CompactOptions::default().holding(leaf_size),
-            ..Default::default()
-        },
+        codec_options: options(args)?,
         build_options: BuildOptions {
             max_leaf_triangles: leaf_size,
             ..Default::default()
@@ -432,9 +428,11 @@ pub fn run_sim(
     });
     if let Some(path) = &args.json {
         let v = serde_json::json!({ "scene": scene_json, "runs": runs });
-        std::fs::write(
+        crate::atomic::atomic_write(
             path,
-            serde_json::to_string_pretty(&v).map_err(|e| e.to_string())?,
+            serde_json::to_string_pretty(&v)
+                .map_err(|e| e.to_string())?
+                .as_bytes(),
         )
         .map_err(|e| format!("{}: {e}", path.display()))?;
         eprintln!("wrote {}", path.display());
@@ -442,18 +440,18 @@ pub fn run_sim(
     if let (Some(path), Some(last)) = (&args.render, runs.last()) {
         let r = last.final_rotation;
         let t = last.final_translation;
-        let pose = cbvh::geom::Pose::from_rotation_translation(
+        let pose = crate::geom::Pose::from_rotation_translation(
             glam::Quat::from_xyzw(r[0], r[1], r[2], r[3]),
             glam::Vec3::from(t),
         );
-        let opts = cbvh::render::RenderOptions {
+        let opts = crate::render::RenderOptions {
             width: 960,
             height: 720,
             ..Default::default()
         };
-        let image = cbvh::render::render_meshes(
+        let image = crate::render::render_meshes(
             &[
-                (&scene.base, cbvh::geom::Pose::IDENTITY),
+                (&scene.base, crate::geom::Pose::IDENTITY),
                 (&scene.dropped, pose),
             ],
             &opts,
@@ -476,18 +474,18 @@ pub fn run_sim(
             .map(|r| (r.shape.clone(), r.interference_ms_per_step.clone()))
             .collect();
         let panels = [
-            cbvh::plot::Panel {
+            crate::app::plot::Panel {
                 title: "narrow phase (contact manifolds) per step",
                 y_label: "ms",
                 series: &narrow,
             },
-            cbvh::plot::Panel {
+            crate::app::plot::Panel {
                 title: "interference (intersecting triangle pairs) per step",
                 y_label: "ms",
                 series: &interference,
             },
         ];
-        cbvh::plot::line_plot_png(path, title, &panels, (1000, 900))?;
+        crate::app::plot::line_plot_png(path, title, &panels, (1000, 900))?;
         eprintln!("wrote {}", path.display());
     }
     Ok(())
@@ -638,7 +636,7 @@ fn print_table(runs: &[RunReport], size: f32) {
     }
     for r in runs {
         if let Some(c) = &r.caches {
-            let part = |name: &str, c: &cbvh::codec::CacheStats| format!("{name} {}", c.summary());
+            let part = |name: &str, c: &crate::codec::CacheStats| format!("{name} {}", c.summary());
             println!(
                 "{}: caches: {}; {}",
                 r.shape,

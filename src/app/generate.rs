@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use cbvh::scene::Kind;
+use crate::scene::Kind;
 
 use super::CliResult;
 
@@ -26,20 +26,20 @@ pub struct GenArgs {
 /// Runs `cbvh gen`.
 pub fn run(a: GenArgs) -> CliResult {
     // Check the output extension before spending time generating.
-    match cbvh::mesh::Format::from_path(&a.output)? {
-        cbvh::mesh::Format::Ply | cbvh::mesh::Format::Obj => {}
+    match crate::mesh::Format::from_path(&a.output)? {
+        crate::mesh::Format::Ply | crate::mesh::Format::Obj => {}
         _ => {
             return Err(
                 format!("{}: can only write .ply or .obj files", a.output.display()).into(),
             );
         }
     }
-    let tris = a.tris.unwrap_or_else(|| cbvh::scene::default_tris(a.kind));
+    let tris = a.tris.unwrap_or_else(|| crate::scene::default_tris(a.kind));
     let t0 = Instant::now();
-    let mesh = super::generate(a.kind, tris, a.seed)?;
+    let mesh = super::generate(a.kind, tris, a.seed, "generating")?;
     let gen_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    cbvh::mesh::save(&mesh, &a.output)?;
+    crate::mesh::save(&mesh, &a.output)?;
     eprintln!(
         "{}: {} triangles, {} vertices ({} requested, seed {}); generated in {:.2} s ({:.2} M triangles/s), written in {:.2} s",
         a.output.display(),

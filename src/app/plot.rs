@@ -12,7 +12,7 @@ static FONT: Once = Once::new();
 
 fn register() {
     FONT.call_once(|| {
-        let bytes: &'static [u8] = include_bytes!("../assets/DejaVuSans.ttf");
+        let bytes: &'static [u8] = include_bytes!("../../assets/DejaVuSans.ttf");
         // Registration fails only for a malformed font, which the vendored one is not.
         let _ = register_font("sans-serif", FontStyle::Normal, bytes);
     });
@@ -116,16 +116,15 @@ pub fn line_plot_png(
         }
         root.present().map_err(|e| e.to_string())?;
     }
-    let file = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+    let err = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
+    let mut file = crate::atomic::AtomicFile::create(path).map_err(|e| err(&e))?;
+    let mut enc = png::Encoder::new(&mut file, width, height);
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
-    let mut w = enc
-        .write_header()
-        .map_err(|e| format!("{}: {e}", path.display()))?;
-    w.write_image_data(&buf)
-        .map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok(())
+    let mut w = enc.write_header().map_err(|e| err(&e))?;
+    w.write_image_data(&buf).map_err(|e| err(&e))?;
+    w.finish().map_err(|e| err(&e))?;
+    file.commit().map_err(|e| err(&e))
 }
 
 /// One panel of [`line_plot_png`] on `area`.

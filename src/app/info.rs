@@ -4,8 +4,8 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use cbvh::codec::{AnyCodec, ByteSize, CodecKind, OpenOptions};
-use cbvh::mesh::{MeshStats, load_with_detail};
+use crate::codec::{AnyCodec, ByteSize, CodecKind, OpenOptions};
+use crate::mesh::{MeshStats, load_with_detail};
 
 use super::CliResult;
 

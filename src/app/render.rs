@@ -5,10 +5,10 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use cbvh::Mesh;
-use cbvh::build::{BuildOptions, Layout, build};
-use cbvh::codec::{AnyCodec, AnyOptions, CodecKind};
-use cbvh::render::{
+use crate::Mesh;
+use crate::build::{BuildOptions, Layout, build};
+use crate::codec::{AnyCodec, AnyOptions, CodecKind};
+use crate::render::{
     Image, RayTarget, RenderOptions, RenderStats, Scene, VertexNormals, any_target, render,
     render_turntable, save_animation,
 };
@@ -18,6 +18,7 @@ use super::{CliResult, Loaded, MeshSource, Structure, progress_bar};
 /// Arguments of `cbvh render`.
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
+    /// Where the mesh comes from.
     #[command(flatten)]
     pub source: MeshSource,
     /// The structure to trace rays through (default: a codec file's own
@@ -43,8 +44,9 @@ pub struct RenderArgs {
     /// Primary rays only: no shadow rays and no reflections.
     #[arg(long)]
     pub primary_only: bool,
-    /// Render threads (a local rayon pool); default: all cores.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    /// Render threads (a local rayon pool; at most 4 × the machine's
+    /// hardware threads); default: all cores.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub threads: Option<u32>,
     /// Camera direction around the vertical axis, degrees (0: from +z).
     #[arg(long, default_value_t = 25.0, allow_negative_numbers = true)]
@@ -90,13 +92,16 @@ fn make_target(
             )?)
         }
         Structure::Parry => Box::new(
-            cbvh::parry::parry_trimesh(mesh)
+            crate::parry::parry_trimesh(mesh)
                 .map_err(|e| format!("parry could not build a TriMesh: {e:?}"))?,
         ),
     })
 }
 
-fn build_tree(mesh: &Mesh, layout: Layout) -> Result<cbvh::CanonicalBvh, cbvh::build::BuildError> {
+fn build_tree(
+    mesh: &Mesh,
+    layout: Layout,
+) -> Result<crate::CanonicalBvh, crate::build::BuildError> {
     let pb = progress_bar("building", mesh.triangle_count() as u64);
     let opts = BuildOptions {
         layout,
@@ -153,11 +158,33 @@ fn turntable_path(a: &RenderArgs) -> PathBuf {
     })
 }
 
+/// The flags clap's ranges do not cover, checked before any work: the
+/// thread count against the machine and the camera angles.
+fn check_flags(a: &RenderArgs) -> CliResult {
+    if let Some(t) = a.threads {
+        let machine = std::thread::available_parallelism().map_or(1, |n| n.get());
+        if t as usize > 4 * machine {
+            return Err(format!(
+                "--threads {t} is more than 4 × the {machine} hardware threads of this machine"
+            )
+            .into());
+        }
+    }
+    if !a.azimuth.is_finite() {
+        return Err(format!("--azimuth {} must be a finite number of degrees", a.azimuth).into());
+    }
+    if !(-89.0..=89.0).contains(&a.elevation) {
+        return Err(format!("--elevation {} must be from -89 to 89 degrees", a.elevation).into());
+    }
+    Ok(())
+}
+
 /// A still image, its stats, and the turntable's frames and stats if asked.
 type Rendered = (Image, RenderStats, Option<(Vec<Image>, RenderStats)>);
 
 /// Runs `cbvh render`.
 pub fn run(mut a: RenderArgs) -> CliResult {
+    check_flags(&a)?;
     check_output(&a.output, &["png"])?;
     if a.turntable.is_some() {
         check_output(&turntable_path(&a), &["png", "gif"])?;
@@ -193,13 +220,13 @@ pub fn run(mut a: RenderArgs) -> CliResult {
         lights: a.lights as usize,
         reflect_depth: a.reflect_depth,
         azimuth_deg: a.azimuth,
-        elevation_deg: a.elevation.clamp(-89.0, 89.0),
+        elevation_deg: a.elevation,
         ..Default::default()
     };
     if a.primary_only {
         opts = opts.primary_only();
     }
-    let work = || -> Result<Rendered, cbvh::render::RenderError> {
+    let work = || -> Result<Rendered, crate::render::RenderError> {
         let pb = progress_bar("rendering", 1);
         let (image, stats) = render(&scene, &opts, &|d, t| {
             pb.set_length(t);

@@ -1,0 +1,366 @@
+//! The command-line front end (feature `app`), one for every binary: the
+//! `cbvh` command's subcommands, the drop tests (also the binaries
+//! `lucy-on-turbine` and `robot-in-plant`), and what they share: where a
+//! mesh comes from (a file, a codec file, a generator), progress bars, the
+//! codec names on the command line, and how an error ends the process.
+//!
+//! - [`generate`], [`info`], [`build`], [`render`]: `cbvh gen`, `info`,
+//!   `build`, `render`.
+//! - [`drop`]: `cbvh lucy-on-turbine` and `cbvh robot-in-plant`.
+//! - [`plot`]: the drop tests' PNG line plots.
+//!
+//! The binaries are a line each: [`main`] for `cbvh`, and
+//! [`exit`]`(drop::lucy::run(...))` for a drop test under its own name.
+
+pub mod build;
+pub mod drop;
+pub mod generate;
+pub mod info;
+pub mod plot;
+pub mod render;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+use crate::Mesh;
+use crate::codec::{AnyCodec, CodecKind, OpenOptions};
+use crate::scene::Kind;
+use indicatif::{ProgressBar, ProgressStyle};
+
+/// A subcommand's error: printed after `error: `, exit status 1.
+pub type CliResult = Result<(), Box<dyn std::error::Error>>;
+
+/// A progress bar on stderr when it is a terminal, hidden otherwise.
+pub fn progress_bar(message: &str, total: u64) -> ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::new(total);
+    pb.set_style(
+        ProgressStyle::with_template(
+            "{msg:>12} [{bar:40}] {percent:>3}% {elapsed_precise} eta {eta}",
+        )
+        .expect("static template")
+        .progress_chars("=> "),
+    );
+    pb.set_message(message.to_string());
+    pb
+}
+
+/// Where a subcommand's mesh comes from: a file, or a generator.
+#[derive(clap::Args, Debug, Clone)]
+pub struct MeshSource {
+    /// A mesh file (.off, .ply, .obj, .stl), or a cbvh codec file written by
+    /// `cbvh build ... -o FILE` (recognised by its content, whatever its name).
+    #[arg(required_unless_present = "gen_kind", conflicts_with = "gen_kind")]
+    pub mesh: Option<PathBuf>,
+    /// Codec files: skip `verify` when opening (only for files you wrote).
+    #[arg(long)]
+    pub no_verify: bool,
+    /// Codec files of codecs that decode into a cache (racbvh's clusters,
+    /// hcc-ooc's low-level trees): the cache's budget in MiB. An hcc-ooc
+    /// file whose i-HCCMesh fits is decoded whole; one that does not runs
+    /// out of core, memory-mapped.
+    #[arg(long, value_name = "MIB", default_value_t = 1024)]
+    pub cache_mib: usize,
+    /// Generate the mesh instead: statue, turbine, plant, robot or isosurface.
+    #[arg(long = "gen", value_name = "KIND")]
+    pub gen_kind: Option<Kind>,
+    /// Triangle count to generate (default: the kind's default).
+    #[arg(long, requires = "gen_kind")]
+    pub tris: Option<usize>,
+    /// Generator seed.
+    #[arg(long, default_value_t = 0, requires = "gen_kind")]
+    pub seed: u64,
+}
+
+impl MeshSource {
+    /// Loads a mesh or opens a codec file (chosen by the file's magic), or
+    /// generates a mesh.
+    pub fn load_any(&self) -> Result<Loaded, Box<dyn std::error::Error>> {
+        if let Some(path) = &self.mesh
+            && CodecKind::of_file(path).is_some()
+        {
+            let opts = OpenOptions {
+                verify: !self.no_verify,
+                cache_budget_bytes: self.cache_mib.saturating_mul(1 << 20),
+            };
+            let codec = AnyCodec::open(path, &opts)?;
+            return Ok(Loaded::Codec(Box::new(codec), path.display().to_string()));
+        }
+        let (mesh, name) = self.load()?;
+        Ok(Loaded::Mesh(mesh, name))
+    }
+
+    /// Loads or generates the mesh, with a progress bar for generation;
+    /// a codec file gives its stored mesh. Returns the mesh and a name for
+    /// reports.
+    pub fn load(&self) -> Result<(Mesh, String), Box<dyn std::error::Error>> {
+        if let Some(path) = &self.mesh
+            && CodecKind::of_file(path).is_some()
+        {
+            let Loaded::Codec(codec, name) = self.load_any()? else {
+                unreachable!("a codec file loads as a codec")
+            };
+            return Ok((codec.decoded_mesh(), name));
+        }
+        if let Some(kind) = self.gen_kind {
+            let tris = self
+                .tris
+                .unwrap_or_else(|| crate::scene::default_tris(kind));
+            let mesh = generate(kind, tris, self.seed, "generating")?;
+            Ok((
+                mesh,
+                format!("{kind} ({tris} requested, seed {})", self.seed),
+            ))
+        } else {
+            let path = self.mesh.as_ref().expect("clap requires a mesh or --gen");
+            Ok((crate::mesh::load(path)?, path.display().to_string()))
+        }
+    }
+}
+
+/// A loaded input: a mesh, or an opened (and verified) codec file; each
+/// with a name for reports.
+pub enum Loaded {
+    /// A mesh (loaded or generated).
+    Mesh(Mesh, String),
+    /// A codec file.
+    Codec(Box<AnyCodec>, String),
+}
+
+/// What `cbvh build` and `cbvh render` make: a codec of the registry, or
+/// parry's own `TriMesh` for comparison. Parsed from the codecs' names and
+/// `parry`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Structure {
+    /// A cbvh codec.
+    Codec(CodecKind),
+    /// parry3d's own TriMesh.
+    Parry,
+}
+
+impl Structure {
+    /// The name on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Structure::Codec(k) => k.name(),
+            Structure::Parry => "parry",
+        }
+    }
+
+    /// Every structure: the codecs in registry order, then parry.
+    fn all() -> impl Iterator<Item = Structure> {
+        CodecKind::ALL
+            .iter()
+            .map(|&k| Structure::Codec(k))
+            .chain([Structure::Parry])
+    }
+
+    /// clap's parser for `--codec`: the names of [`Structure::all`], each
+    /// with its summary in `--help`.
+    pub fn parser() -> impl clap::builder::TypedValueParser<Value = Structure> {
+        use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+        let values = Structure::all().map(|s| {
+            PossibleValue::new(s.name()).help(match s {
+                Structure::Codec(k) => k.summary(),
+                Structure::Parry => "parry3d's own TriMesh, for comparison",
+            })
+        });
+        PossibleValuesParser::new(values).map(|name| {
+            Structure::all()
+                .find(|s| s.name() == name)
+                .expect("clap accepts only the possible values")
+        })
+    }
+}
+
+impl std::fmt::Display for Structure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// The codec settings of every command that encodes (`cbvh build`, the
+/// drop tests): the common ones, and each codec's own as `--set
+/// CODEC.KEY=VALUE`, turned into options by the codecs themselves
+/// ([`crate::codec::settings`]), so that no codec's field is named here
+/// but in the shorthands of the last six flags.
+#[derive(clap::Args, Debug, Clone)]
+pub struct CodecFlags {
+    /// The most triangles a leaf of the canonical tree holds (1, the
+    /// papers' form, by default): plain, racbvh and hcc leaves hold up to
+    /// that many (hcc's multi-triangle leaves); CLBVH collapses its own
+    /// leaves from that tree, of up to 4 triangles (compact: 6) or this
+    /// many if more.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
+    pub leaf_size: u16,
+    /// Bits per quantized vertex coordinate; 0 keeps vertices as f32.
+    /// Unset: each codec's default (racbvh 16, hcc f32, hcc-ooc 16, which
+    /// always quantizes: 0 gives it 16).
+    #[arg(long)]
+    pub vertex_bits: Option<u32>,
+    /// A codec's own setting, CODEC.KEY=VALUE (repeatable; a later one
+    /// wins). The settings:
+    #[arg(long = "set", value_name = "CODEC.KEY=VALUE", long_help = settings_help())]
+    pub set: Vec<String>,
+    /// RACBVH: nodes per cluster, a power of two in 256..=16384 (shorthand
+    /// for --set racbvh.cluster-nodes=N; 4096 by default).
+    #[arg(long)]
+    pub cluster_nodes: Option<u32>,
+    /// RACBVH: bits per quantized box coordinate (shorthand for --set
+    /// racbvh.bits=N; 16 by default).
+    #[arg(long)]
+    pub bits: Option<u32>,
+    /// CLBVH: `M`, the most triangles its SAH collapse merges into one
+    /// leaf (1 to 10); subtrees of at most `8 · M` triangles become
+    /// compressed multi-leaf nodes (the paper's `N × M` threshold).
+    /// Shorthand for --set clbvh.leaf-size=M --set clbvh-compact.leaf-size=M.
+    #[arg(long, value_name = "M")]
+    pub clbvh_leaf_size: Option<usize>,
+    /// CLBVH: regular 8-wide nodes only, no compressed multi-leaf nodes
+    /// (the paper's uncompressed BVH8 reference; shorthand for --set
+    /// clbvh.multi-leaf=false --set clbvh-compact.multi-leaf=false).
+    #[arg(long)]
+    pub clbvh_uncompressed: bool,
+    /// hcc: drop the input's vertex ids (part vertex-ids): smaller, but the
+    /// decoded mesh repeats the vertices low-level trees share (shorthand
+    /// for --set hcc.vertex-ids=false).
+    #[arg(long)]
+    pub no_vertex_ids: bool,
+    /// hcc: number triangles and vertices in the tree's order, storing
+    /// neither id map (parts ids and vertex-ids): the smallest form. The
+    /// file's triangle ids and decoded mesh are then in that order, not the
+    /// input's (shorthand for --set hcc.tree-order=true).
+    #[arg(long)]
+    pub tree_order: bool,
+}
+
+impl CodecFlags {
+    /// The settings, shorthands first and then `--set` in order.
+    pub fn settings(&self) -> Result<crate::codec::Settings, crate::codec::SettingsError> {
+        let mut s = crate::codec::Settings::new(usize::from(self.leaf_size), self.vertex_bits);
+        let mut shorthands = Vec::new();
+        if let Some(n) = self.cluster_nodes {
+            shorthands.push(format!("racbvh.cluster-nodes={n}"));
+        }
+        if let Some(n) = self.bits {
+            shorthands.push(format!("racbvh.bits={n}"));
+        }
+        for codec in ["clbvh", "clbvh-compact"] {
+            if let Some(m) = self.clbvh_leaf_size {
+                shorthands.push(format!("{codec}.leaf-size={m}"));
+            }
+            if self.clbvh_uncompressed {
+                shorthands.push(format!("{codec}.multi-leaf=false"));
+            }
+        }
+        if self.no_vertex_ids {
+            shorthands.push("hcc.vertex-ids=false".into());
+        }
+        if self.tree_order {
+            shorthands.push("hcc.tree-order=true".into());
+        }
+        for spec in shorthands.iter().chain(&self.set) {
+            s.set(spec)?;
+        }
+        Ok(s)
+    }
+
+    /// The options of the codecs `kinds` from these flags (the others
+    /// keep their defaults).
+    pub fn options(
+        &self,
+        kinds: &[CodecKind],
+    ) -> Result<crate::codec::AnyOptions, crate::codec::SettingsError> {
+        crate::codec::AnyOptions::from_settings(&self.settings()?, kinds)
+    }
+}
+
+/// `--set`'s help: every codec's settings, from the registry.
+fn settings_help() -> String {
+    let mut help = String::from(
+        "A codec's own setting, CODEC.KEY=VALUE (repeatable; a later one wins). The settings:",
+    );
+    for k in CodecKind::ALL {
+        let keys = k.settings();
+        if !keys.is_empty() {
+            help.push_str(&format!("\n  {}: {}", k.name(), keys.join(", ")));
+        }
+    }
+    help
+}
+
+/// Generates a mesh with a progress bar (showing `label`) on a terminal.
+pub fn generate(
+    kind: Kind,
+    tris: usize,
+    seed: u64,
+    label: &str,
+) -> Result<Mesh, crate::scene::GenError> {
+    let pb = progress_bar(label, 1);
+    let mesh = crate::scene::generate(kind, tris, seed, &mut |done, total| {
+        pb.set_length(total);
+        pb.set_position(done);
+    })?;
+    pb.finish_and_clear();
+    Ok(mesh)
+}
+
+/// cbvh: compressed bounding volume hierarchies for collision detection and ray tracing.
+#[derive(Parser)]
+#[command(name = "cbvh", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Generate a deterministic procedural mesh and write it as PLY or OBJ.
+    Gen(generate::GenArgs),
+    /// Print a mesh file's triangles, vertices, bounds, degenerate triangles and boundary edges,
+    /// or a codec file's header, sizes per part and verification.
+    Info(info::InfoArgs),
+    /// Build a BVH with a codec and report its size and build time.
+    Build(build::BuildArgs),
+    /// Ray-trace a mesh (Whitted: shadows, reflections) through a codec and write a PNG.
+    Render(render::RenderArgs),
+    /// Drop a statue on a turbine and time the narrow phase per step, parry TriMesh vs cbvh
+    /// (also the binary `lucy-on-turbine`).
+    LucyOnTurbine(drop::lucy::LucyArgs),
+    /// Drop a robot into a power plant and time the narrow phase per step, parry TriMesh vs
+    /// cbvh (also the binary `robot-in-plant`).
+    RobotInPlant(drop::robot::RobotArgs),
+}
+
+/// The `cbvh` command: parses the process's arguments, runs the
+/// subcommand, and returns its exit status.
+pub fn main() -> ExitCode {
+    crate::logger::init_stderr();
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Gen(a) => exit(generate::run(a)),
+        Command::Info(a) => exit(info::run(a)),
+        Command::Build(a) => exit(build::run(a)),
+        Command::Render(a) => exit(render::run(a)),
+        Command::LucyOnTurbine(a) => exit(drop::lucy::run(a)),
+        Command::RobotInPlant(a) => exit(drop::robot::run(a)),
+    }
+}
+
+/// A command's result as its exit status: success, or the error printed
+/// after `error: ` and status 1.
+pub fn exit<E: std::fmt::Display>(result: Result<(), E>) -> ExitCode {
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,154 @@
+//! Atomic saves, for every file cbvh writes (codec files, meshes, images,
+//! reports, plots): the bytes go to a temporary file beside the target, are
+//! flushed to disk, and the temporary file is renamed over the target. A
+//! reader never sees a half-written file, a process that has the old file
+//! memory-mapped keeps its (unlinked) old pages instead of dying with
+//! SIGBUS when the file is rewritten in place, and a writer that fails or
+//! is dropped half way leaves the old file (or none) under the name.
+//!
+//! [`atomic_write`] saves bytes already in memory; [`AtomicFile`] is a
+//! buffered [`Write`] for output produced as it goes (meshes, images),
+//! made visible by [`AtomicFile::commit`].
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Writes `bytes` to `path` atomically (see the module docs). On error the
+/// temporary file is removed and `path` is untouched.
+pub fn atomic_write(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let mut f = AtomicFile::create(path)?;
+    f.write_all(bytes)?;
+    f.commit()
+}
+
+/// A file written under a temporary name beside its target and renamed
+/// over it by [`commit`](Self::commit). Dropped without a commit (an
+/// error, a panic), it removes its temporary file and leaves the target
+/// as it was.
+pub struct AtomicFile {
+    /// `None` once committed.
+    out: Option<BufWriter<File>>,
+    tmp: PathBuf,
+    path: PathBuf,
+}
+
+impl AtomicFile {
+    /// Starts writing `path`: creates the temporary file beside it (so an
+    /// unwritable directory fails here, before any work).
+    pub fn create(path: &Path) -> std::io::Result<Self> {
+        let tmp = temp_beside(path);
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)?;
+        Ok(Self {
+            out: Some(BufWriter::with_capacity(1 << 20, f)),
+            tmp,
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// Flushes the bytes to disk and renames the file over the target. On
+    /// error the temporary file is removed and the target is untouched.
+    pub fn commit(mut self) -> std::io::Result<()> {
+        let out = self.out.take().expect("an AtomicFile commits once");
+        let result = (|| {
+            let f = out.into_inner().map_err(|e| e.into_error())?;
+            f.sync_all()?;
+            drop(f);
+            std::fs::rename(&self.tmp, &self.path)
+        })();
+        if result.is_err() {
+            std::fs::remove_file(&self.tmp).ok();
+        }
+        result
+    }
+
+    fn out(&mut self) -> &mut BufWriter<File> {
+        self.out.as_mut().expect("not committed")
+    }
+}
+
+impl Write for AtomicFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.out().write(buf)
+    }
+
+    fn write_all(&mut self, buf: &[u8]) -> std::io::Result<()> {
+        self.out().write_all(buf)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.out().flush()
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if self.out.take().is_some() {
+            std::fs::remove_file(&self.tmp).ok();
+        }
+    }
+}
+
+/// `dir/.name.tmp-PID-N`: in the target's directory (a rename does not
+/// cross file systems), unique per process and call.
+fn temp_beside(path: &Path) -> PathBuf {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static N: AtomicU64 = AtomicU64::new(0);
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "cbvh".into());
+    let n = N.fetch_add(1, Ordering::Relaxed);
+    path.with_file_name(format!(".{name}.tmp-{}-{n}", std::process::id()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn atomic_write_replaces_and_leaves_no_temp_file() {
+        let dir = std::env::temp_dir().join(format!("cbvh-atomic-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("x.bin");
+        atomic_write(&p, b"first").unwrap();
+        atomic_write(&p, b"second").unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"second");
+        let names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names.len(), 1, "{names:?}");
+        // A target in a missing directory is an error, not a panic.
+        assert!(atomic_write(&dir.join("no/such/x.bin"), b"x").is_err());
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn an_uncommitted_file_leaves_the_target_and_no_temp_file() {
+        let dir = std::env::temp_dir().join(format!("cbvh-atomic-drop-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("x.bin");
+        atomic_write(&p, b"old").unwrap();
+        {
+            let mut f = AtomicFile::create(&p).unwrap();
+            f.write_all(b"half of the new").unwrap();
+            // Before the commit the target still holds the old bytes.
+            assert_eq!(std::fs::read(&p).unwrap(), b"old");
+        }
+        assert_eq!(std::fs::read(&p).unwrap(), b"old");
+        let mut f = AtomicFile::create(&p).unwrap();
+        f.write_all(b"new").unwrap();
+        f.commit().unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"new");
+        let names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names.len(), 1, "{names:?}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}
