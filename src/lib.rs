@@ -28,6 +28,7 @@
 //! [`sim`] that drives rapier; the rest of the crate speaks its own small
 //! geometry types (or parry's glam re-exports), and [`codec`] knows neither.
 #![warn(missing_docs)]
+#![deny(clippy::undocumented_unsafe_blocks)]
 
 #[cfg(feature = "app")]
 pub mod app;

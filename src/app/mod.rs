@@ -4,9 +4,9 @@
 //! mesh comes from (a file, a codec file, a generator), progress bars, the
 //! codec names on the command line, and how an error ends the process.
 //!
-//! - [`generate`], [`info`], [`build`], [`render`]: `cbvh gen`, `info`,
+//! - [`generate`](mod@generate), [`info`], [`build`], [`render`]: `cbvh gen`, `info`,
 //!   `build`, `render`.
-//! - [`drop`]: `cbvh lucy-on-turbine` and `cbvh robot-in-plant`.
+//! - [`drop`](mod@drop): `cbvh lucy-on-turbine` and `cbvh robot-in-plant`.
 //! - [`plot`]: the drop tests' PNG line plots.
 //!
 //! The binaries are a line each: [`main`] for `cbvh`, and
@@ -161,7 +161,7 @@ impl Structure {
             .chain([Structure::Parry])
     }
 
-    /// clap's parser for `--codec`: the names of [`Structure::all`], each
+    /// clap's parser for `--codec`: the names of `Structure::all`, each
     /// with its summary in `--help`.
     pub fn parser() -> impl clap::builder::TypedValueParser<Value = Structure> {
         use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};

@@ -14,7 +14,7 @@
 //! far points much more than the ones near the contact. So the bound is
 //! taken per node pair of the two-tree traversal, over the box of `B`'s
 //! points in that subtree: [`MotionBound`] is a
-//! [`Prediction`](crate::query::Prediction).
+//! [`crate::query::Prediction`].
 //!
 //! # The bound over a box
 //!

@@ -237,7 +237,7 @@ pub fn count_pair_manifolds<M, C>(
 
 /// The per-pair mode's guard against one region pushed both ways, the
 /// rule the patch mode applies to its patches
-/// ([`opposed_losers`](crate::contact::opposed_losers)): of two manifolds
+/// ([`crate::contact::opposed_losers`]): of two manifolds
 /// whose normals are within 25° of opposite and whose points' bounds (on
 /// shape 1) meet, as two triangles sharing an edge can give when each
 /// pair's own oriented axis leans over its own active edge, the one

@@ -223,13 +223,13 @@ impl NodeCursor for ClBvh {
         }
     }
 
-    /// CLBVH's own traversal ([`super::trace`]).
+    /// CLBVH's own traversal (`trace.rs`).
     #[inline]
     fn closest_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> Option<RayHit> {
         super::trace::closest_hit(self, ray, t_max, stats)
     }
 
-    /// CLBVH's own traversal ([`super::trace`]).
+    /// CLBVH's own traversal (`trace.rs`).
     #[inline]
     fn any_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> bool {
         super::trace::any_hit(self, ray, t_max, stats)

@@ -9,7 +9,7 @@
 //! - **compressed multi-leaf nodes** ([`MultiLeafNode`], 72 bytes): the
 //!   dequantization frame and eight 8-bit child boxes rounded outward; every
 //!   child is a leaf, and the leaves' data (the *leaf block*, see
-//!   [`encode`](self::encode) docs) is stored right behind the node, so the
+//!   `encode.rs` docs) is stored right behind the node, so the
 //!   node needs no child pointers.
 //!
 //! The builder's threshold is the paper's `N × M`: a subtree of at most

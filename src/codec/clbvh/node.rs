@@ -142,7 +142,7 @@ impl InnerNode {
 /// Right behind the node (in the arena) come 8 bytes of *leaf ends*
 /// (`ends[k]` = triangles in lanes `0..=k`; a lane with no triangles is
 /// unused and its box is never reported) and then one leaf block
-/// ([`super::encode`]) holding all the node's triangles, lane by lane.
+/// (`encode.rs`) holding all the node's triangles, lane by lane.
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct MultiLeafNode {

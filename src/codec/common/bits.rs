@@ -170,7 +170,7 @@ impl<'a> BitReader<'a> {
 }
 
 /// The Exp-Golomb code of parameter `k` at the start of `w` (bits from
-/// [`BitReader::peek`]): its value and its length in bits, which the caller
+/// `BitReader::peek`): its value and its length in bits, which the caller
 /// skips (a dictionary decoder reads what follows the code from the same
 /// `w` when it fits). Codes of values at or above 2^27 (at most 55 bits
 /// for `k` ≤ 3, within the 56 bits a peek guarantees) are errors.

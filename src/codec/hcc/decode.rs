@@ -589,13 +589,13 @@ impl NodeCursor for HccBvh {
         self.triangle_count as usize
     }
 
-    /// i-HCCMesh's own traversal ([`super::trace`]).
+    /// i-HCCMesh's own traversal (`trace.rs`).
     #[inline]
     fn closest_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> Option<RayHit> {
         super::trace::closest_hit(self, self, ray, t_max, stats)
     }
 
-    /// i-HCCMesh's own traversal ([`super::trace`]).
+    /// i-HCCMesh's own traversal (`trace.rs`).
     #[inline]
     fn any_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> bool {
         super::trace::any_hit(self, self, ray, t_max, stats)

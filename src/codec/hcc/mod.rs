@@ -20,7 +20,7 @@
 //! is stored uncompressed, 32 bytes a node, with each node's exact box; a
 //! high-level leaf names a low-level tree, whose root box is that leaf's.
 //!
-//! **A low-level tree** is a [`TreeHeader`](node::TreeHeader), a run of
+//! **A low-level tree** is a [`node::TreeHeader`], a run of
 //! 4-byte node words, a run of inter-connections and the tree's own vertex
 //! array. Vertices used by several low-level trees are stored once in each
 //! ([`HccStats::duplicated_fraction`]).

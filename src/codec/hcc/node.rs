@@ -14,7 +14,7 @@
 //! | 30–31 | `0` | `1` | `2` | `2` |
 //!
 //! Vertex indices and corners index the low-level tree's vertex array; a
-//! multi-triangle leaf's block (module [`block`](super::block)) is at the
+//! multi-triangle leaf's block (`block.rs`) is at the
 //! given bit offset of the tree's block stream. The
 //! root node of a low-level tree has no sibling and takes its box from the
 //! high-level tree, so an inner root's bits 0–4 hold its template id

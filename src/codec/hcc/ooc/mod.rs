@@ -60,7 +60,7 @@
 //!    inside the template: a template leaf or a leaf of the tree. Node
 //!    types, child positions, inter-connections (child template ids, left
 //!    start, index) all follow from the symbols; nothing else is stored.
-//! 2. **Vertex indices**, streaming-mesh style (§5.1, [ILS05]): the leaves
+//! 2. **Vertex indices**, streaming-mesh style (§5.1, \[ILS05\]): the leaves
 //!    in node-word order, which is the same depth-first order of the
 //!    templates; each corner is one symbol (context by corner slot): 0 for
 //!    a vertex never seen in this tree (it takes the next local index,
@@ -73,7 +73,7 @@
 //!    zig-zagged residuals, one context per axis and kind of prediction,
 //!    from the corners of the vertex's first triangle that have smaller
 //!    indices and the triangles before it: the parallelogram `a + b − c`
-//!    [AG04] when the other two corners are known and an earlier triangle
+//!    \[AG04\] when the other two corners are known and an earlier triangle
 //!    of the tree shares their edge (`c` its third corner; found through
 //!    each vertex's last 16 triangles); their midpoint or the one known
 //!    corner otherwise; the tree's last decoded vertex when no corner is
