@@ -78,9 +78,10 @@ const PALETTE: [RGBColor; 12] = [
 /// A series name has the same colour in every panel (the first panel's
 /// order picks the colours).
 ///
-/// The y axes are logarithmic: the sims' series span four decades or more
-/// (parry's hundreds of milliseconds against cbvh's fractions of one), and
-/// on a linear axis every cbvh line would lie flat on zero. Values at or
+/// The y axes are logarithmic: the sims' series can span four decades or
+/// more (parry's TriMesh against cbvh's contact patches on a large scene,
+/// a step in contact against one without), and on a linear axis the lower
+/// lines would lie flat on zero. Values at or
 /// below [`LOG_FLOOR`] of a panel's largest one (a step without contact
 /// takes about nothing) are drawn at that floor, which the axis label
 /// states.
@@ -101,7 +102,7 @@ pub fn line_plot_png(
     }
     let color_of = |name: &str| {
         let k = names.iter().position(|n| *n == name).unwrap_or(0);
-        PALETTE[k % PALETTE.len()]
+        color_for(k, names.len())
     };
     let mut buf = vec![255u8; (width * height * 3) as usize];
     {
@@ -127,13 +128,33 @@ pub fn line_plot_png(
     file.commit().map_err(|e| err(&e))
 }
 
-/// One panel of [`line_plot_png`] on `area`.
+/// The colour of series `k` of `n`: the palette's while it lasts, and
+/// otherwise `n` hues spread around the colour wheel by the golden angle,
+/// in two lightnesses, so that no two series of a plot share a colour.
+fn color_for(k: usize, n: usize) -> RGBColor {
+    if n <= PALETTE.len() {
+        return PALETTE[k];
+    }
+    let hue = (k as f64 * 0.618_033_988_75).fract();
+    let light = if k.is_multiple_of(2) { 0.38 } else { 0.55 };
+    let c = HSLColor(hue, 0.85, light).to_rgba();
+    RGBColor(c.0, c.1, c.2)
+}
+
+/// Width of the legend column right of each panel's plot, in pixels.
+const LEGEND_WIDTH: u32 = 210;
+
+/// One panel of [`line_plot_png`] on `area`: the plot, and right of it
+/// (never over the lines) the legend.
 fn draw_panel(
     area: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
     panel: &Panel<'_>,
     color_of: &dyn Fn(&str) -> RGBColor,
 ) -> Result<(), String> {
     let series = panel.series;
+    let (w, _) = area.dim_in_pixel();
+    let (area, legend) = area.split_horizontally(w.saturating_sub(LEGEND_WIDTH));
+    let area = &area;
     let x_max = series.iter().map(|s| s.1.len()).max().unwrap_or(1).max(1);
     let (y_min, y_max) = log_range(series);
     let mut chart = ChartBuilder::on(area)
@@ -160,19 +181,26 @@ fn draw_panel(
                 ys.iter().enumerate().map(|(i, y)| (i, floor_at(*y, y_min))),
                 color.stroke_width(2),
             ))
-            .map_err(|e| e.to_string())?
-            .label(name.as_str())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-            });
+            .map_err(|e| e.to_string())?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .map_err(|e| e.to_string())?;
+    // The legend in its own column, one row a series, in series order.
+    for (k, (name, _)) in series.iter().enumerate() {
+        let y = 40 + 17 * k as i32;
+        let color = color_of(name);
+        legend
+            .draw(&PathElement::new(
+                vec![(4, y), (28, y)],
+                color.stroke_width(3),
+            ))
+            .map_err(|e| e.to_string())?;
+        legend
+            .draw(&Text::new(
+                name.as_str(),
+                (34, y - 7),
+                ("sans-serif", 15).into_font(),
+            ))
+            .map_err(|e| e.to_string())?;
+    }
     Ok(())
 }
 
@@ -200,6 +228,21 @@ mod tests {
         assert_eq!(floor_at(5.0, lo), 5.0);
         // Nothing positive: a default decade range, still a valid axis.
         assert_eq!(log_range(&one(&[0.0])), (1e-3, 1.0));
+    }
+
+    /// Every series of a plot has a colour of its own, however many there
+    /// are (the sims draw 17 runs).
+    #[test]
+    fn every_series_has_its_own_colour() {
+        for n in [3, 12, 13, 17, 30] {
+            let colours: std::collections::HashSet<_> = (0..n)
+                .map(|k| {
+                    let c = color_for(k, n);
+                    (c.0, c.1, c.2)
+                })
+                .collect();
+            assert_eq!(colours.len(), n, "{n} series");
+        }
     }
 
     /// A plot with zeros in it is written as a PNG of the asked size.
