@@ -4,7 +4,8 @@
 //! uses them directly: as parry3d / rapier3d collision shapes, and as the
 //! acceleration structure of a CPU ray tracer.
 //!
-//! The crate is organised as in `DESIGN.md`:
+//! The modules, from the mesh to its uses (each folder's module docs say
+//! what it owns):
 //!
 //! - [`mesh`]: the [`Mesh`] type and its loaders/writers (OFF, PLY, OBJ, STL).
 //! - [`scene`]: deterministic procedural scenes standing in for the papers' models.
@@ -13,6 +14,8 @@
 //! - [`codec`]: the storage forms, the [`Codec`](codec::Codec) contract they
 //!   implement, and the registry ([`codec::any`]) that names every codec once.
 //! - [`query`]: ray, overlap, closest-point and tree-vs-tree queries over any cursor.
+//! - [`contact`]: cbvh's own contacts: the batched triangle-pair kernel,
+//!   active edges, oriented normals, and contact patches.
 //! - [`parry`]: the parry3d / rapier3d integration.
 //! - [`sim`]: the rapier harnesses: the drop test behind the sims, and
 //!   scenes with analytic answers that check contacts in motion.
@@ -44,11 +47,8 @@ pub mod mesh;
 pub mod parry;
 pub mod query;
 pub mod render;
-pub mod sim;
-// The folder is src/gen; the module is `scene` because `gen` is a reserved
-// word in edition 2024.
-#[path = "gen/mod.rs"]
 pub mod scene;
+pub mod sim;
 
 pub use build::{BuildOptions, CanonicalBvh, Layout};
 pub use cursor::{NodeCursor, TraversalStats};

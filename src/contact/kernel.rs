@@ -45,10 +45,8 @@ use super::features::clip_to_prism;
 pub use super::features::{closest_on_segments, closest_points};
 use super::orient::{OrientedAxis, PairFacing, oriented_axis_from};
 use super::sat::{Batch, Corners, sat_dispatch};
+pub use super::sat::{LANES, Simd};
 use crate::geom::Triangle;
-
-/// Pairs tested together by the batched separating-axis test.
-pub const LANES: usize = 8;
 
 /// Number of candidate axes per pair (2 faces, 9 edge-edge, 6 in-plane).
 pub const AXES: usize = 17;
@@ -170,15 +168,6 @@ impl KernelStats {
         self.exact_distances += o.exact_distances;
         self.absorbed += o.absorbed;
     }
-}
-
-/// Which implementation of the batched test runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Simd {
-    /// Whatever the processor supports (AVX2 when detected).
-    Auto,
-    /// The portable path (the target's baseline vector width).
-    Scalar,
 }
 
 /// Queues triangle pairs and hands each pair within the prediction distance

@@ -3,8 +3,19 @@
 //! over the lanes so that it vectorizes, with an AVX2 build of the same code
 //! chosen at run time (see [`super::kernel`] for the axes).
 
-use super::kernel::{LANES, Simd};
 use crate::geom::Triangle;
+
+/// Pairs tested together by the batched separating-axis test.
+pub const LANES: usize = 8;
+
+/// Which implementation of the batched test runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Simd {
+    /// Whatever the processor supports (AVX2 when detected).
+    Auto,
+    /// The portable path (the target's baseline vector width).
+    Scalar,
+}
 
 pub(super) type Lanes = [f32; LANES];
 

@@ -494,21 +494,96 @@ pub fn energy_rise(energy: &[f32], points_per_step: &[usize]) -> f32 {
     rise
 }
 
+/// What can go wrong running a drop test: building its shapes.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// parry could not build a `TriMesh` (or set its flags).
+    #[error("parry TriMesh: {0}")]
+    Parry(String),
+    /// cbvh could not build a shape.
+    #[error(transparent)]
+    Cbvh(#[from] crate::parry::ShapeBuildError),
+    /// The decode cache could not be limited.
+    #[error(transparent)]
+    Codec(#[from] crate::codec::CodecError),
+    /// A small-cache run of a codec without a cache.
+    #[error("{0}: the codec has no cache to limit")]
+    NoCache(String),
+}
+
+/// Both meshes' shapes of a run.
 enum Shapes {
     Parry(SharedShape, SharedShape, [usize; 2]),
     Cbvh(CbvhShape, CbvhShape),
 }
 
-fn make_shapes(kind: ShapeKind, scene: &DropScene) -> Result<Shapes, String> {
+impl Shapes {
+    /// The shapes as rapier takes them (dropped, base), their bytes, and
+    /// the cbvh shapes themselves for their caches.
+    fn shared(&self) -> (SharedShape, SharedShape, [usize; 2]) {
+        match self {
+            Shapes::Parry(a, b, bytes) => (a.clone(), b.clone(), *bytes),
+            Shapes::Cbvh(a, b) => (
+                SharedShape::new(a.clone()),
+                SharedShape::new(b.clone()),
+                [a.bytes_total(), b.bytes_total()],
+            ),
+        }
+    }
+
+    /// The base's triangle count.
+    fn base_count(&self) -> usize {
+        match self {
+            Shapes::Cbvh(_, b) => b.triangle_count(),
+            Shapes::Parry(_, b, _) => b
+                .as_shape::<parry3d::shape::TriMesh>()
+                .map_or(0, |t| t.indices().len()),
+        }
+    }
+
+    /// The base's triangle `id` as the shape stores it.
+    fn base_triangle(&self, id: u32) -> Option<[Vector; 3]> {
+        match self {
+            Shapes::Cbvh(_, b) => {
+                let t = b.parry_triangle(id);
+                Some([t.a, t.b, t.c])
+            }
+            Shapes::Parry(_, b, _) => {
+                let tm = b.as_shape::<parry3d::shape::TriMesh>()?;
+                let t = tm.triangle(id);
+                Some([t.a, t.b, t.c])
+            }
+        }
+    }
+
+    /// The papers' interference figure: intersecting triangle pairs at the
+    /// relative pose `pos12`.
+    fn interference(&self, pos12: &PPose) -> u64 {
+        match self {
+            Shapes::Cbvh(a, b) => interference(pos12, a, b),
+            Shapes::Parry(a, b, _) => {
+                let (Some(ta), Some(tb)) = (
+                    a.as_shape::<parry3d::shape::TriMesh>(),
+                    b.as_shape::<parry3d::shape::TriMesh>(),
+                ) else {
+                    unreachable!("parry runs use TriMesh shapes")
+                };
+                trimesh_interference(pos12, ta, tb)
+            }
+        }
+    }
+}
+
+fn make_shapes(kind: ShapeKind, scene: &DropScene) -> Result<Shapes, SimError> {
     let (codec, small_cache) = match kind {
         ShapeKind::Parry | ShapeKind::ParryFixed => {
-            let mut a =
-                parry_trimesh(&scene.dropped).map_err(|e| format!("parry TriMesh: {e:?}"))?;
-            let mut b = parry_trimesh(&scene.base).map_err(|e| format!("parry TriMesh: {e:?}"))?;
+            let parry = |e: &dyn std::fmt::Debug| SimError::Parry(format!("{e:?}"));
+            let mut a = parry_trimesh(&scene.dropped).map_err(|e| parry(&e))?;
+            let mut b = parry_trimesh(&scene.base).map_err(|e| parry(&e))?;
             if kind == ShapeKind::ParryFixed {
                 for t in [&mut a, &mut b] {
                     t.set_flags(TriMeshFlags::FIX_INTERNAL_EDGES)
-                        .map_err(|e| format!("parry TriMesh flags: {e:?}"))?;
+                        .map_err(|e| parry(&e))?;
                 }
             }
             let bytes = [
@@ -526,9 +601,8 @@ fn make_shapes(kind: ShapeKind, scene: &DropScene) -> Result<Shapes, String> {
     };
     // Caches start out holding the whole tree.
     let options = scene.codec_options.clone().with_cache_budget(usize::MAX);
-    let make = |m: &Mesh| -> Result<CbvhShape, String> {
-        let shape = CbvhShape::build(m, &scene.build_options, codec, &options)
-            .map_err(|e| e.to_string())?;
+    let make = |m: &Mesh| -> Result<CbvhShape, SimError> {
+        let shape = CbvhShape::build(m, &scene.build_options, codec, &options)?;
         if !small_cache {
             return Ok(shape);
         }
@@ -538,8 +612,7 @@ fn make_shapes(kind: ShapeKind, scene: &DropScene) -> Result<Shapes, String> {
         let small = shape
             .codec()
             .with_cache_budget_of(&|decoded| decoded / 10)
-            .ok_or_else(|| format!("{}: the codec has no cache to limit", kind.name()))?
-            .map_err(|e| e.to_string())?;
+            .ok_or_else(|| SimError::NoCache(kind.name()))??;
         Ok(CbvhShape::from_codec(small, m))
     };
     Ok(Shapes::Cbvh(make(&scene.dropped)?, make(&scene.base)?))
@@ -573,7 +646,7 @@ pub fn run(
     scene: &DropScene,
     spec: RunSpec,
     progress: &mut dyn FnMut(usize, usize),
-) -> Result<RunReport, String> {
+) -> Result<RunReport, SimError> {
     run_replaying(scene, spec, Replay::Off, REPLAY_ROUNDS, progress)
 }
 
@@ -587,132 +660,226 @@ pub fn run_replaying(
     replay: Replay<'_>,
     rounds: usize,
     progress: &mut dyn FnMut(usize, usize),
-) -> Result<RunReport, String> {
-    let kind = spec.kind;
-    let rss_reset = reset_peak_rss();
-    let t0 = Instant::now();
-    let shapes = make_shapes(kind, scene)?;
-    let build_seconds = t0.elapsed().as_secs_f64();
-    let (s_drop, s_base, bytes, cbvh) = match &shapes {
-        Shapes::Parry(a, b, bytes) => (a.clone(), b.clone(), *bytes, None),
-        Shapes::Cbvh(a, b) => (
-            SharedShape::new(a.clone()),
-            SharedShape::new(b.clone()),
-            [a.bytes_total(), b.bytes_total()],
-            Some((a.clone(), b.clone())),
-        ),
-    };
-    let counters = ContactCounters::shared();
-    let timed = match kind {
-        ShapeKind::Parry | ShapeKind::ParryFixed => None,
-        _ => Some(
-            Timed::new(
-                Dispatcher::new(spec.mode)
-                    .with_counters(counters.clone())
-                    .then_default(),
-            )
-            .recording(),
-        ),
-    };
-    let parry_timed = Timed::new(DefaultQueryDispatcher).recording();
-    let (counter, call_log) = match &timed {
-        Some(t) => (t.counter(), t.calls()),
-        None => (parry_timed.counter(), parry_timed.calls()),
-    };
-    let call_log = call_log.expect("both dispatchers record");
-    let base_address = shape_address(&*s_base.0);
-    let mut calls_per_step = Vec::with_capacity(scene.steps);
-    let mut world = PhysicsWorld {
-        gravity: Vector::new(0.0, -9.81, 0.0),
-        ..Default::default()
-    };
-    world.integration_parameters.dt = scene.dt;
-    // Contact recycling skips the narrow phase while a pair's relative pose
-    // drifts less than a threshold, reusing old contacts: that would time
-    // nothing. The drop test measures collision detection, so every step
-    // recomputes contacts (as in the RACBVH paper's benchmark).
-    world.integration_parameters.contact_recycling = scene.contact_recycling;
-    world.narrow_phase = match timed {
-        Some(t) => NarrowPhase::with_query_dispatcher(t),
-        None => NarrowPhase::with_query_dispatcher(parry_timed),
-    };
-    let base_body = world.bodies.insert(RigidBodyBuilder::fixed());
-    let drop_body: RigidBodyHandle = world
-        .bodies
-        .insert(RigidBodyBuilder::dynamic().can_sleep(false));
-    let base_collider: ColliderHandle = world.colliders.insert_with_parent(
-        ColliderBuilder::new(s_base.clone()).friction(0.6),
-        base_body,
-        &mut world.bodies,
-    );
-    world.colliders.insert_with_parent(
-        ColliderBuilder::new(s_drop.clone())
-            .density(1.0)
-            .friction(0.6),
-        drop_body,
-        &mut world.bodies,
-    );
-
-    let mut narrow = Vec::with_capacity(scene.steps);
-    let mut step_ms = Vec::with_capacity(scene.steps);
-    let mut pairs_per_step = Vec::with_capacity(scene.steps);
-    let mut manifolds_per_step = Vec::with_capacity(scene.steps);
-    let mut points_per_step = Vec::with_capacity(scene.steps);
-    let mut heights = Vec::with_capacity(scene.steps);
-    let mut inter_ms = Vec::with_capacity(scene.steps);
-    let mut inter_pairs = Vec::with_capacity(scene.steps);
-    let mut energy = Vec::with_capacity(scene.steps);
-    let floor = scene.base.bounds().map_or(0.0, |(lo, _)| lo[1]);
-    let mut max_penetration = 0.0f32;
-    let mut max_normal_angle = 0.0f32;
-    // Whether the base is closed, and its outward side, for the normal
-    // audit (from the mesh, as every representation has the same surface).
-    let base_edges = EdgeFlags::compute(scene.base.triangles.len(), |t| {
-        crate::geom::triangle_from_arrays(scene.base.triangle_vertices(t as usize))
-    });
-    let base_count = match &shapes {
-        Shapes::Cbvh(_, b) => b.triangle_count(),
-        Shapes::Parry(_, b, _) => b
-            .as_shape::<parry3d::shape::TriMesh>()
-            .map_or(0, |t| t.indices().len()),
-    };
-    let base_triangle = |id: u32| -> Option<[Vector; 3]> {
-        match &shapes {
-            Shapes::Cbvh(_, b) => {
-                let t = b.parry_triangle(id);
-                Some([t.a, t.b, t.c])
-            }
-            Shapes::Parry(_, b, _) => {
-                let tm = b.as_shape::<parry3d::shape::TriMesh>()?;
-                let t = tm.triangle(id);
-                Some([t.a, t.b, t.c])
-            }
-        }
-    };
-    let around = Neighbourhoods::new(base_count, &base_triangle);
+) -> Result<RunReport, SimError> {
+    let mut run = Run::new(scene, spec)?;
+    let audit = NormalAudit::new(scene, &run.shapes);
+    let mut samples = Samples::with_capacity(scene.steps);
     for step in 0..scene.steps {
-        let before = counter.load(Ordering::Relaxed);
-        counters.take();
+        samples.step(&mut run, &audit);
+        progress(step + 1, scene.steps);
+    }
+    Ok(report(scene, run, samples, replay, rounds))
+}
+
+/// A run set up in rapier: the two bodies on their shapes, the timed
+/// dispatcher recording every call.
+struct Run {
+    spec: RunSpec,
+    shapes: Shapes,
+    s_drop: SharedShape,
+    s_base: SharedShape,
+    bytes: [usize; 2],
+    build_seconds: f64,
+    rss_reset: bool,
+    world: PhysicsWorld,
+    drop_body: RigidBodyHandle,
+    base_body: RigidBodyHandle,
+    base_collider: ColliderHandle,
+    /// Nanoseconds spent in the dispatcher so far.
+    counter: std::sync::Arc<std::sync::atomic::AtomicU64>,
+    /// cbvh's contact counters (triangle-pair contacts of the step).
+    counters: std::sync::Arc<ContactCounters>,
+    /// The dispatcher's calls since the last step.
+    call_log: super::timed::CallLog,
+    base_address: usize,
+    /// The base's lowest point (the energy audit's zero of potential).
+    floor: f32,
+}
+
+impl Run {
+    fn new(scene: &DropScene, spec: RunSpec) -> Result<Self, SimError> {
+        let kind = spec.kind;
+        let rss_reset = reset_peak_rss();
+        let t0 = Instant::now();
+        let shapes = make_shapes(kind, scene)?;
+        let build_seconds = t0.elapsed().as_secs_f64();
+        let (s_drop, s_base, bytes) = shapes.shared();
+        let counters = ContactCounters::shared();
+        let timed = match kind {
+            ShapeKind::Parry | ShapeKind::ParryFixed => None,
+            _ => Some(
+                Timed::new(
+                    Dispatcher::new(spec.mode)
+                        .with_counters(counters.clone())
+                        .then_default(),
+                )
+                .recording(),
+            ),
+        };
+        let parry_timed = Timed::new(DefaultQueryDispatcher).recording();
+        let (counter, call_log) = match &timed {
+            Some(t) => (t.counter(), t.calls()),
+            None => (parry_timed.counter(), parry_timed.calls()),
+        };
+        let call_log = call_log.expect("both dispatchers record");
+        let base_address = shape_address(&*s_base.0);
+        let mut world = PhysicsWorld {
+            gravity: Vector::new(0.0, -9.81, 0.0),
+            ..Default::default()
+        };
+        world.integration_parameters.dt = scene.dt;
+        // Contact recycling skips the narrow phase while a pair's relative
+        // pose drifts less than a threshold, reusing old contacts: that
+        // would time nothing. The drop test measures collision detection,
+        // so every step recomputes contacts (as in the RACBVH paper's
+        // benchmark).
+        world.integration_parameters.contact_recycling = scene.contact_recycling;
+        world.narrow_phase = match timed {
+            Some(t) => NarrowPhase::with_query_dispatcher(t),
+            None => NarrowPhase::with_query_dispatcher(parry_timed),
+        };
+        let base_body = world.bodies.insert(RigidBodyBuilder::fixed());
+        let drop_body: RigidBodyHandle = world
+            .bodies
+            .insert(RigidBodyBuilder::dynamic().can_sleep(false));
+        let base_collider: ColliderHandle = world.colliders.insert_with_parent(
+            ColliderBuilder::new(s_base.clone()).friction(0.6),
+            base_body,
+            &mut world.bodies,
+        );
+        world.colliders.insert_with_parent(
+            ColliderBuilder::new(s_drop.clone())
+                .density(1.0)
+                .friction(0.6),
+            drop_body,
+            &mut world.bodies,
+        );
+        Ok(Self {
+            spec,
+            shapes,
+            s_drop,
+            s_base,
+            bytes,
+            build_seconds,
+            rss_reset,
+            world,
+            drop_body,
+            base_body,
+            base_collider,
+            counter,
+            counters,
+            call_log,
+            base_address,
+            floor: scene.base.bounds().map_or(0.0, |(lo, _)| lo[1]),
+        })
+    }
+}
+
+/// The normal audit: the largest angle between an emitted normal and the
+/// base's outward surface normal around the contact.
+struct NormalAudit {
+    /// Whether the base is closed, and its outward side (from the mesh, as
+    /// every representation has the same surface).
+    base_edges: EdgeFlags,
+    around: Neighbourhoods,
+}
+
+impl NormalAudit {
+    fn new(scene: &DropScene, shapes: &Shapes) -> Self {
+        let base_edges = EdgeFlags::compute(scene.base.triangles.len(), |t| {
+            crate::geom::triangle_from_arrays(scene.base.triangle_vertices(t as usize))
+        });
+        let around = Neighbourhoods::new(shapes.base_count(), &|id| shapes.base_triangle(id));
+        Self { base_edges, around }
+    }
+
+    /// The angle in degrees between `n` (out of the base, in its frame) and
+    /// the base's outward surface normal nearest it among the triangles
+    /// around triangle `id` (at an edge or a corner the surface has every
+    /// normal between theirs); `None` when there is none to compare.
+    fn angle(&self, shapes: &Shapes, n: Vector, id: u32, drop_centre: Vector) -> Option<f32> {
+        let outward = |t: [Vector; 3]| {
+            let face = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero();
+            let sign = if self.base_edges.is_closed() {
+                self.base_edges.outward()
+            } else if face.dot(drop_centre - t[0]) < 0.0 {
+                -1.0
+            } else {
+                1.0
+            };
+            face * sign
+        };
+        let best = self
+            .around
+            .of(id)
+            .filter_map(|k| shapes.base_triangle(k).map(outward))
+            .filter(|f| *f != Vector::ZERO)
+            .map(|f| n.dot(f).clamp(-1.0, 1.0))
+            .fold(None, |a: Option<f32>, c| Some(a.map_or(c, |a| a.max(c))));
+        best.filter(|_| n != Vector::ZERO)
+            .map(|cos| cos.acos().to_degrees())
+    }
+}
+
+/// What a run measures, step by step.
+struct Samples {
+    narrow: Vec<f64>,
+    step_ms: Vec<f64>,
+    pairs: Vec<usize>,
+    manifolds: Vec<usize>,
+    points: Vec<usize>,
+    heights: Vec<f32>,
+    inter_ms: Vec<f64>,
+    inter_pairs: Vec<u64>,
+    energy: Vec<f32>,
+    calls: Vec<Vec<Call>>,
+    max_penetration: f32,
+    max_normal_angle: f32,
+}
+
+impl Samples {
+    fn with_capacity(steps: usize) -> Self {
+        Self {
+            narrow: Vec::with_capacity(steps),
+            step_ms: Vec::with_capacity(steps),
+            pairs: Vec::with_capacity(steps),
+            manifolds: Vec::with_capacity(steps),
+            points: Vec::with_capacity(steps),
+            heights: Vec::with_capacity(steps),
+            inter_ms: Vec::with_capacity(steps),
+            inter_pairs: Vec::with_capacity(steps),
+            energy: Vec::with_capacity(steps),
+            calls: Vec::with_capacity(steps),
+            max_penetration: 0.0,
+            max_normal_angle: 0.0,
+        }
+    }
+
+    /// Steps the world once and records the step.
+    fn step(&mut self, run: &mut Run, audit: &NormalAudit) {
+        let before = run.counter.load(Ordering::Relaxed);
+        run.counters.take();
         let t = Instant::now();
-        world.step();
-        step_ms.push(t.elapsed().as_secs_f64() * 1e3);
-        narrow.push((counter.load(Ordering::Relaxed) - before) as f64 / 1e6);
-        let calls = std::mem::take(&mut *call_log.lock().unwrap_or_else(|e| e.into_inner()));
-        calls_per_step.push(
+        run.world.step();
+        self.step_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        self.narrow
+            .push((run.counter.load(Ordering::Relaxed) - before) as f64 / 1e6);
+        let calls = std::mem::take(&mut *run.call_log.lock().unwrap_or_else(|e| e.into_inner()));
+        self.calls.push(
             calls
                 .into_iter()
                 .map(|c| Call {
                     pos12: c.pos12,
                     prediction: c.prediction,
-                    base_first: c.first == base_address,
+                    base_first: c.first == run.base_address,
                 })
-                .collect::<Vec<_>>(),
+                .collect(),
         );
-        let [_, tri_contacts, _] = counters.take();
+        let [_, tri_contacts, _] = run.counters.take();
         let (mut manifolds, mut points) = (0, 0);
-        let drop_centre = world.bodies[drop_body].center_of_mass();
-        for pair in world.narrow_phase.contact_pairs() {
-            let base_first = pair.collider1 == base_collider;
+        let drop_centre = run.world.bodies[run.drop_body].center_of_mass();
+        for pair in run.world.narrow_phase.contact_pairs() {
+            let base_first = pair.collider1 == run.base_collider;
             for m in pair.manifolds() {
                 if !m.points.is_empty() {
                     manifolds += 1;
@@ -724,84 +891,59 @@ pub fn run_replaying(
                     } else {
                         (m.local_n2, m.subshape2)
                     };
-                    // The base's outward surface normal nearest `n` among
-                    // the triangles around the manifold's: at an edge or a
-                    // corner the surface has every normal between theirs.
-                    let outward = |t: [Vector; 3]| {
-                        let face = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero();
-                        let sign = if base_edges.is_closed() {
-                            base_edges.outward()
-                        } else if face.dot(drop_centre - t[0]) < 0.0 {
-                            -1.0
-                        } else {
-                            1.0
-                        };
-                        face * sign
-                    };
-                    let best = around
-                        .of(id)
-                        .filter_map(|k| base_triangle(k).map(outward))
-                        .filter(|f| *f != Vector::ZERO)
-                        .map(|f| n.dot(f).clamp(-1.0, 1.0))
-                        .fold(None, |a: Option<f32>, c| Some(a.map_or(c, |a| a.max(c))));
-                    if let Some(cos) = best.filter(|_| n != Vector::ZERO) {
-                        max_normal_angle = max_normal_angle.max(cos.acos().to_degrees());
+                    if let Some(angle) = audit.angle(&run.shapes, n, id, drop_centre) {
+                        self.max_normal_angle = self.max_normal_angle.max(angle);
                     }
                 }
                 for p in &m.points {
-                    max_penetration = max_penetration.max(-p.dist);
+                    self.max_penetration = self.max_penetration.max(-p.dist);
                 }
             }
         }
-        let contact_pairs = match spec.mode {
-            ContactMode::Patches(_) if !kind.is_parry() => tri_contacts as usize,
+        let contact_pairs = match run.spec.mode {
+            ContactMode::Patches(_) if !run.spec.kind.is_parry() => tri_contacts as usize,
             _ => manifolds,
         };
         // The papers' interference figure at this step's pose.
-        let pos12 = world.bodies[drop_body]
+        let world = &run.world;
+        let pos12 = world.bodies[run.drop_body]
             .position()
-            .inv_mul(world.bodies[base_body].position());
+            .inv_mul(world.bodies[run.base_body].position());
         let ti = Instant::now();
-        let n_inter = match &shapes {
-            Shapes::Cbvh(a, b) => interference(&pos12, a, b),
-            Shapes::Parry(a, b, _) => {
-                let (Some(ta), Some(tb)) = (
-                    a.as_shape::<parry3d::shape::TriMesh>(),
-                    b.as_shape::<parry3d::shape::TriMesh>(),
-                ) else {
-                    unreachable!("parry runs use TriMesh shapes")
-                };
-                trimesh_interference(&pos12, ta, tb)
-            }
-        };
-        inter_ms.push(ti.elapsed().as_secs_f64() * 1e3);
-        inter_pairs.push(n_inter);
-        let body = &world.bodies[drop_body];
-        heights.push(body.translation().y);
+        let n_inter = run.shapes.interference(&pos12);
+        self.inter_ms.push(ti.elapsed().as_secs_f64() * 1e3);
+        self.inter_pairs.push(n_inter);
+        let body = &world.bodies[run.drop_body];
+        self.heights.push(body.translation().y);
         // rapier's leap-frog form: the potential at the half step, in step
         // with the kinetic energy of the velocities just integrated.
-        energy.push(
+        let dt = world.integration_parameters.dt;
+        self.energy.push(
             body.kinetic_energy()
-                + body.gravitational_potential_energy(scene.dt, world.gravity)
-                + body.mass() * world.gravity.y * floor,
+                + body.gravitational_potential_energy(dt, world.gravity)
+                + body.mass() * world.gravity.y * run.floor,
         );
-        pairs_per_step.push(contact_pairs);
-        manifolds_per_step.push(manifolds);
-        points_per_step.push(points);
-        progress(step + 1, scene.steps);
+        self.pairs.push(contact_pairs);
+        self.manifolds.push(manifolds);
+        self.points.push(points);
     }
+}
+
+/// The run's report from its samples, after the replay if one is asked.
+fn report(scene: &DropScene, run: Run, s: Samples, replay: Replay<'_>, rounds: usize) -> RunReport {
+    let (spec, kind) = (run.spec, run.spec.kind);
     let in_contact = |v: &[f64]| -> Vec<f64> {
         v.iter()
-            .zip(&points_per_step)
+            .zip(&s.points)
             .filter(|(_, p)| **p > 0)
             .map(|(t, _)| *t)
             .collect()
     };
-    let narrow_in_contact = in_contact(&narrow);
+    let narrow_in_contact = in_contact(&s.narrow);
     let trajectory = Trajectory {
         from: spec.name(),
-        steps: calls_per_step,
-        in_contact: points_per_step.iter().map(|&p| p > 0).collect(),
+        steps: s.calls,
+        in_contact: s.points.iter().map(|&p| p > 0).collect(),
     };
     let along = match replay {
         Replay::Off => None,
@@ -810,14 +952,18 @@ pub fn run_replaying(
     };
     let replay_ms = along.map(|t| {
         let ms = match kind {
-            ShapeKind::Parry | ShapeKind::ParryFixed => {
-                replay_along(&DefaultQueryDispatcher, t, &*s_base, &*s_drop, rounds)
-            }
+            ShapeKind::Parry | ShapeKind::ParryFixed => replay_along(
+                &DefaultQueryDispatcher,
+                t,
+                &*run.s_base,
+                &*run.s_drop,
+                rounds,
+            ),
             _ => replay_along(
                 &Dispatcher::new(spec.mode).then_default(),
                 t,
-                &*s_base,
-                &*s_drop,
+                &*run.s_base,
+                &*run.s_drop,
                 rounds,
             ),
         };
@@ -830,7 +976,8 @@ pub fn run_replaying(
         );
         (t.from.clone(), stats, ms)
     });
-    let body = &world.bodies[drop_body];
+    let world = &run.world;
+    let body = &world.bodies[run.drop_body];
     let tr = body.translation();
     let rot = body.rotation();
     let tris = scene.dropped.triangles.len() + scene.base.triangles.len();
@@ -838,50 +985,57 @@ pub fn run_replaying(
         (0..3).map(|k| hi[k] - lo[k]).fold(0.0f32, f32::max)
     });
     let drop_scale = body.mass() * world.gravity.length() * size;
-    Ok(RunReport {
+    let cbvh = match &run.shapes {
+        Shapes::Cbvh(a, b) => Some((a, b)),
+        Shapes::Parry(..) => None,
+    };
+    let bytes = run.bytes;
+    RunReport {
         shape: spec.name(),
         contact_mode: if kind.is_parry() {
             "parry".into()
         } else {
             spec.mode.name().into()
         },
-        build_seconds,
+        build_seconds: run.build_seconds,
         narrow_phase_ms: TimeStats::of(&narrow_in_contact),
-        step_ms: TimeStats::of(&in_contact(&step_ms)),
+        step_ms: TimeStats::of(&in_contact(&s.step_ms)),
         steps_in_contact: narrow_in_contact.len(),
-        max_contact_pairs: pairs_per_step.iter().copied().max().unwrap_or(0),
-        max_manifolds: manifolds_per_step.iter().copied().max().unwrap_or(0),
-        max_contact_points: points_per_step.iter().copied().max().unwrap_or(0),
-        interference_ms: TimeStats::of(&in_contact(&inter_ms)),
-        max_interference_pairs: inter_pairs.iter().copied().max().unwrap_or(0),
-        max_penetration,
-        max_normal_angle_deg: max_normal_angle,
-        peak_rss_bytes: if rss_reset { peak_rss_bytes() } else { None },
+        max_contact_pairs: s.pairs.iter().copied().max().unwrap_or(0),
+        max_manifolds: s.manifolds.iter().copied().max().unwrap_or(0),
+        max_contact_points: s.points.iter().copied().max().unwrap_or(0),
+        interference_ms: TimeStats::of(&in_contact(&s.inter_ms)),
+        max_interference_pairs: s.inter_pairs.iter().copied().max().unwrap_or(0),
+        max_penetration: s.max_penetration,
+        max_normal_angle_deg: s.max_normal_angle,
+        peak_rss_bytes: if run.rss_reset {
+            peak_rss_bytes()
+        } else {
+            None
+        },
         bytes_per_triangle: (bytes[0] + bytes[1]) as f64 / tris.max(1) as f64,
         bytes,
         final_translation: [tr.x, tr.y, tr.z],
         final_rotation: [rot.x, rot.y, rot.z, rot.w],
         final_speed: body.linvel().length(),
         final_state: final_state(scene, body.center_of_mass(), body.linvel().length()),
-        energy_gain: energy_rise(&energy, &points_per_step) / drop_scale.max(f32::MIN_POSITIVE),
-        caches: cbvh
-            .as_ref()
-            .and_then(|(a, b)| Some([a.codec().cache_stats()?, b.codec().cache_stats()?])),
+        energy_gain: energy_rise(&s.energy, &s.points) / drop_scale.max(f32::MIN_POSITIVE),
+        caches: cbvh.and_then(|(a, b)| Some([a.codec().cache_stats()?, b.codec().cache_stats()?])),
         fallback_bvh_built: cbvh
             .is_some_and(|(a, b)| a.fallback_bvh_built() || b.fallback_bvh_built()),
         replay_along: replay_ms.as_ref().map(|r| r.0.clone()),
         replay_narrow_phase_ms: replay_ms.as_ref().map(|r| r.1),
         replay_narrow_phase_ms_per_step: replay_ms.map(|r| r.2).unwrap_or_default(),
         trajectory,
-        narrow_phase_ms_per_step: narrow,
-        contact_pairs_per_step: pairs_per_step,
-        manifolds_per_step,
-        interference_ms_per_step: inter_ms,
-        interference_pairs_per_step: inter_pairs,
-        contact_points_per_step: points_per_step,
-        height_per_step: heights,
-        energy_per_step: energy,
-    })
+        narrow_phase_ms_per_step: s.narrow,
+        contact_pairs_per_step: s.pairs,
+        manifolds_per_step: s.manifolds,
+        interference_ms_per_step: s.inter_ms,
+        interference_pairs_per_step: s.inter_pairs,
+        contact_points_per_step: s.points,
+        height_per_step: s.heights,
+        energy_per_step: s.energy,
+    }
 }
 
 /// The triangles around each triangle of a mesh (those sharing a corner

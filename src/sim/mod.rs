@@ -21,5 +21,7 @@ pub mod droptest;
 pub mod slide;
 pub mod timed;
 
-pub use droptest::{DropScene, Placement, Replay, RunReport, RunSpec, ShapeKind, Trajectory};
+pub use droptest::{
+    DropScene, Placement, Replay, RunReport, RunSpec, ShapeKind, SimError, Trajectory,
+};
 pub use timed::Timed;

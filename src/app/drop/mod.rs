@@ -397,7 +397,8 @@ pub fn run_sim(
             replay,
             args.replay_rounds as usize,
             &mut |s, _| pb.set_position(s as u64),
-        )?;
+        )
+        .map_err(|e| e.to_string())?;
         pb.finish_and_clear();
         let replayed = match (&r.replay_along, r.replay_narrow_phase_ms) {
             (Some(along), Some(t)) => format!(", along {along}'s trajectory {:.3} ms", t.median),

@@ -135,9 +135,9 @@ mod trace;
 mod verify;
 mod vertices;
 
-pub use decode::HccNode;
 pub use encode::HccBvh;
 pub use error::HccError;
+pub use node::HccNode;
 
 use crate::codec::ByteSize;
 use crate::codec::common::MassProps;

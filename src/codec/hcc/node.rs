@@ -211,6 +211,161 @@ impl HighNode {
     }
 }
 
+// ---------------------------------------------------------------------------
+// The cursor's node handle. It lives with the words it decodes, not in
+// `decode.rs`, so that `decode.rs` and `trace.rs` both depend on it and not
+// on each other.
+
+use super::template::{MAX_TEMPLATE_NODES, TEMPLATE_COUNT};
+use crate::geom::Aabb;
+pub(super) const KIND_HIGH: u8 = 3;
+pub(super) const KIND_EMPTY: u8 = 4;
+/// The root of a low-level tree not yet opened (out of core: its box is
+/// the high-level leaf's; its word is read when the tree is entered).
+pub(super) const KIND_UNOPENED: u8 = 5;
+
+/// A node handle: the node's decoded box (the parent box its children are
+/// decoded against), where it is, and which template it sits in. 32 bytes,
+/// two 16-byte rows, so that the two-tree traversal's node pairs (two
+/// handles and two boxes) stay small.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+pub struct HccNode {
+    min: [f32; 3],
+    /// Node word index, or high-level node index.
+    pos: u32,
+    max: [f32; 3],
+    /// The low-level tree (unused for high-level nodes) above
+    /// [`META_TREE_SHIFT`], the node's offset from its template's first
+    /// word (4 bits), the template's id (5 bits) and the node type
+    /// (`TYPE_*`, [`KIND_HIGH`], [`KIND_EMPTY`], [`KIND_UNOPENED`]; 3 bits).
+    meta: u32,
+}
+
+/// Where the tree index starts in [`HccNode`]'s meta word.
+const META_TREE_SHIFT: u32 = 32 - TREE_INDEX_BITS;
+// The type, the template and the place in it below the tree index.
+const _: () = assert!(META_TREE_SHIFT >= 3 + 5 + 4);
+const _: () = assert!(MAX_TEMPLATE_NODES <= 16 && TEMPLATE_COUNT <= 32);
+const _: () = assert!(std::mem::size_of::<HccNode>() == 32);
+
+impl HccNode {
+    #[inline(always)]
+    pub(super) fn new(
+        bounds: Aabb,
+        tree: u32,
+        pos: u32,
+        block: u32,
+        template: u8,
+        kind: u8,
+    ) -> Self {
+        debug_assert!(tree >> TREE_INDEX_BITS == 0 && pos - block < 16);
+        Self {
+            min: bounds.min.to_array(),
+            pos,
+            max: bounds.max.to_array(),
+            meta: tree << META_TREE_SHIFT
+                | (pos - block) << 8
+                | u32::from(template) << 3
+                | u32::from(kind),
+        }
+    }
+
+    /// The node's decoded box.
+    #[inline(always)]
+    pub fn bounds(&self) -> Aabb {
+        Aabb::from_arrays(self.min, self.max)
+    }
+
+    /// The node word index (low-level nodes).
+    #[inline(always)]
+    pub(super) fn pos(&self) -> u32 {
+        self.pos
+    }
+
+    /// The node word index of the first node of the node's template.
+    #[inline(always)]
+    pub(super) fn block(&self) -> u32 {
+        self.pos - (self.meta >> 8 & 15)
+    }
+
+    #[inline(always)]
+    pub(super) fn kind(&self) -> u8 {
+        (self.meta & 7) as u8
+    }
+
+    #[inline(always)]
+    pub(super) fn template_id(&self) -> u8 {
+        (self.meta >> 3 & 31) as u8
+    }
+
+    /// The low-level tree the node is in (low-level nodes).
+    #[inline(always)]
+    pub(super) fn tree(&self) -> u32 {
+        self.meta >> META_TREE_SHIFT
+    }
+
+    /// The same node, said to be in low-level tree `tree` (a one-tree
+    /// i-HCCMesh's node as a node of the whole model, and back).
+    #[inline(always)]
+    pub(super) fn in_tree(mut self, tree: u32) -> Self {
+        self.meta = self.meta & ((1 << META_TREE_SHIFT) - 1) | tree << META_TREE_SHIFT;
+        self
+    }
+
+    /// The high-level node `i` with box `bounds`.
+    #[inline(always)]
+    pub(super) fn high(i: u32, bounds: Aabb) -> Self {
+        Self::new(bounds, 0, i, i, 0, KIND_HIGH)
+    }
+
+    /// The root of low-level tree `tree`, box `bounds`, before the tree is
+    /// read (see [`HccNode::is_unopened`]).
+    #[inline(always)]
+    pub(super) fn unopened(tree: u32, bounds: Aabb) -> Self {
+        Self::new(bounds, tree, 0, 0, 0, KIND_UNOPENED)
+    }
+
+    /// Whether this is a low-level tree's root not yet read: only the
+    /// out-of-core mode makes them, so that a traversal decodes a tree
+    /// when it enters the tree's box, not when it meets the box.
+    #[inline(always)]
+    pub(super) fn is_unopened(&self) -> bool {
+        self.kind() == KIND_UNOPENED
+    }
+
+    /// The root of an empty model.
+    pub(super) fn empty() -> Self {
+        Self::new(Aabb::EMPTY, 0, 0, 0, 0, KIND_EMPTY)
+    }
+
+    /// Whether this is a high-level node (a high-level leaf is the root of
+    /// its low-level tree, not a high-level node).
+    #[inline(always)]
+    pub(super) fn is_high(&self) -> bool {
+        self.kind() == KIND_HIGH
+    }
+
+    /// Whether this is a leaf of a low-level tree, or an empty model's
+    /// root.
+    #[inline(always)]
+    pub(super) fn is_leaf(&self) -> bool {
+        self.kind() == TYPE_LEAF as u8 || self.kind() == KIND_EMPTY
+    }
+
+    /// Whether this is an empty model's root.
+    #[inline(always)]
+    pub(super) fn is_empty(&self) -> bool {
+        self.kind() == KIND_EMPTY
+    }
+
+    /// The template id of the template the node sits in (low-level nodes;
+    /// `None` for high-level nodes).
+    pub fn template(&self) -> Option<u8> {
+        (self.kind() <= TYPE_LEAF as u8).then_some(self.template_id())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -22,7 +22,7 @@
 //! rays/s through the generic traversal, 4.67 through this one (plain
 //! 6.15: from 0.64× to 0.76× plain's).
 
-use super::decode::HccNode;
+use super::node::HccNode;
 use crate::cursor::{NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Ray, SLAB_EXIT_SCALE, ray_triangle};
 use crate::query::Stack;
