@@ -109,6 +109,15 @@ fn temp_beside(path: &Path) -> PathBuf {
 mod tests {
     use super::*;
 
+    /// Asserts that `dir` holds one file: no temporary file was left.
+    fn only_one_file_in(dir: &Path) {
+        let names: Vec<_> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names.len(), 1, "{names:?}");
+    }
+
     #[test]
     fn atomic_write_replaces_and_leaves_no_temp_file() {
         let dir = std::env::temp_dir().join(format!("cbvh-atomic-{}", std::process::id()));
@@ -117,11 +126,7 @@ mod tests {
         atomic_write(&p, b"first").unwrap();
         atomic_write(&p, b"second").unwrap();
         assert_eq!(std::fs::read(&p).unwrap(), b"second");
-        let names: Vec<_> = std::fs::read_dir(&dir)
-            .unwrap()
-            .map(|e| e.unwrap().file_name())
-            .collect();
-        assert_eq!(names.len(), 1, "{names:?}");
+        only_one_file_in(&dir);
         // A target in a missing directory is an error, not a panic.
         assert!(atomic_write(&dir.join("no/such/x.bin"), b"x").is_err());
         std::fs::remove_dir_all(&dir).ok();
@@ -144,11 +149,7 @@ mod tests {
         f.write_all(b"new").unwrap();
         f.commit().unwrap();
         assert_eq!(std::fs::read(&p).unwrap(), b"new");
-        let names: Vec<_> = std::fs::read_dir(&dir)
-            .unwrap()
-            .map(|e| e.unwrap().file_name())
-            .collect();
-        assert_eq!(names.len(), 1, "{names:?}");
+        only_one_file_in(&dir);
         std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -35,10 +35,7 @@ pub struct LucyArgs {
 /// Runs the drop test.
 pub fn run(mut a: LucyArgs) -> Result<(), String> {
     a.sim.width_fraction.get_or_insert(0.5);
-    super::validate(&a.sim)?;
-    super::init_threads(&a.sim)?;
-    // Reject bad shape names before generating meshes.
-    super::run_specs(&a.sim)?;
+    super::start(&a.sim)?;
     let (statue, sn) =
         super::mesh_from(&a.statue, Kind::Statue, a.statue_tris, a.sim.seed, "statue")?;
     let (mut turbine, tn) = super::mesh_from(

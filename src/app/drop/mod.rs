@@ -308,6 +308,14 @@ pub fn mesh_from(
     }
 }
 
+/// Everything a drop test does before it makes a mesh: every flag
+/// checked ([`validate`], shape names included), then the thread pool and
+/// the logger ([`init_threads`]).
+pub fn start(args: &SimArgs) -> Result<(), String> {
+    validate(args)?;
+    init_threads(args)
+}
+
 /// Sizes rayon's global pool from `--threads`. Call it first: mesh
 /// generation and loading already use the pool.
 pub fn init_threads(args: &SimArgs) -> Result<(), String> {

@@ -32,10 +32,7 @@ pub fn run(mut a: RobotArgs) -> Result<(), String> {
     // The robot is small next to a plant: a tenth of its width unless the
     // user chose a width.
     a.sim.width_fraction.get_or_insert(0.1);
-    super::validate(&a.sim)?;
-    super::init_threads(&a.sim)?;
-    // Reject bad shape names before generating meshes.
-    super::run_specs(&a.sim)?;
+    super::start(&a.sim)?;
     let (robot, rn) = super::mesh_from(&a.robot, Kind::Robot, a.robot_tris, a.sim.seed, "robot")?;
     let (plant, pn) = super::mesh_from(&a.plant, Kind::Plant, a.plant_tris, a.sim.seed, "plant")?;
     super::run_sim("robot-in-plant", robot, plant, (rn, pn), &a.sim)
