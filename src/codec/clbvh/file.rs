@@ -28,11 +28,9 @@
 
 use std::path::Path;
 
-use xxhash_rust::xxh3::xxh3_64;
-
 use super::node::InnerNode;
 use super::{ClBvh, ClError, ClOptions, LeafKind};
-use crate::codec::common::container::{check_header, section_entry, version, write_sections};
+use crate::codec::common::container::{check_header, sections, version, write_sections};
 use crate::codec::common::edges;
 use crate::codec::common::huge::huge;
 use crate::codec::common::le::{u32_at, word_bytes, words};
@@ -174,46 +172,22 @@ impl ClBvh {
                 "a value is not finite or the mass is negative",
             )
         })?;
-        let mut at = HEADER_LEN as u64;
-        let mut ranges: [std::ops::Range<usize>; SECTIONS] = Default::default();
-        for k in 0..SECTIONS {
-            let (off, len, hash) = section_entry(b, TABLE, k);
-            if off != at {
-                return Err(header_err(
-                    NAMES[k],
-                    format!("the section starts at {off}, not right after the previous one ({at})"),
-                ));
-            }
-            if len % ELEM[k] != 0 {
-                return Err(header_err(
-                    NAMES[k],
-                    format!(
+        let ranges = sections(
+            b,
+            TABLE,
+            &NAMES,
+            |k, len| {
+                if len % ELEM[k] == 0 {
+                    Ok(())
+                } else {
+                    Err(format!(
                         "{len} bytes is not a whole number of {}-byte entries",
                         ELEM[k]
-                    ),
-                ));
-            }
-            let end = off
-                .checked_add(len)
-                .filter(|&e| e <= b.len() as u64)
-                .ok_or(FormatError::Truncated {
-                    section: NAMES[k],
-                    need: off.saturating_add(len),
-                    have: b.len() as u64,
-                })?;
-            let r = off as usize..end as usize;
-            if xxh3_64(&b[r.clone()]) != hash {
-                return Err(FormatError::Checksum { section: NAMES[k] }.into());
-            }
-            ranges[k] = r;
-            at = end;
-        }
-        if at != b.len() as u64 {
-            return Err(header_err(
-                "length",
-                format!("{} bytes follow the last section", b.len() as u64 - at),
-            ));
-        }
+                    ))
+                }
+            },
+            |_| false,
+        )?;
         let expect_tris = |k: usize, per: usize| {
             let n = ranges[k].len() / ELEM[k] as usize;
             if n == tris * per {

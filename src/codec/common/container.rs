@@ -1,8 +1,10 @@
 //! The frame every cbvh codec file shares: a fixed-size header that starts
 //! with the codec's magic and ends with a section table and the header's
-//! checksum, then the sections. What the header holds between the magic and
-//! the table, which sections there are and how they are checked against
-//! each other is the codec's own (see its `file.rs`).
+//! checksum, then the sections. Every codec reads its frame with the
+//! functions here: [`version`], [`check_header`], then [`sections`] (the
+//! table: sections back to back, lengths, checksums). What the header holds
+//! between the magic and the table, which sections there are and how they
+//! are checked against each other is the codec's own (see its `file.rs`).
 //!
 //! # Layout
 //! All integers little-endian; checksums are xxh3-64.
@@ -80,6 +82,64 @@ pub fn check_header(
         return Err(FormatError::Checksum { section: "header" });
     }
     Ok(())
+}
+
+/// Checks the section table of `b`, whose header [`check_header`] has
+/// passed, and returns each section's byte range, in table order. The
+/// table starts at byte `table` and has one entry per name in `names`
+/// (used in errors). Every section must:
+///
+/// - start where the one before it ends (the first right after the
+///   header), the last one ending the file: no gap, no overlap, nothing
+///   after;
+/// - have a length `len_ok(k, len)` accepts (the codec's counts give most
+///   lengths; `Err(why)` is reported as a header error of that section);
+/// - match its checksum, unless `lazy(k)`: a section checked piece by
+///   piece as it is read (RACBVH's clusters, o-HCCMesh's trees out of
+///   core), or by `verify`.
+///
+/// Never panics and allocates only the ranges, whatever the table says.
+pub fn sections(
+    b: &[u8],
+    table: usize,
+    names: &[&'static str],
+    len_ok: impl Fn(usize, u64) -> Result<(), String>,
+    lazy: impl Fn(usize) -> bool,
+) -> Result<Vec<std::ops::Range<usize>>, FormatError> {
+    let header_len = table + ENTRY * names.len() + 8;
+    let mut at = header_len as u64;
+    let mut ranges = Vec::with_capacity(names.len());
+    for (k, &name) in names.iter().enumerate() {
+        let (off, len, hash) = section_entry(b, table, k);
+        if off != at {
+            return Err(FormatError::header(
+                name,
+                format!("the section starts at {off}, not right after the previous one ({at})"),
+            ));
+        }
+        len_ok(k, len).map_err(|why| FormatError::header(name, why))?;
+        let end = off.checked_add(len).filter(|&e| e <= b.len() as u64);
+        let Some(end) = end else {
+            return Err(FormatError::Truncated {
+                section: name,
+                need: off.saturating_add(len),
+                have: b.len() as u64,
+            });
+        };
+        let r = off as usize..end as usize;
+        if !lazy(k) && xxh3_64(&b[r.clone()]) != hash {
+            return Err(FormatError::Checksum { section: name });
+        }
+        ranges.push(r);
+        at = end;
+    }
+    if at != b.len() as u64 {
+        return Err(FormatError::header(
+            "length",
+            format!("{} bytes follow the last section", b.len() as u64 - at),
+        ));
+    }
+    Ok(ranges)
 }
 
 /// Entry `k` of the section table that starts at byte `table` of a checked

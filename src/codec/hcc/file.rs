@@ -43,8 +43,6 @@
 
 use std::path::Path;
 
-use xxhash_rust::xxh3::xxh3_64;
-
 use super::ids::{IdMap, VertexIds};
 use super::node::{HighNode, MAX_TREES, TreeHeader};
 use super::vertices::{Quantized, VertexTree, Vertices};
@@ -245,44 +243,16 @@ impl HccBvh {
             if has_vids { None } else { Some(0) },
             None,
         ];
-        let mut at = HEADER_LEN as u64;
-        let mut ranges: [std::ops::Range<usize>; SECTIONS] = Default::default();
-        for k in 0..SECTIONS {
-            let (off, len, hash) = container::section_entry(b, TABLE, k);
-            if off != at {
-                return Err(header_err(
-                    NAMES[k],
-                    format!("the section starts at {off}, not at {at}"),
-                ));
-            }
-            if want[k].is_some_and(|w| w != len) {
-                return Err(header_err(
-                    NAMES[k],
-                    format!("{len} bytes where the counts give {}", want[k].unwrap_or(0)),
-                ));
-            }
-            let end = off.checked_add(len).filter(|&e| e <= b.len() as u64);
-            let Some(end) = end else {
-                return Err(FormatError::Truncated {
-                    section: NAMES[k],
-                    need: off.saturating_add(len),
-                    have: b.len() as u64,
-                }
-                .into());
-            };
-            let r = off as usize..end as usize;
-            if xxh3_64(&b[r.clone()]) != hash {
-                return Err(FormatError::Checksum { section: NAMES[k] }.into());
-            }
-            ranges[k] = r;
-            at = end;
-        }
-        if at != b.len() as u64 {
-            return Err(header_err(
-                "length",
-                format!("{} bytes follow the last section", b.len() as u64 - at),
-            ));
-        }
+        let ranges = container::sections(
+            b,
+            TABLE,
+            &NAMES,
+            |k, len| match want[k] {
+                Some(w) if w != len => Err(format!("{len} bytes where the counts give {w}")),
+                _ => Ok(()),
+            },
+            |_| false,
+        )?;
         let sec = |k: usize| &b[ranges[k].clone()];
         let w = |c: &[u8], k: usize| u32_at(c, 4 * k);
         let high = sec(0)

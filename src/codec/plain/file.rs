@@ -33,8 +33,6 @@
 
 use std::path::Path;
 
-use xxhash_rust::xxh3::xxh3_64;
-
 use super::node::PlainNode;
 use super::{PlainBvh, PlainError};
 use crate::codec::common::huge::huge;
@@ -152,45 +150,19 @@ impl PlainBvh {
             )
         })?;
         let elem = [32u64, 12, 12, 4];
-        let mut at = HEADER_LEN as u64;
-        let mut ranges: [std::ops::Range<usize>; SECTIONS] = Default::default();
-        for k in 0..SECTIONS {
-            let (off, len, hash) = container::section_entry(b, TABLE, k);
-            if off != at {
-                return Err(header_err(
-                    NAMES[k],
-                    format!("the section starts at {off}, not right after the previous one ({at})"),
-                ));
-            }
-            // The edge flags are variable-length: bounded by the file.
-            if k < elem.len() && len != u64::from(counts[k]) * elem[k] {
-                return Err(header_err(
-                    NAMES[k],
-                    format!("{len} bytes for {} entries", counts[k]),
-                ));
-            }
-            let end = off.saturating_add(len); // the others below 2^40
-            if end > b.len() as u64 {
-                return Err(FormatError::Truncated {
-                    section: NAMES[k],
-                    need: end,
-                    have: b.len() as u64,
+        // The edge flags are variable-length: bounded by the file.
+        let ranges = container::sections(
+            b,
+            TABLE,
+            &NAMES,
+            |k, len| match elem.get(k) {
+                Some(e) if len != u64::from(counts[k]) * e => {
+                    Err(format!("{len} bytes for {} entries", counts[k]))
                 }
-                .into());
-            }
-            let r = off as usize..end as usize;
-            if xxh3_64(&b[r.clone()]) != hash {
-                return Err(FormatError::Checksum { section: NAMES[k] }.into());
-            }
-            ranges[k] = r;
-            at = end;
-        }
-        if at != b.len() as u64 {
-            return Err(header_err(
-                "length",
-                format!("{} bytes follow the last section", b.len() as u64 - at),
-            ));
-        }
+                _ => Ok(()),
+            },
+            |_| false,
+        )?;
         // Fixed-size reads (no per-record allocation): the word `k` of a
         // record `c`.
         let w = |c: &[u8], k: usize| u32_at(c, 4 * k);

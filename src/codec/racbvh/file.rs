@@ -265,35 +265,14 @@ impl RacBvh {
             )
         })?;
         let names = ["meta", "clusters", "vertices", "triangles", edges::SECTION];
-        let mut sections: [&[u8]; SECTIONS] = [&[]; SECTIONS];
-        let mut ranges: [Range<usize>; SECTIONS] = Default::default();
-        let mut hashes = [0u64; SECTIONS];
-        for (k, name) in names.into_iter().enumerate() {
-            let (off, len, hash) = container::section_entry(b, TABLE, k);
-            hashes[k] = hash;
-            let end = off
-                .checked_add(len)
-                .ok_or_else(|| header_err(name, "offset + length overflows"))?;
-            if off < HEADER_LEN as u64 {
-                return Err(header_err(name, "the section overlaps the header"));
-            }
-            if k > 0 && off < ranges[k - 1].end as u64 {
-                return Err(header_err(
-                    name,
-                    "the section overlaps the one before it (sections are stored in order)",
-                ));
-            }
-            if end > b.len() as u64 {
-                return Err(FormatError::Truncated {
-                    section: name,
-                    need: end,
-                    have: b.len() as u64,
-                }
-                .into());
-            }
-            sections[k] = &b[off as usize..end as usize];
-            ranges[k] = off as usize..end as usize;
-        }
+        // The clusters are checked cluster by cluster as they are decoded
+        // (the meta table holds their checksums), the mesh's two sections
+        // when the mesh is unpacked; the meta table and the edge flags here.
+        let ranges =
+            container::sections(b, TABLE, &names, |_, _| Ok(()), |k| (1..=3).contains(&k))?;
+        let sections: [&[u8]; SECTIONS] = std::array::from_fn(|k| &b[ranges[k].clone()]);
+        let hashes: [u64; SECTIONS] =
+            std::array::from_fn(|k| container::section_entry(b, TABLE, k).2);
         let csize = 1u64 << cluster_bits;
         let clusters = u64::from(node_count).div_ceil(csize);
         let need = clusters * META_ENTRY as u64;
@@ -304,11 +283,6 @@ impl RacBvh {
                 have: sections[0].len() as u64,
             }
             .into());
-        }
-        if xxh3_64(sections[0]) != hashes[0] {
-            return Err(RacError::Corrupt(
-                "the meta table's checksum does not match",
-            ));
         }
         let data = sections[1];
         // Every node codes at least one bit (its structure symbol), so a
@@ -356,12 +330,6 @@ impl RacBvh {
             make(ranges[3].clone()),
         )?;
         let mesh_hash = combine(hashes[2], hashes[3]);
-        if xxh3_64(sections[4]) != hashes[4] {
-            return Err(FormatError::Checksum {
-                section: edges::SECTION,
-            }
-            .into());
-        }
         let edges = edges::decode(sections[4], u64::from(triangle_count))?;
         let mut rac = RacBvh::assemble(
             header,

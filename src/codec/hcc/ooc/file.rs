@@ -1,8 +1,6 @@
 //! The o-HCCMesh file's frame: header fields and sections, written and
 //! parsed (layout in the module docs of [`ooc`](super)).
 
-use xxhash_rust::xxh3::xxh3_64;
-
 use super::super::node::MAX_TREES;
 use super::OocError;
 use crate::codec::common::le::{f32x3_at, u32_at};
@@ -174,37 +172,18 @@ pub fn parse_with(b: &[u8], streams: bool) -> Result<(Header, [&[u8]; SECTIONS])
             format!("{} is more than {MAX_TREES}", h.trees),
         ));
     }
-    let mut at = HEADER_LEN as u64;
+    // Out of core (without `streams`), the trees are checked tree by tree
+    // as they are paged in.
+    let ranges = container::sections(
+        b,
+        TABLE,
+        &NAMES,
+        |_, _| Ok(()),
+        |k| !streams && k == SEC_TREES,
+    )?;
     let mut out: [&[u8]; SECTIONS] = [&[]; SECTIONS];
-    for (k, slot) in out.iter_mut().enumerate() {
-        let (off, len, hash) = container::section_entry(b, TABLE, k);
-        if off != at {
-            return Err(header_err(
-                NAMES[k],
-                format!("the section starts at {off}, not at {at}"),
-            ));
-        }
-        let end = off.checked_add(len).filter(|&e| e <= b.len() as u64);
-        let Some(end) = end else {
-            return Err(FormatError::Truncated {
-                section: NAMES[k],
-                need: off.saturating_add(len),
-                have: b.len() as u64,
-            }
-            .into());
-        };
-        let s = &b[off as usize..end as usize];
-        if (streams || k != SEC_TREES) && xxh3_64(s) != hash {
-            return Err(FormatError::Checksum { section: NAMES[k] }.into());
-        }
-        *slot = s;
-        at = end;
-    }
-    if at != b.len() as u64 {
-        return Err(header_err(
-            "length",
-            format!("{} bytes follow the last section", b.len() as u64 - at),
-        ));
+    for (slot, r) in out.iter_mut().zip(ranges) {
+        *slot = &b[r];
     }
     if (h.tree_order && !out[SEC_IDS].is_empty()) || (!h.vertex_ids && !out[SEC_VIDS].is_empty()) {
         return Err(header_err(
