@@ -3,7 +3,7 @@
 //! same answers and mass properties as the codec built from the mesh; and
 //! the CLI and sims using such files as a new user would.
 
-use crate::common;
+use crate::common::{self, cbvh};
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -136,18 +136,6 @@ fn saving_over_a_mapped_file_is_atomic() {
     assert_eq!(now.decoded_mesh(), rb.decoded_mesh());
     drop(mapped);
     std::fs::remove_file(&path).unwrap();
-}
-
-fn cbvh(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_cbvh"))
-        .args(args)
-        .output()
-        .expect("run cbvh");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
 }
 
 /// The new user's path: build a file, then info, render, re-encode and a

@@ -1,8 +1,8 @@
 //! The ray tracer: same image whatever the tree, close to parry's, shadows
 //! darken, threads do not change the image, and the CLI's errors.
 
+use crate::common::cbvh;
 use std::path::PathBuf;
-use std::process::Command;
 
 use cbvh::build::{BuildOptions, Layout, build};
 use cbvh::codec::plain::PlainBvh;
@@ -593,18 +593,6 @@ fn turntable_is_an_animated_png_of_distinct_frames() {
     assert_eq!(n, 3);
     std::fs::remove_file(&gif_path).ok();
     assert!(render_turntable(&scene, &opts, 0, &|_, _| {}).is_err());
-}
-
-fn cbvh(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_cbvh"))
-        .args(args)
-        .output()
-        .expect("run cbvh");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
 }
 
 #[test]

@@ -578,3 +578,17 @@ pub fn check_bvtt_par_and_min<A: NodeCursor, B: NodeCursor>(
         }
     }
 }
+
+/// Runs the `cbvh` command with `args`: (success, stdout, stderr).
+#[cfg(feature = "app")]
+pub fn cbvh(args: &[&str]) -> (bool, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_cbvh"))
+        .args(args)
+        .output()
+        .expect("run cbvh");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
