@@ -201,7 +201,7 @@ pub fn validate(args: &SimArgs) -> Result<(), String> {
             args.subdivide, args.subdivide
         ));
     }
-    options(args)?;
+    options(args, &run_specs(args)?)?;
     for (flag, path) in [
         ("--json", &args.json),
         ("--plot", &args.plot),
@@ -263,8 +263,8 @@ pub fn run_specs(args: &SimArgs) -> Result<Vec<RunSpec>, String> {
 }
 
 /// The options of the codecs the runs use, from the codec flags.
-fn options(args: &SimArgs) -> Result<crate::codec::AnyOptions, String> {
-    let mut kinds: Vec<CodecKind> = run_specs(args)?
+fn options(args: &SimArgs, specs: &[RunSpec]) -> Result<crate::codec::AnyOptions, String> {
+    let mut kinds: Vec<CodecKind> = specs
         .iter()
         .filter_map(|s| match s.kind {
             ShapeKind::Cbvh(k) | ShapeKind::CbvhTenthCache(k) => Some(k),
@@ -368,6 +368,7 @@ pub fn run_sim(
     let (dlo, dhi) = dropped.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
     let (blo, bhi) = base.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
     let statue_size = (0..3).map(|k| dhi[k] - dlo[k]).fold(0.0f32, f32::max);
+    let specs = run_specs(args)?;
     let leaf_size = usize::from(args.codecs.leaf_size);
     let scene = DropScene {
         dropped,
@@ -375,7 +376,7 @@ pub fn run_sim(
         steps: args.steps,
         dt: 1.0 / 60.0,
         contact_recycling: args.contact_recycling,
-        codec_options: options(args)?,
+        codec_options: options(args, &specs)?,
         build_options: BuildOptions {
             max_leaf_triangles: leaf_size,
             ..Default::default()
@@ -390,7 +391,6 @@ pub fn run_sim(
         scene.base.triangle_count(),
         scene.steps
     );
-    let specs = run_specs(args)?;
     let mut runs: Vec<RunReport> = Vec::new();
     for spec in specs {
         let pb = bar(&spec.name(), scene.steps as u64);
