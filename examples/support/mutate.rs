@@ -1,33 +1,45 @@
-//! The mutation harness for every codec file decoder, shared by the test
-//! suite (`tests/mutation.rs`, a short run) and `examples/mutate.rs` (a long
-//! run that prints the table).
+//! The mutation harness for every codec's file, shared by the test suite
+//! (`tests/mutation.rs`, a short run) and `examples/mutate.rs` (a long run
+//! that prints the table). It knows no codec's layout: it reads a file's
+//! section table through the codec's [`Frame`] (`CodecKind::frame`), and
+//! attacks any codec the registry names.
 //!
-//! Attacks: truncations; raw bit flips; bit flips with every checksum
-//! recomputed; forged headers (huge counts, offsets past the end,
-//! overlapping sections, bad grids and mass), checksums recomputed;
-//! structurally corrupt but checksummed trees (repeated children, cycles,
-//! boxes outside their parent, leaves that do not contain their triangle,
-//! a triangle in two leaves). Every case must end in an error from the
-//! reader, in `verify` catching it, or in answers identical to the original
-//! file's; with checksums recomputed a file may also be a *consistent*
-//! different file (every proof of `verify` holds, the answers differ: a
-//! forger who recomputes checksums can write any valid file). Never a
-//! panic, a hang, or, for the attacks marked `must_catch`, a different
-//! answer.
+//! Attacks:
+//! - truncations and raw bit flips (no checksum recomputed): must be
+//!   refused, or give the original file back;
+//! - bit flips with every checksum recomputed, anywhere in the file;
+//! - every 4-byte word of the header's fields forged with values that
+//!   break counts, flags, grids and mass (huge, zero, negative, NaN, ×2,
+//!   ×10³⁰), checksums recomputed;
+//! - every section-table entry forged (offsets and lengths past the end,
+//!   zero, overlapping the previous section), checksums recomputed;
+//! - structurally corrupt trees written by the codec's own encoder from a
+//!   corrupted canonical tree (a child named twice, a node with two
+//!   parents, a deep DAG), where the encoder takes them.
+//!
+//! How a case may end: the reader refuses it, `verify` refuses it, or the
+//! file is accepted and is either the original (same decoded mesh, mass,
+//! edge flags, root box and answers to fixed rays and boxes) or a
+//! *consistent* other file: one whose answers are those of its own decoded
+//! mesh (brute force), whose root box is tight around it and whose mass is
+//! physical. A forger who recomputes checksums can write any consistent
+//! file, so those are allowed where checksums were recomputed; a file
+//! that is accepted and *inconsistent* (answers that disagree with its own
+//! triangles, a root box looser than the mesh, an impossible mass) is
+//! always a bug, as is a panic. A header forgery that is accepted with the
+//! original's answers is an *ignored* header word (a reserved word, a
+//! flag the reader does not check): also a bug.
 
 #![allow(dead_code)] // each includer uses what it needs
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
-use cbvh::TraversalStats;
-use cbvh::codec::racbvh::RacBvh;
-use cbvh::codec::{AnyCodec, OpenOptions};
-use cbvh::geom::{Aabb, Ray};
+use cbvh::codec::common::container::Frame;
+use cbvh::codec::{AnyCodec, AnyOptions, CodecKind, OpenOptions};
+use cbvh::geom::{Aabb, Ray, Triangle, ray_triangle};
+use cbvh::{CanonicalBvh, Mesh, TraversalStats};
 use glam::Vec3A;
 use xxhash_rust::xxh3::xxh3_64;
-
-/// Sections of the plain and RACBVH files (the last one the edge flags).
-const SECTIONS: usize = 5;
 
 /// A small deterministic generator.
 pub struct Rng(pub u64);
@@ -51,11 +63,13 @@ pub enum Outcome {
     OpenError,
     /// `verify` refused them.
     VerifyError,
-    /// Verified, and every answer equals the original file's.
+    /// Accepted, and the original file in every answer.
     Same,
-    /// Verified, answers differ: a consistent different file (only allowed
-    /// where checksums were recomputed).
+    /// Accepted: another file, consistent with its own triangles.
     Consistent,
+    /// Accepted, but answers, root box or mass disagree with the file's
+    /// own triangles: always a bug.
+    Inconsistent,
     /// A panic: always a bug.
     Panic,
 }
@@ -63,94 +77,235 @@ pub enum Outcome {
 /// One row of the table.
 #[derive(Clone, Debug, Default)]
 pub struct Row {
-    pub codec: &'static str,
+    pub codec: String,
     pub attack: &'static str,
+    /// Attacks that leave the checksums as they are: every change must be
+    /// refused.
     pub must_catch: bool,
+    /// Header-word forgeries: a change the reader neither refuses nor
+    /// uses (accepted with the original's answers) is an ignored word.
+    pub no_ignored: bool,
     pub cases: usize,
     pub open_error: usize,
     pub verify_error: usize,
     pub same: usize,
     pub consistent: usize,
+    pub inconsistent: usize,
     pub panic: usize,
+    /// Header-word forgeries accepted with the original's answers.
+    pub ignored: usize,
+    /// Where the first failing case of this row changed the file (for the
+    /// report): a byte offset and a note.
+    pub first_bad: Option<String>,
+    /// With an allocation probe ([`Subject::probe`]): the largest single
+    /// allocation of any case of the row, and that case.
+    pub largest_alloc: Option<(usize, String)>,
 }
 
 impl Row {
     /// Whether every case ended acceptably.
     pub fn ok(&self) -> bool {
-        self.panic == 0 && (!self.must_catch || self.consistent == 0)
+        self.panic == 0
+            && self.inconsistent == 0
+            && (!self.must_catch || self.consistent == 0)
+            && (!self.no_ignored || self.ignored == 0)
     }
 }
 
 /// Prints the rows as a Markdown table.
 pub fn print_table(rows: &[Row]) {
     println!(
-        "| codec | attack | cases | reader error | verify error | same answers | consistent other file | panic |"
+        "| codec | attack | cases | reader error | verify error | same | consistent other file | ignored header word | inconsistent | panic | first bad case |"
     );
-    println!("|---|---|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---|");
     for r in rows {
         println!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} |",
-            r.codec, r.attack, r.cases, r.open_error, r.verify_error, r.same, r.consistent, r.panic
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            r.codec,
+            r.attack,
+            r.cases,
+            r.open_error,
+            r.verify_error,
+            r.same,
+            r.consistent,
+            r.ignored,
+            r.inconsistent,
+            r.panic,
+            r.first_bad.as_deref().unwrap_or("")
         );
     }
 }
 
-/// What a file answers: closest hits of fixed rays, and the triangles
-/// overlapping fixed boxes.
+/// What a file answers: closest hits of fixed rays (t, as bits), the
+/// triangles overlapping fixed boxes, and what a consumer reads besides
+/// (the decoded mesh, the root box, the mass, the edge flags, and the
+/// header fields `cbvh info` prints: a statistic the header stores is
+/// read there, so a forged one is another file, not an ignored word).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Answers(Vec<Option<(u32, u32)>>, Vec<Vec<u32>>, usize);
+pub struct Answers {
+    hits: Vec<Option<u32>>,
+    overlaps: Vec<Vec<u32>>,
+    mesh: (Vec<[u32; 3]>, Vec<[u32; 3]>),
+    root: [u32; 6],
+    mass: Vec<u8>,
+    flags: Vec<u8>,
+    info: Vec<(&'static str, String)>,
+}
 
-fn answers_of<C: cbvh::NodeCursor>(c: &C, rays: &[Ray], boxes: &[Aabb]) -> Answers {
-    let mut st = TraversalStats::default();
-    let hits = rays
-        .iter()
-        .map(|r| {
-            cbvh::query::closest_hit(c, r, f32::INFINITY, &mut st)
-                .map(|h| (h.triangle, h.t.to_bits()))
-        })
-        .collect();
-    let overlaps = boxes
-        .iter()
-        .map(|b| {
-            let mut ids = Vec::new();
-            cbvh::query::overlap(c, b, &mut st, |id, _| {
-                ids.push(id);
-                std::ops::ControlFlow::Continue(())
-            });
-            ids.sort_unstable();
-            ids
-        })
-        .collect();
-    Answers(hits, overlaps, c.triangle_count())
+fn bits(a: &Aabb) -> [u32; 6] {
+    let (l, h) = (a.min, a.max);
+    [l.x, l.y, l.z, h.x, h.y, h.z].map(f32::to_bits)
 }
 
 fn answers(c: &AnyCodec, rays: &[Ray], boxes: &[Aabb]) -> Answers {
-    cbvh::with_codec!(c, |c| answers_of(c, rays, boxes))
+    let mut st = TraversalStats::default();
+    let (hits, overlaps, root) = cbvh::with_codec!(c, |c| {
+        let hits = rays
+            .iter()
+            .map(|r| cbvh::query::closest_hit(c, r, f32::INFINITY, &mut st).map(|h| h.t.to_bits()))
+            .collect();
+        let overlaps = boxes
+            .iter()
+            .map(|b| {
+                let mut ids = Vec::new();
+                cbvh::query::overlap(c, b, &mut st, |id, _| {
+                    ids.push(id);
+                    std::ops::ControlFlow::Continue(())
+                });
+                ids.sort_unstable();
+                ids
+            })
+            .collect();
+        (hits, overlaps, cbvh::NodeCursor::root(c).1)
+    });
+    let m = c.decoded_mesh();
+    Answers {
+        hits,
+        overlaps,
+        mesh: (
+            m.vertices.iter().map(|v| v.map(f32::to_bits)).collect(),
+            m.triangles.clone(),
+        ),
+        root: bits(&root),
+        mass: c.mass().to_bytes().to_vec(),
+        flags: c.edge_flags().as_slice().to_vec(),
+        info: c.header_fields(),
+    }
 }
 
-/// A codec file under attack.
+/// Why an accepted file is inconsistent with its own triangles, if it is:
+/// answers that brute force over its decoded mesh does not give, a root
+/// box not tight around the mesh (within 1 % of its diagonal: the grid of
+/// a quantized codec rounds outwards), or an impossible mass.
+fn inconsistency(a: &Answers, rays: &[Ray], boxes: &[Aabb]) -> Option<String> {
+    let verts: Vec<Vec3A> = a
+        .mesh
+        .0
+        .iter()
+        .map(|v| Vec3A::from(v.map(f32::from_bits)))
+        .collect();
+    let tris: Vec<Triangle> = a
+        .mesh
+        .1
+        .iter()
+        .map(|t| t.map(|i| verts[i as usize]))
+        .collect();
+    for (k, ray) in rays.iter().enumerate() {
+        let mut best = f32::INFINITY;
+        let mut hit = None;
+        for tri in &tris {
+            if let Some(h) = ray_triangle(ray, tri, best) {
+                best = h.t;
+                hit = Some(h.t.to_bits());
+            }
+        }
+        if hit != a.hits[k] {
+            return Some(format!("ray {k}: {:?}, brute force {hit:?}", a.hits[k]));
+        }
+    }
+    for (k, b) in boxes.iter().enumerate() {
+        let ids: Vec<u32> = (0..tris.len() as u32)
+            .filter(|&i| Aabb::of_triangle(&tris[i as usize]).intersects(b))
+            .collect();
+        if ids != a.overlaps[k] {
+            return Some(format!("box {k}: overlaps differ from brute force"));
+        }
+    }
+    if let Some(first) = tris.first() {
+        let mut bounds = Aabb::of_triangle(first);
+        for t in &tris {
+            bounds = bounds.union(&Aabb::of_triangle(t));
+        }
+        let root = a.root.map(f32::from_bits);
+        let slack = 0.01 * bounds.extent().length();
+        for k in 0..3 {
+            let (lo, hi) = (bounds.min[k], bounds.max[k]);
+            // The root must contain the mesh (verify proves it) and not
+            // reach beyond it by more than the slack.
+            let tight = root[k] <= lo && root[3 + k] >= hi;
+            let snug = lo - root[k] <= slack && root[3 + k] - hi <= slack;
+            if !(tight && snug) {
+                return Some(format!(
+                    "root box {root:?} against the mesh's bounds {:?}..{:?}",
+                    bounds.min, bounds.max
+                ));
+            }
+        }
+    }
+    let f = |k: usize| f32::from_le_bytes(a.mass[4 * k..4 * k + 4].try_into().unwrap());
+    let mass = f(0);
+    let inertia: Vec<f32> = (4..13).map(f).collect();
+    if !(mass.is_finite() && mass >= 0.0) {
+        return Some(format!("mass {mass}"));
+    }
+    if mass > 0.0 {
+        // A physical inertia tensor: symmetric, positive diagonal, each
+        // principal moment at most the sum of the other two.
+        let (xx, yy, zz) = (inertia[0], inertia[4], inertia[8]);
+        let sym = (inertia[1] - inertia[3]).abs() <= 1e-3 * (xx + yy + zz)
+            && (inertia[2] - inertia[6]).abs() <= 1e-3 * (xx + yy + zz)
+            && (inertia[5] - inertia[7]).abs() <= 1e-3 * (xx + yy + zz);
+        let tol = 1e-3 * (xx + yy + zz);
+        let triangle = xx <= yy + zz + tol && yy <= xx + zz + tol && zz <= xx + yy + tol;
+        if !(xx > 0.0 && yy > 0.0 && zz > 0.0 && sym && triangle) {
+            return Some(format!("inertia {inertia:?} for mass {mass}"));
+        }
+    }
+    None
+}
+
+/// A codec's file under attack.
 pub struct Subject {
-    pub codec: &'static str,
+    pub kind: CodecKind,
+    /// The cache budget the file is opened with (o-HCCMesh pages its
+    /// trees when its decoded form does not fit).
+    pub budget: usize,
+    /// The codec's name and the variant's settings.
+    pub label: String,
     pub bytes: Vec<u8>,
+    pub frame: Frame,
     rays: Vec<Ray>,
     boxes: Vec<Aabb>,
     want: Answers,
+    /// Returns the largest single allocation since it was last called, and
+    /// starts counting afresh: set by an includer with a recording global
+    /// allocator, so that each case's largest allocation is known.
+    pub probe: Option<fn() -> usize>,
 }
 
-fn open(codec: &str, b: &[u8]) -> Result<AnyCodec, String> {
-    let kind = codec.parse().map_err(|e| format!("{e}"))?;
+fn open(kind: CodecKind, b: &[u8], budget: usize) -> Result<AnyCodec, String> {
     let options = OpenOptions {
         verify: false,
-        cache_budget_bytes: 1 << 20,
+        cache_budget_bytes: budget,
     };
     AnyCodec::from_bytes(kind, b, &options).map_err(|e| e.to_string())
 }
 
 impl Subject {
-    /// The file of `codec` ("plain" or "racbvh") in `bytes`, with the
+    /// The file of `kind` in `bytes` (`label` names the variant), with the
     /// answers of the original.
-    pub fn new(codec: &'static str, bytes: Vec<u8>) -> Self {
-        let c = open(codec, &bytes).expect("the original opens");
+    pub fn new(kind: CodecKind, label: String, bytes: Vec<u8>, budget: usize) -> Self {
+        let c = open(kind, &bytes, budget).expect("the original opens");
         c.verify().expect("the original verifies");
         let b = cbvh::with_codec!(&c, |c| cbvh::NodeCursor::root(c).1);
         let (lo, hi) = (b.min, b.max);
@@ -176,132 +331,300 @@ impl Subject {
             })
             .collect();
         let want = answers(&c, &rays, &boxes);
+        if let Some(why) = inconsistency(&want, &rays, &boxes) {
+            panic!("{label}: the original is inconsistent: {why}");
+        }
         Self {
-            codec,
+            kind,
+            budget,
+            label,
+            frame: kind.frame(),
             bytes,
             rays,
             boxes,
             want,
+            probe: None,
         }
     }
 
-    /// How `bytes` end.
-    pub fn outcome(&self, bytes: &[u8]) -> Outcome {
-        catch_unwind(AssertUnwindSafe(|| match open(self.codec, bytes) {
-            Err(_) => Outcome::OpenError,
-            Ok(c) => match c.verify() {
-                Err(_) => Outcome::VerifyError,
-                Ok(()) if answers(&c, &self.rays, &self.boxes) == self.want => Outcome::Same,
-                Ok(()) => Outcome::Consistent,
-            },
-        }))
-        .unwrap_or(Outcome::Panic)
+    /// How `bytes` end (and, for an inconsistent file, why).
+    pub fn outcome(&self, bytes: &[u8]) -> (Outcome, Option<String>) {
+        self.outcome_probed(bytes).0
     }
 
-    fn row(&self, attack: &'static str, must_catch: bool, cases: Vec<Vec<u8>>) -> Row {
+    /// The largest single allocation of opening, verifying and querying
+    /// `bytes` (0 without a probe).
+    pub fn largest_allocation(&self, bytes: &[u8]) -> usize {
+        self.outcome_probed(bytes).1
+    }
+
+    /// [`outcome`](Self::outcome), with the largest single allocation of
+    /// opening, verifying and querying the file (not of the brute force
+    /// that checks an accepted other file) if there is a probe.
+    fn outcome_probed(&self, bytes: &[u8]) -> ((Outcome, Option<String>), usize) {
+        let probe = || self.probe.map_or(0, |p| p());
+        probe();
+        let mut largest = 0;
+        let outcome = catch_unwind(AssertUnwindSafe(|| {
+            match open(self.kind, bytes, self.budget) {
+                Err(_) => (Outcome::OpenError, None),
+                Ok(c) => match c.verify() {
+                    Err(_) => (Outcome::VerifyError, None),
+                    Ok(()) => {
+                        let got = answers(&c, &self.rays, &self.boxes);
+                        largest = probe();
+                        if got == self.want {
+                            (Outcome::Same, None)
+                        } else if let Some(why) = inconsistency(&got, &self.rays, &self.boxes) {
+                            (Outcome::Inconsistent, Some(why))
+                        } else {
+                            (Outcome::Consistent, None)
+                        }
+                    }
+                },
+            }
+        }))
+        .unwrap_or((Outcome::Panic, None));
+        if largest == 0 {
+            largest = probe();
+        }
+        (outcome, largest)
+    }
+
+    fn row(
+        &self,
+        attack: &'static str,
+        must_catch: bool,
+        no_ignored: bool,
+        cases: Vec<(Vec<u8>, String)>,
+    ) -> Row {
         let mut row = Row {
-            codec: self.codec,
+            codec: self.label.clone(),
             attack,
             must_catch,
+            no_ignored,
             ..Default::default()
         };
-        for case in cases {
+        for (case, what) in cases {
             row.cases += 1;
-            match self.outcome(&case) {
-                Outcome::OpenError => row.open_error += 1,
-                Outcome::VerifyError => row.verify_error += 1,
-                Outcome::Same => row.same += 1,
-                Outcome::Consistent => row.consistent += 1,
-                Outcome::Panic => row.panic += 1,
+            let ((outcome, why), size) = self.outcome_probed(&case);
+            if self.probe.is_some() && row.largest_alloc.as_ref().is_none_or(|(s, _)| size > *s) {
+                row.largest_alloc = Some((size, what.clone()));
+            }
+            let bad = match outcome {
+                Outcome::OpenError => {
+                    row.open_error += 1;
+                    false
+                }
+                Outcome::VerifyError => {
+                    row.verify_error += 1;
+                    false
+                }
+                Outcome::Same => {
+                    row.same += 1;
+                    row.ignored += usize::from(no_ignored);
+                    no_ignored
+                }
+                Outcome::Consistent => {
+                    row.consistent += 1;
+                    must_catch
+                }
+                Outcome::Inconsistent => {
+                    row.inconsistent += 1;
+                    true
+                }
+                Outcome::Panic => {
+                    row.panic += 1;
+                    true
+                }
+            };
+            if std::env::var_os("MUTATE_TRACE").is_some() && bad {
+                eprintln!(
+                    "{}: {what}: {outcome:?} {}",
+                    self.label,
+                    why.clone().unwrap_or_default()
+                );
+            }
+            if bad && row.first_bad.is_none() {
+                row.first_bad = Some(format!("{what}: {outcome:?} {}", why.unwrap_or_default()));
             }
         }
         row
     }
 
-    /// Recomputes every checksum of `b` (best effort: never panics on
-    /// garbage), so that an attack reaches the checks behind them.
+    /// Recomputes every checksum of `b`: the codec's own ones inside its
+    /// sections (RACBVH's per-cluster checksums), then the frame's.
     pub fn reseal(&self, b: &mut [u8]) {
-        if self.codec == "plain" {
-            reseal(b, 216, 88, None);
-        } else {
-            reseal(b, 312, 184, Some(20));
+        if self.kind == CodecKind::Racbvh {
+            reseal_clusters(b, &self.frame);
         }
+        self.frame.reseal(b);
     }
 
-    /// Runs every attack with `n` cases for the random ones.
+    /// Runs every byte-level attack, `n` cases for the random ones.
     pub fn run(&self, n: usize, seed: u64) -> Vec<Row> {
         let mut rng = Rng(seed | 1);
         let len = self.bytes.len();
+        let header = self.frame.header_len();
         let mut rows = Vec::new();
         // Truncations.
-        let cuts: Vec<Vec<u8>> = [0, 1, 7, 8, 100, 215, 216, 311, 312]
+        let cuts = [0, 1, 7, 8, 12, header - 1, header, header + 1]
             .into_iter()
             .chain((0..n).map(|_| rng.below(len)))
             .chain([len - 1])
             .filter(|&c| c < len)
-            .map(|c| self.bytes[..c].to_vec())
+            .map(|c| (self.bytes[..c].to_vec(), format!("cut at {c}")))
             .collect();
-        rows.push(self.row("truncation", true, cuts));
+        rows.push(self.row("truncation", true, false, cuts));
         // Raw bit flips.
         let flip = |rng: &mut Rng, b: &mut Vec<u8>| {
             let at = rng.below(b.len());
             b[at] ^= 1 << rng.below(8);
+            at
         };
-        let raw: Vec<Vec<u8>> = (0..n)
+        let raw = (0..n)
             .map(|_| {
                 let mut b = self.bytes.clone();
-                flip(&mut rng, &mut b);
-                b
+                let at = flip(&mut rng, &mut b);
+                (b, format!("bit flip at {at}"))
             })
             .collect();
-        rows.push(self.row("raw bit flip", true, raw));
+        rows.push(self.row("raw bit flip", true, false, raw));
         // Bit flips, checksums recomputed.
-        let sealed: Vec<Vec<u8>> = (0..n)
+        let sealed = (0..n)
             .map(|_| {
                 let mut b = self.bytes.clone();
-                for _ in 0..1 + rng.below(3) {
-                    flip(&mut rng, &mut b);
-                }
+                let at: Vec<usize> = (0..1 + rng.below(3))
+                    .map(|_| flip(&mut rng, &mut b))
+                    .collect();
                 self.reseal(&mut b);
-                b
+                (b, format!("bit flips at {at:?}"))
             })
             .collect();
-        rows.push(self.row("bit flips, checksums recomputed", false, sealed));
-        // Forged headers.
-        let forged: Vec<Vec<u8>> = self
-            .forgeries()
-            .into_iter()
-            .map(|(at, v)| {
-                let mut b = self.bytes.clone();
-                b[at..at + v.len()].copy_from_slice(&v);
-                self.reseal_header_only(&mut b);
-                b
-            })
-            .collect();
-        rows.push(self.row("forged header (checksummed)", false, forged));
-        // Structurally corrupt, checksummed trees.
-        if self.codec == "plain" {
-            let trees = self.corrupt_plain_trees(n, &mut rng);
-            rows.push(self.row(
-                "corrupt tree, checksummed (repeats, cycles, boxes)",
-                true,
-                trees,
-            ));
-        }
+        rows.push(self.row("bit flips, checksums recomputed", false, false, sealed));
+        // Forged header words.
+        // Every value for every word in a long run, a few in a short one.
+        let per_word = if n >= 100 { usize::MAX } else { 1 + n / 4 };
+        let forged = self.forged_words(per_word, &mut rng);
+        rows.push(self.row("forged header word (checksummed)", false, true, forged));
+        // Forged section tables.
+        let tables = self.forged_tables();
+        rows.push(self.row("forged section table (checksummed)", false, false, tables));
         rows
     }
 
-    /// RACBVH files whose trees are structurally corrupt, written by the
-    /// real encoder (so every checksum and every bit is as the codec writes
-    /// it): an inner node naming one child twice, a node adopted by a
-    /// second parent (a DAG: the hang and million-triangle
-    /// overlap), or a child moved before its parent; cases the encoder
-    /// refuses are skipped.
-    pub fn racbvh_corrupt_trees(
+    /// Every 4-byte word of the header's fields (after the magic and the
+    /// version) replaced by each of a set of hostile values (at most
+    /// `per_word` of them, chosen with `rng`), the checksums recomputed.
+    fn forged_words(&self, per_word: usize, rng: &mut Rng) -> Vec<(Vec<u8>, String)> {
+        let mut out = Vec::new();
+        for at in (12..self.frame.table).step_by(4) {
+            let old = u32::from_le_bytes(self.bytes[at..at + 4].try_into().unwrap());
+            let f = f32::from_bits(old);
+            let mut vals = vec![
+                0,
+                1,
+                old ^ 1,
+                old.wrapping_add(1),
+                old.wrapping_sub(1),
+                old ^ 0x8000_0000,
+                u32::MAX,
+                1 << 31,
+                (1 << 31) - 1,
+                1 << 24,
+                old.wrapping_mul(2),
+            ];
+            if f.is_finite() {
+                vals.extend(
+                    [
+                        f * 2.0,
+                        f * 0.5,
+                        f + 0.25,
+                        -f,
+                        f * 1e30,
+                        f32::NAN,
+                        f32::INFINITY,
+                    ]
+                    .map(f32::to_bits),
+                );
+            }
+            vals.sort_unstable();
+            vals.dedup();
+            vals.retain(|&v| v != old);
+            // A short run forges each word with a few of the values, chosen
+            // at random.
+            while vals.len() > per_word {
+                vals.swap_remove(rng.below(vals.len()));
+            }
+            for v in vals {
+                let mut b = self.bytes.clone();
+                b[at..at + 4].copy_from_slice(&v.to_le_bytes());
+                self.frame.reseal(&mut b);
+                out.push((b, format!("header word at {at}: {old:#x} -> {v:#x}")));
+            }
+        }
+        out
+    }
+
+    /// Each section-table entry's offset and length forged, checksums
+    /// recomputed.
+    fn forged_tables(&self) -> Vec<(Vec<u8>, String)> {
+        let len = self.bytes.len() as u64;
+        let mut out = Vec::new();
+        for k in 0..self.frame.sections.len() {
+            let at = self.frame.table + 24 * k;
+            let (off, slen, _) = self.frame.entry(&self.bytes, k);
+            let mut put = |field: usize, v: u64| {
+                let mut b = self.bytes.clone();
+                b[at + field..at + field + 8].copy_from_slice(&v.to_le_bytes());
+                self.frame.reseal(&mut b);
+                out.push((
+                    b,
+                    format!("section {k} {} = {v}", ["offset", "length"][field / 8]),
+                ));
+            };
+            for v in [
+                len,
+                len + 1,
+                u64::MAX,
+                u64::MAX - 7,
+                0,
+                8,
+                off + 1,
+                off.wrapping_sub(1),
+            ] {
+                put(0, v);
+            }
+            for v in [
+                len,
+                len + 1,
+                u64::MAX,
+                u64::MAX - 7,
+                0,
+                8,
+                slen + 1,
+                slen.wrapping_sub(1),
+            ] {
+                put(8, v);
+            }
+        }
+        out
+    }
+
+    /// Files written by the codec's own encoder from canonical trees with
+    /// one structural defect each (a child named twice, a node adopted by
+    /// a second parent, a path of children named twice: a DAG), so that
+    /// every checksum and bit is as the codec writes them; trees the
+    /// encoder refuses (or panics on: the canonical tree is trusted input)
+    /// are skipped. The encoder may also turn such a tree into a valid file
+    /// of another mesh (hcc's tree order numbers the triangles it reaches,
+    /// o-HCCMesh rebuilds its trees), so a consistent other file is
+    /// allowed; an inconsistent one is not.
+    pub fn corrupt_trees(
         &self,
-        bvh: &cbvh::CanonicalBvh,
-        mesh: &cbvh::Mesh,
-        opts: &cbvh::codec::racbvh::RacOptions,
+        bvh: &CanonicalBvh,
+        mesh: &Mesh,
+        options: &AnyOptions,
         n: usize,
         seed: u64,
     ) -> Row {
@@ -317,16 +640,12 @@ impl Subject {
             match k % 3 {
                 0 => t.nodes[i].b = t.nodes[i].a,
                 1 if i < j => {
-                    // j's right child becomes i's left child too (two parents),
-                    // in a later cluster when possible.
                     let c = t.nodes[j].b;
                     if c as usize > i {
                         t.nodes[i].a = c;
                     }
                 }
                 _ => {
-                    // A deep DAG: every inner node on a path names its left
-                    // child twice.
                     let mut x = i;
                     for _ in 0..64 {
                         if t.nodes[x].is_leaf() {
@@ -338,128 +657,19 @@ impl Subject {
                     }
                 }
             }
-            if let Ok(r) = RacBvh::encode(&t, mesh, opts) {
-                cases.push(r.to_bytes());
+            let encoded = catch_unwind(AssertUnwindSafe(|| {
+                AnyCodec::encode(self.kind, &t, mesh, options).ok()
+            }));
+            if let Ok(Some(c)) = encoded {
+                cases.push((c.to_bytes(), format!("tree defect {}", k % 3)));
             }
         }
-        self.row("corrupt tree via the encoder (repeats, DAGs)", true, cases)
-    }
-
-    fn reseal_header_only(&self, b: &mut [u8]) {
-        let h = if self.codec == "plain" { 216 } else { 312 };
-        let sum = xxh3_64(&b[..h - 8]);
-        b[h - 8..h].copy_from_slice(&sum.to_le_bytes());
-    }
-
-    /// (byte offset, new bytes) for each forged header field.
-    fn forgeries(&self) -> Vec<(usize, Vec<u8>)> {
-        let len = self.bytes.len() as u64;
-        let u32s = |at: usize, vals: &[u32]| -> Vec<(usize, Vec<u8>)> {
-            vals.iter()
-                .map(|v| (at, v.to_le_bytes().to_vec()))
-                .collect()
-        };
-        let mut out = Vec::new();
-        let (table, counts): (usize, &[usize]) = if self.codec == "plain" {
-            (88, &[16, 20, 24, 28])
-        } else {
-            (184, &[24, 28, 92])
-        };
-        for &c in counts {
-            out.extend(u32s(c, &[0, 1, u32::MAX, 1 << 31, (1 << 31) - 1, 1 << 24]));
-        }
-        for k in 0..SECTIONS {
-            let off = table + 24 * k;
-            for v in [len, len + 1, u64::MAX, u64::MAX - 7, 0, 8] {
-                out.push((off, v.to_le_bytes().to_vec()));
-                out.push((off + 8, v.to_le_bytes().to_vec()));
-            }
-            if k > 0 {
-                // Overlap the previous section.
-                out.push((off, self.bytes[off - 24..off - 16].to_vec()));
-            }
-        }
-        let nan = f32::NAN.to_le_bytes().to_vec();
-        let mass = if self.codec == "plain" { 32 } else { 128 };
-        out.push((mass, nan.clone()));
-        out.push((mass, (-1.0f32).to_le_bytes().to_vec()));
-        out.push((mass + 4, nan.clone()));
-        if self.codec != "plain" {
-            // Cluster bits, box bits, max leaf, threshold, vertex bits.
-            out.extend(u32s(16, &[7, 14, 15, u32::MAX]));
-            out.extend(u32s(20, &[7, 8, 24, 25]));
-            out.extend(u32s(32, &[0, 2, 65537]));
-            out.extend(u32s(88, &[7, 8, 24, 32, 33]));
-            // The box grid and the vertex grid: shifted, scaled, NaN.
-            for at in [40, 52, 100, 112] {
-                let v = f32::from_le_bytes(self.bytes[at..at + 4].try_into().unwrap());
-                for x in [v + 0.25, v * 2.0, v * 0.5, -v, f32::NAN, f32::INFINITY] {
-                    out.push((at, x.to_le_bytes().to_vec()));
-                }
-            }
-        }
-        out
-    }
-
-    /// Plain trees with one structural defect each, checksums recomputed.
-    fn corrupt_plain_trees(&self, n: usize, rng: &mut Rng) -> Vec<Vec<u8>> {
-        let nodes = u32::from_le_bytes(self.bytes[16..20].try_into().unwrap()) as usize;
-        let at = |i: usize| 216 + 32 * i;
-        let word = |b: &[u8], i: usize, w: usize| {
-            u32::from_le_bytes(b[at(i) + 4 * w..at(i) + 4 * w + 4].try_into().unwrap())
-        };
-        let put = |b: &mut [u8], i: usize, w: usize, v: u32| {
-            b[at(i) + 4 * w..at(i) + 4 * w + 4].copy_from_slice(&v.to_le_bytes());
-        };
-        let inner: Vec<usize> = (0..nodes)
-            .filter(|&i| word(&self.bytes, i, 7) & 0x8000_0000 == 0)
-            .collect();
-        let leaves: Vec<usize> = (0..nodes)
-            .filter(|&i| word(&self.bytes, i, 7) & 0x8000_0000 != 0)
-            .collect();
-        let mut out = Vec::new();
-        for k in 0..n {
-            let mut b = self.bytes.clone();
-            let i = inner[rng.below(inner.len())];
-            let (l, r) = (word(&b, i, 6), word(&b, i, 7));
-            match k % 7 {
-                0 => put(&mut b, i, 7, l),                // the same child twice
-                1 => put(&mut b, i, 6, 0),                // a cycle back to the root
-                2 => put(&mut b, i, 6, i as u32),         // a self-loop
-                3 => put(&mut b, i, 7, nodes as u32 + 5), // out of range
-                4 => {
-                    // A child box sticking out of its parent.
-                    let c = l as usize;
-                    let v = f32::from_bits(word(&b, c, 0)) - 1.0;
-                    put(&mut b, c, 0, v.to_bits());
-                    let _ = r;
-                }
-                5 => {
-                    // A leaf box that misses its triangle (shrunk to a point).
-                    let leaf = leaves[rng.below(leaves.len())];
-                    for w in 3..6 {
-                        let v = word(&b, leaf, w - 3);
-                        put(&mut b, leaf, w, v);
-                    }
-                }
-                _ => {
-                    // A triangle in two leaves (another leaf's id).
-                    let (a, c) = (
-                        leaves[rng.below(leaves.len())],
-                        leaves[rng.below(leaves.len())],
-                    );
-                    if a == c {
-                        put(&mut b, i, 7, l);
-                    } else {
-                        let v = word(&b, a, 6);
-                        put(&mut b, c, 6, v);
-                    }
-                }
-            }
-            self.reseal(&mut b);
-            out.push(b);
-        }
-        out
+        self.row(
+            "corrupt tree via the encoder (repeats, DAGs)",
+            false,
+            false,
+            cases,
+        )
     }
 }
 
@@ -467,44 +677,98 @@ fn u64_at(b: &[u8], at: usize) -> Option<u64> {
     Some(u64::from_le_bytes(b.get(at..at + 8)?.try_into().ok()?))
 }
 
-/// Recomputes the section checksums (and, with `meta`, the per-cluster
-/// checksums in the first section's entries of `meta` bytes), then the
-/// header's.
-fn reseal(b: &mut [u8], header: usize, table: usize, meta: Option<usize>) {
-    if b.len() < header {
+/// RACBVH's per-cluster checksums (the meta table, section 0: 20-byte
+/// entries of cluster start u64, then at 12 the cluster's checksum),
+/// recomputed over the clusters section (section 1); best effort on
+/// garbage, never panics.
+fn reseal_clusters(b: &mut [u8], frame: &Frame) {
+    const ENTRY: usize = 20;
+    if b.len() < frame.header_len() {
         return;
     }
     let range = |b: &[u8], k: usize| -> Option<std::ops::Range<usize>> {
-        let off = usize::try_from(u64_at(b, table + 24 * k)?).ok()?;
-        let len = usize::try_from(u64_at(b, table + 24 * k + 8)?).ok()?;
-        let end = off.checked_add(len)?;
+        let (off, len, _) = frame.entry(b, k);
+        let off = usize::try_from(off).ok()?;
+        let end = off.checked_add(usize::try_from(len).ok()?)?;
         (end <= b.len()).then_some(off..end)
     };
-    if let (Some(entry), Some(m), Some(c)) = (meta, range(b, 0), range(b, 1)) {
-        let count = m.len() / entry;
-        for i in 0..count {
-            let e = m.start + i * entry;
-            let start = u64_at(b, e).and_then(|x| usize::try_from(x).ok());
-            let end = if i + 1 < count {
-                u64_at(b, e + entry).and_then(|x| usize::try_from(x).ok())
-            } else {
-                Some(c.len())
-            };
-            if let (Some(s), Some(t)) = (start, end)
-                && s <= t
-                && t <= c.len()
-            {
-                let h = xxh3_64(&b[c.start + s..c.start + t]);
-                b[e + 12..e + 20].copy_from_slice(&h.to_le_bytes());
-            }
+    let (Some(m), Some(c)) = (range(b, 0), range(b, 1)) else {
+        return;
+    };
+    let count = m.len() / ENTRY;
+    for i in 0..count {
+        let e = m.start + i * ENTRY;
+        let start = u64_at(b, e).and_then(|x| usize::try_from(x).ok());
+        let end = if i + 1 < count {
+            u64_at(b, e + ENTRY).and_then(|x| usize::try_from(x).ok())
+        } else {
+            Some(c.len())
+        };
+        if let (Some(s), Some(t)) = (start, end)
+            && s <= t
+            && t <= c.len()
+        {
+            let h = xxh3_64(&b[c.start + s..c.start + t]);
+            b[e + 12..e + 20].copy_from_slice(&h.to_le_bytes());
         }
     }
-    for k in 0..SECTIONS {
-        if let Some(r) = range(b, k) {
-            let h = xxh3_64(&b[r]);
-            b[table + 24 * k + 16..table + 24 * k + 24].copy_from_slice(&h.to_le_bytes());
-        }
+}
+
+/// A codec variant to attack: the codec's name, the build's leaf size, its
+/// `CODEC.KEY=VALUE` settings, and the cache budget it is opened with.
+pub type Variant = (&'static str, usize, &'static [&'static str], usize);
+
+/// The variants every run attacks: each codec with its defaults, and the
+/// options and modes that change its layout or its reader.
+pub const VARIANTS: &[Variant] = &[
+    ("plain", 1, &[], 1 << 20),
+    ("plain", 4, &[], 1 << 20),
+    ("racbvh", 1, &["racbvh.cluster-nodes=256"], 1 << 20),
+    (
+        "racbvh",
+        4,
+        &["racbvh.cluster-nodes=256", "racbvh.bits=12"],
+        4096,
+    ),
+    ("clbvh", 1, &[], 1 << 20),
+    ("clbvh", 1, &["clbvh.multi-leaf=false"], 1 << 20),
+    ("clbvh-compact", 1, &[], 1 << 20),
+    ("hcc", 1, &[], 1 << 20),
+    ("hcc", 4, &["hcc.tree-order=true"], 1 << 20),
+    ("hcc", 1, &["hcc.vertex-ids=false"], 1 << 20),
+    ("hcc-ooc", 1, &[], 1 << 20),
+    // A budget too small for the decoded trees: paged out of core.
+    ("hcc-ooc", 4, &[], 4096),
+];
+
+/// One variant's subject, its canonical tree and its options.
+pub fn variant(
+    mesh: &Mesh,
+    (codec, leaf, sets, budget): Variant,
+) -> (Subject, CanonicalBvh, AnyOptions) {
+    let kind: CodecKind = codec.parse().unwrap();
+    let mut settings = cbvh::codec::Settings::new(leaf, None);
+    for s in sets {
+        settings.set(s).unwrap();
     }
-    let h = xxh3_64(&b[..header - 8]);
-    b[header - 8..header].copy_from_slice(&h.to_le_bytes());
+    let options = AnyOptions::from_settings(&settings, &[kind]).unwrap();
+    let build = cbvh::build::BuildOptions {
+        max_leaf_triangles: leaf,
+        ..Default::default()
+    };
+    let bvh = cbvh::build::build(mesh, &build, &|_, _| {}).unwrap();
+    let bytes = AnyCodec::encode(kind, &bvh, mesh, &options)
+        .unwrap()
+        .to_bytes();
+    let mut label = codec.to_string();
+    if leaf > 1 {
+        label += &format!(" leaf {leaf}");
+    }
+    for s in sets {
+        label += &format!(" {}", s.split_once('.').map_or(*s, |(_, kv)| kv));
+    }
+    if budget < 1 << 20 {
+        label += &format!(" cache {budget} B");
+    }
+    (Subject::new(kind, label, bytes, budget), bvh, options)
 }

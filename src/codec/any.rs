@@ -22,6 +22,7 @@ use std::path::{Path, PathBuf};
 use super::ByteSize;
 use super::clbvh::{ClBvh, ClBvhCompact};
 use super::common::MassProps;
+use super::common::container::Frame;
 use super::contract::{Codec, OpenOptions};
 use super::hcc::HccBvh;
 use super::hcc::ooc::HccOocBvh;
@@ -244,6 +245,19 @@ impl CodecKind {
             }
         }
         self.visit(Keys)
+    }
+
+    /// The frame of the codec's files ([`Codec::FRAME`]): where their
+    /// section table lies, their sections' names.
+    pub fn frame(self) -> Frame {
+        struct FrameOf;
+        impl KindVisitor for FrameOf {
+            type Output = Frame;
+            fn visit<C: Registered>(self) -> Frame {
+                C::FRAME
+            }
+        }
+        self.visit(FrameOf)
     }
 
     /// Whether the codec decodes into a cache under a byte budget

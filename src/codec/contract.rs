@@ -6,6 +6,7 @@ use std::path::Path;
 use super::ByteSize;
 use super::any::CodecKind;
 use super::common::MassProps;
+use super::common::container::Frame;
 use super::common::page_cache::CacheStats;
 use super::settings::{Settings, SettingsError};
 use crate::build::CanonicalBvh;
@@ -29,6 +30,11 @@ pub trait Codec: NodeCursor + ByteSize + Send + Sync + Sized + 'static {
     /// The first eight bytes of the codec's file, by which
     /// [`AnyCodec::open`](super::AnyCodec::open) recognises it.
     const MAGIC: [u8; 8];
+
+    /// Where the codec file's section table lies and what its sections
+    /// are called: what its reader and writer go through, and what a tool
+    /// reads a file's sections with without knowing the codec.
+    const FRAME: Frame;
 
     /// Encoding settings.
     type Options: Clone + Default + std::fmt::Debug + Send + Sync;

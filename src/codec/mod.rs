@@ -76,6 +76,7 @@ pub mod racbvh;
 pub mod settings;
 
 pub use any::{AnyCodec, AnyOptions, CodecError, CodecFileError, CodecKind, UnknownCodec};
+pub use common::container::Frame;
 pub use common::page_cache::CacheStats;
 pub use contract::{Codec, OpenOptions};
 pub use settings::{Settings, SettingsError};

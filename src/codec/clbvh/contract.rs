@@ -3,6 +3,7 @@
 //! [`ClBvh`]'s own methods. The registry names each type once, so the
 //! compact variant is a type of its own.
 
+use crate::codec::common::container::Frame;
 use std::path::Path;
 
 use super::{ClBvh, ClBvhCompact, ClError, ClOptions, CompactOptions, LeafKind, file};
@@ -37,6 +38,7 @@ fn build_fields(c: &ClBvh) -> Vec<(&'static str, serde_json::Value)> {
 impl Codec for ClBvh {
     const KIND: CodecKind = CodecKind::Clbvh;
     const MAGIC: [u8; 8] = file::MAGIC;
+    const FRAME: Frame = file::FRAME;
     /// `leaves` must be [`LeafKind::Fast`] (the compact variant is
     /// [`ClBvhCompact`]).
     type Options = ClOptions;
@@ -119,6 +121,7 @@ fn read(path: &Path) -> Result<Vec<u8>, ClError> {
 impl Codec for ClBvhCompact {
     const KIND: CodecKind = CodecKind::ClbvhCompact;
     const MAGIC: [u8; 8] = file::MAGIC_COMPACT;
+    const FRAME: Frame = file::FRAME;
     type Options = CompactOptions;
     type Error = ClError;
 

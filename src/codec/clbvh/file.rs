@@ -30,7 +30,7 @@ use std::path::Path;
 
 use super::node::InnerNode;
 use super::{ClBvh, ClError, ClOptions, LeafKind};
-use crate::codec::common::container::{check_header, sections, version, write_sections};
+use crate::codec::common::container::{Frame, version};
 use crate::codec::common::edges;
 use crate::codec::common::huge::huge;
 use crate::codec::common::le::{u32_at, word_bytes, words};
@@ -56,6 +56,11 @@ const NAMES: [&str; SECTIONS] = [
     "blocks",
     edges::SECTION,
 ];
+/// The file's frame: where its section table lies, its sections' names.
+pub(super) const FRAME: Frame = Frame {
+    table: TABLE,
+    sections: &NAMES,
+};
 /// Bytes of a section's entries (the edge flags are a byte stream).
 const ELEM: [u64; SECTIONS] = [224, 4, 12, 12, 4, 8, 1];
 
@@ -104,7 +109,7 @@ impl ClBvh {
         out.extend_from_slice(&0u32.to_le_bytes());
         debug_assert_eq!(out.len(), TABLE);
         let refs: Vec<&[u8]> = sections.iter().map(Vec::as_slice).collect();
-        write_sections(&mut out, HEADER_LEN, &refs);
+        FRAME.write(&mut out, &refs);
         out
     }
 
@@ -148,7 +153,7 @@ impl ClBvh {
                 supported: VERSION,
             });
         }
-        check_header(b, HEADER_LEN, magic, "CLBVH")?;
+        FRAME.check_header(b, magic, "CLBVH")?;
         let flags = u32_at(b, 12);
         if flags & !2 != 0 || u32_at(b, 108) != 0 {
             return Err(header_err("flags", "reserved bits are set"));
@@ -166,16 +171,10 @@ impl ClBvh {
         let root_box = Aabb::from_arrays([f(0), f(1), f(2)], [f(3), f(4), f(5)]);
         let multi_nodes = u32_at(b, 48) as usize;
         let tris = u32_at(b, 52) as usize;
-        let mass = MassProps::from_bytes(&b[56..56 + MASS_BYTES]).ok_or_else(|| {
-            header_err(
-                "mass properties",
-                "a value is not finite or the mass is negative",
-            )
-        })?;
-        let ranges = sections(
+        let mass = MassProps::from_bytes(&b[56..56 + MASS_BYTES])
+            .map_err(|why| header_err("mass properties", why))?;
+        let ranges = FRAME.sections(
             b,
-            TABLE,
-            &NAMES,
             |k, len| {
                 if len % ELEM[k] == 0 {
                     Ok(())

@@ -37,6 +37,15 @@ impl Walk<'_> {
             .ok_or(bad(at, "a leaf block starts past the arena"))?;
         let (n, u) = ((hdr & 0xFFFF) as usize, (hdr >> 16) as usize);
         let nt = self.seen_tri.len();
+        // The block's words, checked before anything is allocated for its
+        // triangles (a forged count must not buy a large allocation).
+        let words = match t.options.leaves {
+            LeafKind::Fast => 10 * n,
+            LeafKind::Compact => u + n + (3 * n).div_ceil(4),
+        };
+        if at + 1 + words > a.len() {
+            return Err(bad(at, "a leaf block runs past the arena"));
+        }
         let mut out = Vec::with_capacity(n);
         match t.options.leaves {
             LeafKind::Fast => {
@@ -119,6 +128,12 @@ fn inside(b: &Aabb, tris: &[(u32, Triangle)]) -> bool {
         .all(|(_, t)| t.iter().all(|&p| b.contains_point(p)))
 }
 
+fn grow(b: &mut Aabb, tris: &[(u32, Triangle)]) {
+    for (_, t) in tris {
+        t.iter().for_each(|&p| b.grow(p));
+    }
+}
+
 fn good_box(b: &Aabb) -> bool {
     b.min.is_finite() && b.max.is_finite() && b.min.cmple(b.max).all()
 }
@@ -129,7 +144,11 @@ impl ClBvh {
     /// range with used lanes first, inner boxes are finite and nested, leaf
     /// blocks lie inside the arena and hold each triangle exactly once with
     /// the mesh's corners (fast) or valid vertex and slot indices (compact),
-    /// and every box (float or decoded) contains the triangles below it.
+    /// every box (float or decoded) contains the triangles below it, no
+    /// leaf or multi-leaf node holds more than `8 · M` triangles (the
+    /// multi-leaf threshold), multi-leaf nodes appear only
+    /// where the flags allow them, and the root box is exactly the
+    /// triangles' bounds (the renderer frames its camera from it).
     pub fn verify(&self) -> Result<(), ClError> {
         let nt = self.triangle_count();
         if let Some(v) = self
@@ -164,6 +183,7 @@ impl ClBvh {
         };
         let mut seen_inner = vec![false; self.inner.len()];
         let mut multi = 0usize;
+        let mut bounds = Aabb::EMPTY;
         if nt > 0 && !good_box(&self.root_box) {
             return Err(bad(0, "the root box is not finite or inverted"));
         }
@@ -196,6 +216,10 @@ impl ClBvh {
                     if !inside(&b, &tris) {
                         return Err(bad(at, "a leaf's box does not contain its triangles"));
                     }
+                    if tris.len() > 8 * self.options.leaf_size {
+                        return Err(bad(at, "a leaf holds more than 8 · M triangles"));
+                    }
+                    grow(&mut bounds, &tris);
                 }
                 TAG_MULTI => {
                     multi += 1;
@@ -213,6 +237,10 @@ impl ClBvh {
                     if ends.windows(2).any(|e| e[0] > e[1]) || ends[7] as usize != tris.len() {
                         return Err(bad(at, "a multi-leaf node's leaf ends are wrong"));
                     }
+                    if tris.len() > 8 * self.options.leaf_size {
+                        return Err(bad(at, "a multi-leaf node holds more than 8 · M triangles"));
+                    }
+                    grow(&mut bounds, &tris);
                     let mut prev = 0;
                     for (k, &end) in ends.iter().enumerate() {
                         let lane = &tris[prev..end as usize];
@@ -227,6 +255,15 @@ impl ClBvh {
         }
         if multi != self.multi_nodes {
             return Err(bad(multi, "the multi-leaf node count is wrong"));
+        }
+        if multi > 0 && !self.options.multi_leaf {
+            return Err(bad(
+                multi,
+                "multi-leaf nodes in a tree whose flags say none",
+            ));
+        }
+        if nt > 0 && (bounds.min != self.root_box.min || bounds.max != self.root_box.max) {
+            return Err(bad(0, "the root box is not the triangles' bounds"));
         }
         if let Some(i) = seen_inner.iter().position(|s| !s) {
             return Err(bad(i, "no node names this inner node as a child"));

@@ -46,7 +46,8 @@ impl MassProps {
     };
 
     /// Signed-volume integration over `mesh` (as parry's
-    /// `MassProperties::from_trimesh` at density 1).
+    /// `MassProperties::from_trimesh` at density 1); [`MassProps::ZERO`]
+    /// where the figures are not [`physical`](Self::physical).
     pub fn of_mesh(mesh: &Mesh) -> MassProps {
         if mesh.vertices.is_empty() || mesh.triangles.is_empty() {
             return MassProps::ZERO;
@@ -65,13 +66,18 @@ impl MassProps {
         }
         let sign = volume.signum();
         let (mass, inertia) = (volume * sign, itot * sign);
-        if !(mass.is_finite() && inertia.is_finite() && com.is_finite()) {
-            return MassProps::ZERO;
-        }
-        MassProps {
+        let m = MassProps {
             mass,
             com: com.to_array(),
             inertia: inertia.to_cols_array(),
+        };
+        // A mesh that does not enclose a volume (an open or
+        // self-intersecting surface) can integrate to figures no body has:
+        // it gets none, as one without volume does.
+        if m.physical().is_ok() {
+            m
+        } else {
+            MassProps::ZERO
         }
     }
 
@@ -87,12 +93,13 @@ impl MassProps {
         out
     }
 
-    /// Reads stored bytes (`b` holds at least [`MASS_BYTES`]); `None` if a
-    /// value is not finite or the mass is negative.
-    pub fn from_bytes(b: &[u8]) -> Option<MassProps> {
+    /// Reads stored bytes (`b` holds at least [`MASS_BYTES`]), refusing
+    /// figures no body can have ([`physical`](Self::physical)): the reason
+    /// as the error.
+    pub fn from_bytes(b: &[u8]) -> Result<MassProps, &'static str> {
         let f = |k: usize| {
-            let w = b.get(4 * k..4 * k + 4)?;
-            Some(f32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+            let w = b.get(4 * k..4 * k + 4).ok_or("fewer than 52 bytes")?;
+            Ok::<f32, &'static str>(f32::from_le_bytes([w[0], w[1], w[2], w[3]]))
         };
         let mut vals = [0f32; 13];
         for (k, v) in vals.iter_mut().enumerate() {
@@ -103,7 +110,63 @@ impl MassProps {
             com: [vals[1], vals[2], vals[3]],
             inertia: std::array::from_fn(|k| vals[4 + k]),
         };
-        (vals.iter().all(|x| x.is_finite()) && m.mass >= 0.0).then_some(m)
+        m.physical().map(|()| m)
+    }
+
+    /// Whether a body can have these figures, and if not why: every value
+    /// finite; no mass and no inertia, or a positive mass with an inertia
+    /// tensor that a distribution of positive mass has. That is: `I` is
+    /// symmetric and `C = tr(I)/2 · 1 − I` (the second moments `∫ r rᵀ dm`)
+    /// is positive semi-definite, which also makes `I` positive
+    /// semi-definite with principal moments obeying the triangle
+    /// inequality. Rounding is allowed for, relative to the trace.
+    pub fn physical(&self) -> Result<(), &'static str> {
+        let vals = std::iter::once(self.mass)
+            .chain(self.com)
+            .chain(self.inertia);
+        if vals.into_iter().any(|x| !x.is_finite()) {
+            return Err("a value is not finite");
+        }
+        if self.mass < 0.0 {
+            return Err("the mass is negative");
+        }
+        let i: [f64; 9] = self.inertia.map(f64::from);
+        let at = |r: usize, c: usize| i[3 * c + r];
+        let trace = at(0, 0) + at(1, 1) + at(2, 2);
+        if self.mass == 0.0 {
+            return if i.iter().all(|&x| x == 0.0) {
+                Ok(())
+            } else {
+                Err("no mass, but an inertia")
+            };
+        }
+        if trace <= 0.0 {
+            return Err("a mass without inertia");
+        }
+        let tol = 1e-5 * trace;
+        for (r, c) in [(0, 1), (0, 2), (1, 2)] {
+            if (at(r, c) - at(c, r)).abs() > tol {
+                return Err("the inertia tensor is not symmetric");
+            }
+        }
+        let cm = |r: usize, c: usize| {
+            let sym = 0.5 * (at(r, c) + at(c, r));
+            if r == c { 0.5 * trace - sym } else { -sym }
+        };
+        // Every principal minor of C non-negative (up to rounding).
+        let minor2 = |a: usize, b: usize| cm(a, a) * cm(b, b) - cm(a, b) * cm(a, b);
+        let det = cm(0, 0) * minor2(1, 2) - cm(0, 1) * (cm(1, 0) * cm(2, 2) - cm(1, 2) * cm(2, 0))
+            + cm(0, 2) * (cm(1, 0) * cm(2, 1) - cm(1, 1) * cm(2, 0));
+        let ok = (0..3).all(|k| cm(k, k) >= -tol)
+            && [(0, 1), (0, 2), (1, 2)]
+                .iter()
+                .all(|&(a, b)| minor2(a, b) >= -tol * trace)
+            && det >= -tol * trace * trace;
+        if ok {
+            Ok(())
+        } else {
+            Err("no distribution of positive mass has this inertia tensor")
+        }
     }
 }
 
@@ -255,4 +318,89 @@ fn tetrahedron_unit_inertia_tensor_wrt_point(
         * 0.05;
 
     Mat3::from_cols_array(&[a0, -c1, -b1, -c1, b0, -a1, -b1, -a1, c0])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cube() -> Mesh {
+        let v = (0..8)
+            .map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32])
+            .collect();
+        // Outward-facing quads, two triangles each.
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let t = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
+        Mesh::new(v, t)
+    }
+
+    #[test]
+    fn a_closed_mesh_is_physical_and_round_trips() {
+        let m = MassProps::of_mesh(&cube());
+        assert!((m.mass - 1.0).abs() < 1e-5, "{m:?}");
+        // A unit cube: I = m (1 + 1) / 12 on the diagonal.
+        assert!((m.inertia[0] - 1.0 / 6.0).abs() < 1e-5, "{m:?}");
+        assert_eq!(m.physical(), Ok(()));
+        assert_eq!(MassProps::from_bytes(&m.to_bytes()), Ok(m));
+    }
+
+    #[test]
+    fn figures_no_body_has_are_refused() {
+        let m = MassProps::of_mesh(&cube());
+        let with = |f: &dyn Fn(&mut MassProps)| {
+            let mut x = m;
+            f(&mut x);
+            MassProps::from_bytes(&x.to_bytes())
+        };
+        assert!(with(&|x| x.mass = f32::NAN).is_err());
+        assert!(with(&|x| x.mass = -1.0).is_err());
+        assert!(with(&|x| x.com[1] = f32::INFINITY).is_err());
+        // A principal moment larger than the other two together.
+        assert!(with(&|x| x.inertia[0] = 1.0).is_err());
+        // A negative moment.
+        assert!(with(&|x| x.inertia[4] = -0.1).is_err());
+        // Not symmetric.
+        assert!(with(&|x| x.inertia[1] = 0.05).is_err());
+        // A product of inertia too large for any distribution.
+        assert!(
+            with(&|x| {
+                x.inertia[1] = 0.15;
+                x.inertia[3] = 0.15;
+            })
+            .is_err()
+        );
+        // Mass without inertia, inertia without mass.
+        assert!(with(&|x| x.inertia = [0.0; 9]).is_err());
+        assert!(with(&|x| x.mass = 0.0).is_err());
+        assert_eq!(MassProps::ZERO.physical(), Ok(()));
+        // A valid rotation of the tensor's frame stays valid: a small
+        // product of inertia.
+        assert!(
+            with(&|x| {
+                x.inertia[1] = 0.01;
+                x.inertia[3] = 0.01;
+            })
+            .is_ok()
+        );
+    }
+
+    #[test]
+    fn an_open_surface_gets_no_mass_rather_than_an_impossible_one() {
+        // One triangle far from the others: the signed volumes from the
+        // geometric centre do not describe a body.
+        let mut mesh = cube();
+        mesh.triangles.truncate(7);
+        let m = MassProps::of_mesh(&mesh);
+        assert_eq!(m.physical(), Ok(()), "{m:?}");
+    }
 }

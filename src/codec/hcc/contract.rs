@@ -1,6 +1,7 @@
 //! The i-HCCMesh's [`Codec`] contract, delegating to [`HccBvh`]'s own
 //! methods.
 
+use crate::codec::common::container::Frame;
 use std::path::Path;
 
 use super::{HccBvh, HccError, HccOptions, file};
@@ -14,6 +15,7 @@ use crate::mesh::Mesh;
 impl Codec for HccBvh {
     const KIND: CodecKind = CodecKind::Hcc;
     const MAGIC: [u8; 8] = file::MAGIC;
+    const FRAME: Frame = file::FRAME;
     /// Vertex format, vertex ids and triangle ids; the canonical tree's leaf size picks
     /// one triangle a leaf (the paper's form) or multi-triangle leaves.
     type Options = HccOptions;
@@ -83,6 +85,14 @@ impl Codec for HccBvh {
             ("multi-triangle leaves", self.is_multi().to_string()),
             ("vertices", vertices),
             ("stored vertices", self.stats().tree_vertices.to_string()),
+            (
+                "input mesh",
+                format!(
+                    "{} vertices, {} of them used",
+                    self.mesh_vertices,
+                    self.stats().mesh_vertices
+                ),
+            ),
             ("vertex ids", self.has_vertex_ids().to_string()),
             (
                 "triangle ids",

@@ -47,9 +47,10 @@ use super::ids::{IdMap, VertexIds};
 use super::node::{HighNode, MAX_TREES, TreeHeader};
 use super::vertices::{Quantized, VertexTree, Vertices};
 use super::{HccBvh, HccError, HccStats};
+use crate::codec::common::container::{self, Frame};
+use crate::codec::common::edges;
 use crate::codec::common::le::{f32x3_at, u32_at, word_bytes, words};
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps, atomic_write};
-use crate::codec::common::{container, edges};
 
 /// The file version this build writes and reads.
 pub const VERSION: u32 = 3;
@@ -73,6 +74,11 @@ const NAMES: [&str; SECTIONS] = [
     "vertex ids",
     edges::SECTION,
 ];
+/// The file's frame: where its section table lies, its sections' names.
+pub(super) const FRAME: Frame = Frame {
+    table: TABLE,
+    sections: &NAMES,
+};
 const FLAG_MULTI: u32 = 1;
 const FLAG_QUANTIZED: u32 = 2;
 const FLAG_VERTEX_IDS: u32 = 4;
@@ -160,7 +166,7 @@ impl HccBvh {
             &vids,
             &edges::encode(&self.edges),
         ];
-        container::write_sections(&mut out, HEADER_LEN, &sections);
+        FRAME.write(&mut out, &sections);
         out
     }
 
@@ -194,7 +200,7 @@ impl HccBvh {
                 supported: VERSION,
             });
         }
-        container::check_header(b, HEADER_LEN, &MAGIC, "i-HCCMesh")?;
+        FRAME.check_header(b, &MAGIC, "i-HCCMesh")?;
         let flags = u32_at(b, 12);
         if flags > FLAG_MULTI | FLAG_QUANTIZED | FLAG_VERTEX_IDS | FLAG_TREE_ORDER {
             return Err(header_err("flags", "reserved bits are set"));
@@ -215,12 +221,8 @@ impl HccBvh {
             mesh_vertices,
             bits,
         ] = std::array::from_fn(|k| u32_at(b, 16 + 4 * k));
-        let mass = MassProps::from_bytes(&b[MASS_AT..TABLE]).ok_or_else(|| {
-            header_err(
-                "mass properties",
-                "a value is not finite or the mass is negative",
-            )
-        })?;
+        let mass = MassProps::from_bytes(&b[MASS_AT..TABLE])
+            .map_err(|why| header_err("mass properties", why))?;
         if n_trees as usize > MAX_TREES {
             return Err(header_err(
                 "low-level trees",
@@ -243,10 +245,8 @@ impl HccBvh {
             if has_vids { None } else { Some(0) },
             None,
         ];
-        let ranges = container::sections(
+        let ranges = FRAME.sections(
             b,
-            TABLE,
-            &NAMES,
             |k, len| match want[k] {
                 Some(w) if w != len => Err(format!("{len} bytes where the counts give {w}")),
                 _ => Ok(()),

@@ -1,6 +1,7 @@
 //! The plain codec's [`Codec`] contract, delegating to [`PlainBvh`]'s own
 //! methods.
 
+use crate::codec::common::container::Frame;
 use std::path::Path;
 
 use super::{PlainBvh, PlainError, file};
@@ -13,6 +14,7 @@ use crate::mesh::Mesh;
 impl Codec for PlainBvh {
     const KIND: CodecKind = CodecKind::Plain;
     const MAGIC: [u8; 8] = file::MAGIC;
+    const FRAME: Frame = file::FRAME;
     /// The plain codec has nothing to choose.
     type Options = ();
     type Error = PlainError;

@@ -35,10 +35,11 @@ use std::path::Path;
 
 use super::node::PlainNode;
 use super::{PlainBvh, PlainError};
+use crate::codec::common::container::{self, Frame};
+use crate::codec::common::edges;
 use crate::codec::common::huge::huge;
 use crate::codec::common::le::{u32_at, words};
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps, atomic_write};
-use crate::codec::common::{container, edges};
 
 /// The file version this build writes and reads.
 pub const VERSION: u32 = 2;
@@ -49,6 +50,11 @@ const TABLE: usize = 88;
 const HEADER_LEN: usize = TABLE + 24 * SECTIONS + 8;
 const _: () = assert!(HEADER_LEN == 216);
 const NAMES: [&str; SECTIONS] = ["nodes", "vertices", "triangles", "leaf ids", edges::SECTION];
+/// The file's frame: where its section table lies, its sections' names.
+pub(super) const FRAME: Frame = Frame {
+    table: TABLE,
+    sections: &NAMES,
+};
 
 fn header_err(field: &'static str, why: impl Into<String>) -> PlainError {
     FormatError::header(field, why).into()
@@ -99,7 +105,7 @@ impl PlainBvh {
         out.extend_from_slice(&0u32.to_le_bytes());
         debug_assert_eq!(out.len(), TABLE);
         let sections: [&[u8]; SECTIONS] = [&nodes, &verts, &tris, &ids, &flags];
-        container::write_sections(&mut out, HEADER_LEN, &sections);
+        FRAME.write(&mut out, &sections);
         out
     }
 
@@ -135,7 +141,7 @@ impl PlainBvh {
                 supported: VERSION,
             });
         }
-        container::check_header(b, HEADER_LEN, &MAGIC, "plain BVH")?;
+        FRAME.check_header(b, &MAGIC, "plain BVH")?;
         if u32_at(b, 12) != 0 || u32_at(b, 84) != 0 {
             return Err(header_err("flags", "reserved bits are set"));
         }
@@ -143,18 +149,12 @@ impl PlainBvh {
         if counts[0] == 0 {
             return Err(header_err("node count", "a tree has at least one node"));
         }
-        let mass = MassProps::from_bytes(&b[32..32 + MASS_BYTES]).ok_or_else(|| {
-            header_err(
-                "mass properties",
-                "a value is not finite or the mass is negative",
-            )
-        })?;
+        let mass = MassProps::from_bytes(&b[32..32 + MASS_BYTES])
+            .map_err(|why| header_err("mass properties", why))?;
         let elem = [32u64, 12, 12, 4];
         // The edge flags are variable-length: bounded by the file.
-        let ranges = container::sections(
+        let ranges = FRAME.sections(
             b,
-            TABLE,
-            &NAMES,
             |k, len| match elem.get(k) {
                 Some(e) if len != u64::from(counts[k]) * e => {
                     Err(format!("{len} bytes for {} entries", counts[k]))

@@ -1,5 +1,6 @@
 //! RACBVH's [`Codec`] contract, delegating to [`RacBvh`]'s own methods.
 
+use crate::codec::common::container::Frame;
 use std::path::Path;
 
 use super::{RacBvh, RacError, RacOptions, file};
@@ -12,6 +13,7 @@ use crate::mesh::Mesh;
 impl Codec for RacBvh {
     const KIND: CodecKind = CodecKind::Racbvh;
     const MAGIC: [u8; 8] = file::MAGIC;
+    const FRAME: Frame = file::FRAME;
     type Options = RacOptions;
     type Error = RacError;
 

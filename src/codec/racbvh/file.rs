@@ -46,11 +46,12 @@ use xxhash_rust::xxh3::xxh3_64;
 
 use super::mesh::{MeshParams, PackedMesh};
 use super::{ClusterMeta, Header, RacBvh, RacError};
+use crate::codec::common::container::{self, Frame};
+use crate::codec::common::edges;
 use crate::codec::common::le::{f32x3_at, u32_at, u64_at};
 use crate::codec::common::packed::bits_for;
 use crate::codec::common::quant::Grid;
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps, Store};
-use crate::codec::common::{container, edges};
 
 /// The container version this build writes and reads.
 pub const VERSION: u32 = 4;
@@ -61,6 +62,12 @@ const TABLE: usize = 184;
 const SECTIONS: usize = 5;
 const HEADER_LEN: usize = TABLE + 24 * SECTIONS + 8;
 const _: () = assert!(HEADER_LEN == 312);
+const NAMES: [&str; SECTIONS] = ["meta", "clusters", "vertices", "triangles", edges::SECTION];
+/// The file's frame: where its section table lies, its sections' names.
+pub(super) const FRAME: Frame = Frame {
+    table: TABLE,
+    sections: &NAMES,
+};
 /// Bytes of one meta-table entry.
 pub(super) const META_ENTRY: usize = 20;
 
@@ -131,7 +138,7 @@ impl RacBvh {
         }
         let flags = edges::encode(&self.edges);
         let sections: [&[u8]; SECTIONS] = [&meta, &self.data, &m.vertices, &m.triangles, &flags];
-        container::write_sections(&mut out, HEADER_LEN, &sections);
+        FRAME.write(&mut out, &sections);
         out
     }
 
@@ -177,7 +184,7 @@ impl RacBvh {
         {
             return Err(RacError::Version(version));
         }
-        container::check_header(b, HEADER_LEN, &MAGIC, "RACBVH")?;
+        FRAME.check_header(b, &MAGIC, "RACBVH")?;
         let flags = u32_at(b, 12);
         if flags & !3 != 0 {
             return Err(header_err("flags", format!("unknown flags {flags:#x}")));
@@ -228,6 +235,10 @@ impl RacBvh {
             step: Vec3A::from(step),
             max_q: ((1u64 << bits) - 1) as u32,
         };
+        let seconds = f64::from_bits(u64_at(b, 80));
+        if !(seconds.is_finite() && seconds >= 0.0) {
+            return Err(header_err("compression seconds", format!("{seconds}")));
+        }
         let header = Header {
             cluster_bits,
             bits,
@@ -239,7 +250,7 @@ impl RacBvh {
             empty,
             tree_bits: u64_at(b, 64),
             bv_bits: u64_at(b, 72),
-            compression_seconds: f64::from_bits(u64_at(b, 80)),
+            compression_seconds: seconds,
         };
         let (vertex_bits, vertex_count, index_bits) = (u32_at(b, 88), u32_at(b, 92), u32_at(b, 96));
         if !(lossless && vertex_bits == 32 || !lossless && (8..=24).contains(&vertex_bits)) {
@@ -254,25 +265,24 @@ impl RacBvh {
                 format!("{index_bits} for {vertex_count} vertices"),
             ));
         }
+        if u32_at(b, 124) != 0 || u32_at(b, 180) != 0 {
+            return Err(header_err(
+                "reserved words",
+                "bytes 124–127 or 180–183 are not zero",
+            ));
+        }
         let (morigin, mstep) = (f32x3_at(b, 100), f32x3_at(b, 112));
         if morigin.iter().chain(&mstep).any(|v| !v.is_finite()) {
             return Err(header_err("vertex grid", "not finite"));
         }
-        let mass = MassProps::from_bytes(&b[128..128 + MASS_BYTES]).ok_or_else(|| {
-            header_err(
-                "mass properties",
-                "a value is not finite or the mass is negative",
-            )
-        })?;
-        let names = ["meta", "clusters", "vertices", "triangles", edges::SECTION];
+        let mass = MassProps::from_bytes(&b[128..128 + MASS_BYTES])
+            .map_err(|why| header_err("mass properties", why))?;
         // The clusters are checked cluster by cluster as they are decoded
         // (the meta table holds their checksums), the mesh's two sections
         // when the mesh is unpacked; the meta table and the edge flags here.
-        let ranges =
-            container::sections(b, TABLE, &names, |_, _| Ok(()), |k| (1..=3).contains(&k))?;
+        let ranges = FRAME.sections(b, |_, _| Ok(()), |k| (1..=3).contains(&k))?;
         let sections: [&[u8]; SECTIONS] = std::array::from_fn(|k| &b[ranges[k].clone()]);
-        let hashes: [u64; SECTIONS] =
-            std::array::from_fn(|k| container::section_entry(b, TABLE, k).2);
+        let hashes: [u64; SECTIONS] = std::array::from_fn(|k| FRAME.entry(b, k).2);
         let csize = 1u64 << cluster_bits;
         let clusters = u64::from(node_count).div_ceil(csize);
         let need = clusters * META_ENTRY as u64;

@@ -197,6 +197,12 @@ impl RacBvh {
             ),
             ("vertices", m.vertex_count.to_string()),
             ("max leaf tris", h.max_leaf.to_string()),
+            ("triangle-delta threshold", h.tri_threshold.to_string()),
+            (
+                "coded bits",
+                format!("{} of structure, {} of boxes", h.tree_bits, h.bv_bits),
+            ),
+            ("compression time", format!("{} s", h.compression_seconds)),
         ]
     }
 

@@ -1,6 +1,7 @@
 //! The `hcc-ooc` codec's [`Codec`] contract and its traversal: both
 //! delegate to the decoded i-HCCMesh.
 
+use crate::codec::common::container::Frame;
 use std::path::Path;
 
 use super::super::trace::{self, Pairs};
@@ -123,6 +124,7 @@ impl Pairs for Paged {
 impl Codec for HccOocBvh {
     const KIND: CodecKind = CodecKind::HccOoc;
     const MAGIC: [u8; 8] = file::MAGIC;
+    const FRAME: Frame = file::FRAME;
     /// Grid bits and which id maps to keep (default: 16 bits, tree order).
     type Options = OocOptions;
     type Error = OocError;

@@ -3,8 +3,9 @@
 
 use super::super::node::MAX_TREES;
 use super::OocError;
+use crate::codec::common::container::{self, Frame};
 use crate::codec::common::le::{f32x3_at, u32_at};
-use crate::codec::common::{FormatError, MASS_BYTES, MassProps, container, edges};
+use crate::codec::common::{FormatError, MASS_BYTES, MassProps, edges};
 
 /// The file version this build writes and reads.
 pub const VERSION: u32 = 7;
@@ -29,6 +30,11 @@ pub const NAMES: [&str; SECTIONS] = [
     "tree firsts",
     edges::SECTION,
 ];
+/// The file's frame: where its section table lies, its sections' names.
+pub(in crate::codec) const FRAME: Frame = Frame {
+    table: TABLE,
+    sections: &NAMES,
+};
 /// Section index of the dictionaries.
 pub const SEC_DICTS: usize = 0;
 /// Section index of the high-level tree's shape bits.
@@ -116,7 +122,7 @@ pub fn write(h: &Header, sections: &[&[u8]; SECTIONS]) -> Vec<u8> {
     }
     debug_assert_eq!(out.len(), MASS_AT);
     out.extend_from_slice(&h.mass.to_bytes());
-    container::write_sections(&mut out, HEADER_LEN, sections);
+    FRAME.write(&mut out, sections);
     out
 }
 
@@ -138,18 +144,14 @@ pub fn parse_with(b: &[u8], streams: bool) -> Result<(Header, [&[u8]; SECTIONS])
             supported: VERSION,
         });
     }
-    container::check_header(b, HEADER_LEN, &MAGIC, "o-HCCMesh")?;
+    FRAME.check_header(b, &MAGIC, "o-HCCMesh")?;
     let flags = u32_at(b, 12);
     if flags > FLAG_VERTEX_IDS | FLAG_TREE_ORDER | FLAG_MULTI {
         return Err(header_err("flags", "reserved bits are set"));
     }
     let f: [u32; 9] = std::array::from_fn(|k| u32_at(b, 16 + 4 * k));
-    let mass = MassProps::from_bytes(&b[MASS_AT..TABLE]).ok_or_else(|| {
-        header_err(
-            "mass properties",
-            "a value is not finite or the mass is negative",
-        )
-    })?;
+    let mass = MassProps::from_bytes(&b[MASS_AT..TABLE])
+        .map_err(|why| header_err("mass properties", why))?;
     let h = Header {
         multi: flags & FLAG_MULTI != 0,
         vertex_ids: flags & FLAG_VERTEX_IDS != 0,
@@ -174,13 +176,7 @@ pub fn parse_with(b: &[u8], streams: bool) -> Result<(Header, [&[u8]; SECTIONS])
     }
     // Out of core (without `streams`), the trees are checked tree by tree
     // as they are paged in.
-    let ranges = container::sections(
-        b,
-        TABLE,
-        &NAMES,
-        |_, _| Ok(()),
-        |k| !streams && k == SEC_TREES,
-    )?;
+    let ranges = FRAME.sections(b, |_, _| Ok(()), |k| !streams && k == SEC_TREES)?;
     let mut out: [&[u8]; SECTIONS] = [&[]; SECTIONS];
     for (slot, r) in out.iter_mut().zip(ranges) {
         *slot = &b[r];

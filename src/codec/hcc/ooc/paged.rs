@@ -394,8 +394,7 @@ impl Paged {
     /// children's. Decodes tree by tree, outside the cache.
     pub(super) fn verify(&self) -> Result<(), OocError> {
         let streams = self.section(SEC_TREES);
-        let entry =
-            crate::codec::common::container::section_entry(&self.file, file::TABLE, SEC_TREES);
+        let entry = file::FRAME.entry(&self.file, SEC_TREES);
         if xxh3_64(streams) != entry.2 {
             return Err(FormatError::Checksum {
                 section: file::NAMES[SEC_TREES],
@@ -409,12 +408,15 @@ impl Paged {
             }
         }
         let mut boxes = vec![[0f32; 6]; self.high.len()];
+        let (mut words, mut ics) = (0u64, 0u64);
         for (t, leaf) in leaf_box.iter().enumerate() {
             let k = t as u32;
             let bad = |what| OocError::Corrupt { tree: k, what };
             let bytes = tree_stream(&self.starts, streams, k)?;
             let (hcc, root) = self.coder.tree(k, bytes)?;
             hcc.verify()?;
+            words += hcc.nodes.len() as u64;
+            ics += hcc.ics.len() as u64;
             let [first, base] = self.firsts[t];
             let [next, next_base] = self.firsts[t + 1];
             if hcc.triangle_count != next - first
@@ -426,6 +428,13 @@ impl Paged {
             }
             let i = leaf.ok_or(bad("no high-level leaf names the tree"))?;
             boxes[i] = root;
+        }
+        let h = &self.coder.h;
+        if words != u64::from(h.node_words) || ics != u64::from(h.interconnections) {
+            return Err(OocError::Corrupt {
+                tree: u32::MAX,
+                what: "the trees hold another number of node words or inter-connections than the header says",
+            });
         }
         for i in (0..self.high.len()).rev() {
             let n = self.high[i];
@@ -484,6 +493,13 @@ impl Paged {
                 ),
             ),
             ("stored vertices", h.stored_vertices.to_string()),
+            (
+                "input mesh",
+                format!(
+                    "{} vertices, {} of them used",
+                    h.mesh_vertices, h.used_vertices
+                ),
+            ),
             ("vertex ids", h.vertex_ids.to_string()),
             (
                 "triangle ids",
