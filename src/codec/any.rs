@@ -272,6 +272,19 @@ impl CodecKind {
         }
         self.visit(HasCache)
     }
+
+    /// Whether the codec's encoding depends on its cache budget (see
+    /// [`Codec::ENCODES_FOR_CACHE_BUDGET`]).
+    pub fn encodes_for_cache_budget(self) -> bool {
+        struct EncodesForBudget;
+        impl KindVisitor for EncodesForBudget {
+            type Output = bool;
+            fn visit<C: Registered>(self) -> bool {
+                C::ENCODES_FOR_CACHE_BUDGET
+            }
+        }
+        self.visit(EncodesForBudget)
+    }
 }
 
 impl std::fmt::Display for CodecKind {

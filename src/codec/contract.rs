@@ -131,6 +131,13 @@ pub trait Codec: NodeCursor + ByteSize + Send + Sync + Sized + 'static {
         None
     }
 
+    /// Whether the encoding itself depends on the cache budget in the
+    /// options (RACBVH sizes its clusters so that the budget holds enough of
+    /// them): a front end that wants a small cache then encodes for it
+    /// rather than re-opening a tree encoded for a large one. `false` by
+    /// default.
+    const ENCODES_FOR_CACHE_BUDGET: bool = false;
+
     /// For a codec with a cache: its counters (budget, bytes held,
     /// decodes, hits). `None` (the default) for a codec without one, or
     /// one that decoded everything up front (hcc-ooc pre-loaded).

@@ -18,7 +18,7 @@ use rapier3d::prelude::{
 
 use super::timed::{Timed, shape_address};
 use crate::build::BuildOptions;
-use crate::codec::{AnyOptions, CacheStats, CodecKind};
+use crate::codec::{AnyCodec, AnyOptions, CacheStats, CodecKind};
 use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 use crate::parry::cbvh_cbvh::interference;
@@ -609,11 +609,27 @@ fn make_shapes(kind: ShapeKind, scene: &DropScene) -> Result<Shapes, SimError> {
         // 10 % of the decompressed size: measured by decoding the whole
         // tree once with the unbounded cache, then the same bytes re-opened
         // with a tenth of it.
-        let small = shape
-            .codec()
-            .with_cache_budget_of(&|decoded| decoded / 10)
-            .ok_or_else(|| SimError::NoCache(kind.name()))??;
-        Ok(CbvhShape::from_codec(small, m))
+        let rebudget = |codec: &AnyCodec, budget: &dyn Fn(usize) -> usize| {
+            codec
+                .with_cache_budget_of(budget)
+                .ok_or_else(|| SimError::NoCache(kind.name()))
+        };
+        let small = rebudget(shape.codec(), &|decoded| decoded / 10)??;
+        if !codec.encodes_for_cache_budget() {
+            return Ok(CbvhShape::from_codec(small, m));
+        }
+        // A codec that encodes for its budget (RACBVH: the cluster size) is
+        // encoded again for that budget, as a user who knows it would, and
+        // then given a tenth of what that encoding decodes to (measured
+        // with an unbounded cache again).
+        let budget = small.cache_stats().map_or(usize::MAX, |s| s.budget_bytes);
+        let options = options.clone().with_cache_budget(budget);
+        let shape = CbvhShape::build(m, &scene.build_options, codec, &options)?;
+        let whole = rebudget(shape.codec(), &|_| usize::MAX)??;
+        Ok(CbvhShape::from_codec(
+            rebudget(&whole, &|decoded| decoded / 10)??,
+            m,
+        ))
     };
     Ok(Shapes::Cbvh(make(&scene.dropped)?, make(&scene.base)?))
 }

@@ -216,6 +216,95 @@ fn the_cache_stays_within_its_budget() {
 }
 
 #[test]
+fn the_cluster_size_is_chosen_from_the_cache_budget() {
+    use cbvh::codec::racbvh::{MIN_CLUSTER_NODES, RESIDENT_CLUSTERS};
+    let per = |c: usize| RESIDENT_CLUSTERS * c * 34;
+    let with = |cluster_nodes, cache_budget_bytes| RacOptions {
+        cluster_nodes,
+        cache_budget_bytes,
+        ..Default::default()
+    };
+    assert_eq!(with(4096, usize::MAX).cluster_nodes_for_budget(), 4096);
+    assert_eq!(with(4096, 64 << 20).cluster_nodes_for_budget(), 4096);
+    assert_eq!(with(4096, per(4096)).cluster_nodes_for_budget(), 4096);
+    assert_eq!(with(4096, per(4096) - 1).cluster_nodes_for_budget(), 2048);
+    assert_eq!(with(16384, per(1024)).cluster_nodes_for_budget(), 1024);
+    assert_eq!(with(1024, per(4096)).cluster_nodes_for_budget(), 1024);
+    assert_eq!(with(4096, 0).cluster_nodes_for_budget(), MIN_CLUSTER_NODES);
+}
+
+/// Issue 32: a cache of a tenth of the tree, encoded for that budget, holds
+/// many small clusters instead of less than one large one, answers every
+/// query as the full cache does, and a repeated working set that fits is
+/// decoded once.
+#[test]
+fn a_tenth_cache_encoded_for_its_budget_agrees_with_the_full_cache() {
+    let mesh = statue(20_000);
+    let bvh = tree(&mesh, Layout::DepthFirst, 1);
+    let full = RacBvh::encode(&bvh, &mesh, &RacOptions::default()).unwrap();
+    assert_eq!(full.cluster_nodes(), 4096);
+    for i in 0..full.node_count() as u32 {
+        full.bv(i);
+    }
+    let tenth = full.cache_stats().cached_bytes / 10;
+    assert!(
+        tenth < 4096 * 34,
+        "a tenth holds less than one default cluster"
+    );
+    let o = RacOptions {
+        cache_budget_bytes: tenth,
+        ..Default::default()
+    };
+    let small = RacBvh::encode(&bvh, &mesh, &o).unwrap();
+    assert_eq!(small.cluster_nodes(), 256);
+    assert_eq!(small.cache_stats().budget_bytes, tenth);
+    // Node by node, from the last (each completion walks up to the root).
+    for i in (0..bvh.nodes.len() as u32).rev() {
+        assert_eq!(small.bv(i), full.bv(i), "node {i}");
+        assert_eq!(small.is_leaf(i), full.is_leaf(i), "node {i}");
+        if full.is_leaf(i) {
+            assert_eq!(small.leaf_triangles(i), full.leaf_triangles(i), "node {i}");
+        } else {
+            assert_eq!(
+                [small.left(i), small.right(i)],
+                [full.left(i), full.right(i)]
+            );
+        }
+    }
+    small.clear_cache();
+    let dm = full.decoded_mesh();
+    assert_eq!(small.decoded_mesh().triangles, dm.triangles);
+    let mut stats = TraversalStats::default();
+    let rays = test_rays(&dm, 7, 300);
+    for ray in &rays {
+        assert_eq!(
+            query::closest_hit(&small, ray, f32::INFINITY, &mut stats),
+            query::closest_hit(&full, ray, f32::INFINITY, &mut stats)
+        );
+        let s = small.cache_stats();
+        assert!(s.cached_bytes <= tenth, "{s:?}");
+    }
+    // The first 4 clusters' nodes, round after round, in both directions:
+    // they fit the budget (15 clusters), so each is decoded once.
+    // (The counters are cumulative; the thread's pins may still hold some
+    // of these clusters.)
+    small.clear_cache();
+    let before = small.cache_stats().decodes;
+    let mut after_first = 0;
+    for round in 0..6 {
+        for i in 0..4 * 256 {
+            let i = if round % 2 == 0 { i } else { 4 * 256 - 1 - i };
+            small.bv(i);
+        }
+        if round == 0 {
+            after_first = small.cache_stats().decodes;
+            assert!(after_first - before <= 4, "{:?}", small.cache_stats());
+        }
+    }
+    assert_eq!(small.cache_stats().decodes, after_first);
+}
+
+#[test]
 fn eight_threads_with_a_tiny_cache_agree_with_one() {
     let mesh = statue(3000);
     let bvh = tree(&mesh, Layout::CacheEfficient, 1);

@@ -112,6 +112,24 @@ impl CacheStats {
     }
 }
 
+/// Pages a shard can hold at least, when the budget allows one shard that
+/// many.
+pub const PAGES_PER_SHARD: usize = 64;
+
+/// The most shards a cache has.
+pub const MAX_SHARDS: usize = 16;
+
+/// How many shards a cache of `budget` bytes for pages of at most
+/// `max_page` bytes gets: up to [`MAX_SHARDS`], each able to hold at least
+/// [`PAGES_PER_SHARD`] pages. Pages go to shards by number, each shard
+/// evicts by its own LRU order, so a shard must hold a working set's share
+/// with room to spare: with 16 pages a shard, the few pages of a step that
+/// hash to one shard evict each other while other shards sit idle (and the
+/// threads' pins, up to 16 pages each, could fill it).
+pub fn shard_count(budget: usize, max_page: usize) -> usize {
+    (budget / PAGES_PER_SHARD.saturating_mul(max_page.max(1))).clamp(1, MAX_SHARDS)
+}
+
 struct Shard<T> {
     lru: LruCache<u32, Arc<T>>,
     bytes: usize,
@@ -130,11 +148,10 @@ pub struct PageCache<T> {
 }
 
 impl<T: Page> PageCache<T> {
-    /// A cache of `budget` bytes for pages of at most `max_page` bytes: up
-    /// to 16 shards, each able to hold at least 16 pages (so that the
-    /// threads' pins rarely fill a shard).
+    /// A cache of `budget` bytes for pages of at most `max_page` bytes:
+    /// [`shard_count`] shards, each with an equal share of the budget.
     pub fn new(budget: usize, max_page: usize) -> Self {
-        let shards = (budget / (16 * max_page.max(1))).clamp(1, 16);
+        let shards = shard_count(budget, max_page);
         Self {
             shards: (0..shards)
                 .map(|_| {
@@ -374,6 +391,43 @@ mod tests {
         assert!(c.get(7).is_none());
         drop(p);
         assert_eq!(c.stats().live_bytes, 0);
+    }
+
+    #[test]
+    fn each_shard_holds_at_least_64_pages_when_the_budget_allows() {
+        // Less than 64 pages' worth: one shard with the whole budget.
+        assert_eq!(shard_count(63 * 100, 100), 1);
+        assert_eq!(shard_count(0, 100), 1);
+        assert_eq!(shard_count(1000, 0), 1000 / 64); // (pages of at least a byte)
+        // 64 pages a shard, up to 16 shards.
+        assert_eq!(shard_count(64 * 100, 100), 1);
+        assert_eq!(shard_count(4 * 64 * 100 + 99, 100), 4);
+        assert_eq!(shard_count(usize::MAX, 1 << 20), MAX_SHARDS);
+        assert_eq!(shard_count(usize::MAX, usize::MAX), 1);
+        for (budget, page) in [(6400, 100), (1 << 20, 8704), (13 << 20, 139_392)] {
+            let c = PageCache::<P>::new(budget, page);
+            let s = c.stats().shards;
+            assert!(
+                s == 1 || budget / s >= PAGES_PER_SHARD * page,
+                "{budget} {page} {s}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_repeated_working_set_that_fits_hits_after_its_first_round() {
+        // 40 pages of 100 bytes in a 64-page budget, looked up round after
+        // round in the same order: each is decoded once.
+        let c = PageCache::<P>::new(6400, 100);
+        for _ in 0..10 {
+            for k in 0..40 {
+                drop(c.get_or_decode::<()>(k, || Ok(page(&c, 100))).unwrap());
+            }
+        }
+        let s = c.stats();
+        assert_eq!(s.decodes, 40);
+        assert_eq!(s.hits, 9 * 40);
+        unpin::<P>();
     }
 
     #[test]

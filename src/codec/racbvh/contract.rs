@@ -98,6 +98,10 @@ impl Codec for RacBvh {
         ]
     }
 
+    /// The cluster size is chosen from the budget
+    /// ([`RacOptions::cluster_nodes_for_budget`]).
+    const ENCODES_FOR_CACHE_BUDGET: bool = true;
+
     fn cache_stats(&self) -> Option<crate::codec::CacheStats> {
         Some(RacBvh::cache_stats(self))
     }

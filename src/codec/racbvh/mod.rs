@@ -1,7 +1,8 @@
 //! RACBVH: random-accessible compressed BVHs (Kim et al., TVCG 2010, §4–5).
 //!
 //! The tree's nodes, in layout order, are cut into clusters of `2^k`
-//! consecutive nodes ([`RacOptions::cluster_nodes`], 4096 by default), each
+//! consecutive nodes ([`RacOptions::cluster_nodes`], 4096 by default, fewer
+//! when the cache budget is small: see *Cache* below), each
 //! compressed on its own with every coder context reset, so any cluster can
 //! be decompressed in any order. A meta table holds each cluster's start
 //! offset and node count. At runtime a cluster decompresses into 32-byte
@@ -106,8 +107,25 @@
 //!   node, the ordinal of its local root; completing a node loads the local
 //!   root's parent (recursively completing it), then completes the local
 //!   root's whole subtree inside the cluster, under the cluster's lock.
+//! - **Cluster size from the budget**: the encoder halves
+//!   [`RacOptions::cluster_nodes`] (down to 256, the paper's smallest) until
+//!   the cache budget holds [`RESIDENT_CLUSTERS`] (256) decoded clusters
+//!   ([`RacOptions::cluster_nodes_for_budget`]). A collision step touches
+//!   few nodes of each cluster it enters (depth-first layout, robot in
+//!   plant: 837 nodes of the robot's 32 k, in all 8 of its 4096-node
+//!   clusters or 50 of its 256-node ones), so a budget of a few large
+//!   clusters re-decoded them many times a step (issue 32: with a tenth of
+//!   the tree cached, the plant's 9 resident clusters of 4096 nodes took 157
+//!   decodes a step, the robot's budget was smaller than one cluster and
+//!   nothing was cached). At 256 nodes a cluster a tenth of the plant holds
+//!   its 72 clusters a step, and compression loses 11 % (8.0:1 to 7.1:1 on
+//!   a 200 k statue). The size depends on the budget only, not on the
+//!   tree: the default budget (64 MiB) keeps 4096-node clusters. A file
+//!   keeps the size it was encoded with; re-opening it with a smaller
+//!   budget does not re-cluster it (encode for the budget you will use).
 //! - **Cache**: `lru::LruCache` shards behind mutexes, each with a share of
-//!   the byte budget (a shard per 16 clusters of budget, at most 16); each
+//!   the byte budget (a shard per 64 clusters of budget, at most 16:
+//!   [`shard_count`](crate::codec::common::page_cache::shard_count)); each
 //!   thread also pins up to 16 clusters it used, direct-mapped by cluster
 //!   index, and
 //!   reads them without locks (the paper updates the LRU list only when the
@@ -171,7 +189,7 @@ mod verify;
 
 pub use cache::CacheStats;
 pub use cursor::RacNode;
-pub use encode::{RacOptions, RacStats};
+pub use encode::{MIN_CLUSTER_NODES, RESIDENT_CLUSTERS, RacOptions, RacStats};
 pub use error::RacError;
 pub use node::{CoreNode, INCOMPLETE};
 pub use tree::RacBvh;
