@@ -325,23 +325,10 @@ mod tests {
     use super::*;
 
     fn cube() -> Mesh {
-        let v = (0..8)
-            .map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32])
-            .collect();
-        // Outward-facing quads, two triangles each.
-        let quads = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        let t = quads
-            .iter()
-            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-            .collect();
-        Mesh::new(v, t)
+        // A unit cube from the origin.
+        let mut m = crate::sim::slide::cube_mesh(1.0);
+        m.vertices.iter_mut().flatten().for_each(|c| *c += 0.5);
+        m
     }
 
     #[test]
