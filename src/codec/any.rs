@@ -347,6 +347,7 @@ impl AnyOptions {
             fn visit<C: Registered>(self) {
                 if let Some(b) = C::cache_budget(C::options_mut(self.0)) {
                     *b = self.1;
+                    C::fit_cache_budget(C::options_mut(self.0));
                 }
             }
         }

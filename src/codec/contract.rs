@@ -131,12 +131,21 @@ pub trait Codec: NodeCursor + ByteSize + Send + Sync + Sized + 'static {
         None
     }
 
-    /// Whether the encoding itself depends on the cache budget in the
-    /// options (RACBVH sizes its clusters so that the budget holds enough of
-    /// them): a front end that wants a small cache then encodes for it
-    /// rather than re-opening a tree encoded for a large one. `false` by
-    /// default.
+    /// Whether the encoding depends on a cache budget set through
+    /// [`AnyOptions::with_cache_budget`](super::AnyOptions::with_cache_budget)
+    /// (RACBVH sizes its clusters so that the budget holds enough of them,
+    /// [`Codec::fit_cache_budget`]): a front end that wants a small cache
+    /// then encodes for it rather than re-opening a tree encoded for a
+    /// large one. `false` by default.
     const ENCODES_FOR_CACHE_BUDGET: bool = false;
+
+    /// Fits `options` to the cache budget just set in them
+    /// ([`Codec::cache_budget`]); nothing by default. Called by
+    /// [`AnyOptions::with_cache_budget`](super::AnyOptions::with_cache_budget),
+    /// never by the encoder, which takes its options as they are.
+    fn fit_cache_budget(options: &mut Self::Options) {
+        let _ = options;
+    }
 
     /// For a codec with a cache: its counters (budget, bytes held,
     /// decodes, hits). `None` (the default) for a codec without one, or

@@ -6,9 +6,9 @@
 use crate::common;
 
 use cbvh::build::{BuildOptions, CanonicalBvh, Layout, build};
-use cbvh::codec::ByteSize;
 use cbvh::codec::common::FormatError;
 use cbvh::codec::racbvh::{RacBvh, RacError, RacOptions};
+use cbvh::codec::{AnyOptions, ByteSize};
 use cbvh::cursor::NodeCursor;
 use cbvh::scene::{Kind, generate};
 use cbvh::{Mesh, TraversalStats, query};
@@ -251,10 +251,18 @@ fn a_tenth_cache_encoded_for_its_budget_agrees_with_the_full_cache() {
         tenth < 4096 * 34,
         "a tenth holds less than one default cluster"
     );
-    let o = RacOptions {
+    // The encoder takes the cluster size it is given, whatever the budget.
+    let asked = RacOptions {
         cache_budget_bytes: tenth,
         ..Default::default()
     };
+    assert_eq!(
+        RacBvh::encode(&bvh, &mesh, &asked).unwrap().cluster_nodes(),
+        4096
+    );
+    // Fitted to the budget (as `AnyOptions::with_cache_budget` does).
+    let o = AnyOptions::default().with_cache_budget(tenth).racbvh;
+    assert_eq!(o.cache_budget_bytes, tenth);
     let small = RacBvh::encode(&bvh, &mesh, &o).unwrap();
     assert_eq!(small.cluster_nodes(), 256);
     assert_eq!(small.cache_stats().budget_bytes, tenth);

@@ -102,6 +102,10 @@ impl Codec for RacBvh {
     /// ([`RacOptions::cluster_nodes_for_budget`]).
     const ENCODES_FOR_CACHE_BUDGET: bool = true;
 
+    fn fit_cache_budget(options: &mut RacOptions) {
+        options.cluster_nodes = options.cluster_nodes_for_budget();
+    }
+
     fn cache_stats(&self) -> Option<crate::codec::CacheStats> {
         Some(RacBvh::cache_stats(self))
     }

@@ -27,10 +27,11 @@ use crate::mesh::Mesh;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RacOptions {
     /// Nodes per cluster: a power of two in 256..=16384 (4096 by default).
-    /// The most nodes a cluster holds: the encoder takes fewer, down to
-    /// 256, when the cache budget would hold fewer than
-    /// [`RESIDENT_CLUSTERS`] clusters of this size (see
-    /// [`cluster_nodes_for_budget`](Self::cluster_nodes_for_budget)).
+    /// A front end that sets the cache budget through
+    /// [`AnyOptions::with_cache_budget`](crate::codec::AnyOptions::with_cache_budget)
+    /// gets the size that budget suits
+    /// ([`cluster_nodes_for_budget`](Self::cluster_nodes_for_budget));
+    /// the encoder itself takes this value as it is.
     pub cluster_nodes: u32,
     /// Bits per quantized box coordinate, 8..=24 (16 by default).
     pub bits: u32,
@@ -38,7 +39,6 @@ pub struct RacOptions {
     /// (16 by default).
     pub vertex_bits: Option<u32>,
     /// Byte budget of the decompressed-cluster cache (64 MiB by default).
-    /// It also bounds the cluster size (see `cluster_nodes`).
     pub cache_budget_bytes: usize,
     /// Triangle-index deltas with `|delta| < threshold` are dictionary
     /// coded, others stored raw (§4.3.2; 10 by default, 1..=4096).
@@ -57,8 +57,9 @@ impl Default for RacOptions {
     }
 }
 
-/// How many clusters the cache budget should hold at least: the encoder
-/// shrinks clusters (down to 256 nodes) until it does. A drop test's step
+/// How many clusters the cache budget should hold at least:
+/// [`RacOptions::cluster_nodes_for_budget`] shrinks clusters (down to 256
+/// nodes) until it does. A drop test's step
 /// touches 6 to 72 distinct clusters of each tree (robot in plant, Lucy on
 /// turbine, 256- to 4096-node clusters) and LRU needs head room above the
 /// working set; a cache of a handful of 4096-node clusters re-decoded
@@ -69,8 +70,8 @@ pub const RESIDENT_CLUSTERS: usize = 256;
 pub const MIN_CLUSTER_NODES: u32 = 256;
 
 impl RacOptions {
-    /// The cluster size the encoder uses: [`cluster_nodes`](Self::cluster_nodes),
-    /// halved while the cache budget holds fewer than [`RESIDENT_CLUSTERS`]
+    /// The cluster size that suits the cache budget:
+    /// [`cluster_nodes`](Self::cluster_nodes), halved while the cache budget holds fewer than [`RESIDENT_CLUSTERS`]
     /// decoded clusters of that size (34 bytes a node), down to 256 nodes.
     /// Compression loses little (a 200 k-triangle statue: 8.0:1 at 4096
     /// nodes, 7.8:1 at 1024, 7.1:1 at 256) and a small cache then holds
@@ -313,7 +314,7 @@ impl RacBvh {
                 c.max[a] = lo.max(hi);
             }
         }
-        let cluster_nodes = options.cluster_nodes_for_budget();
+        let cluster_nodes = options.cluster_nodes;
         let cluster_bits = cluster_nodes.trailing_zeros();
         let header = Header {
             cluster_bits,

@@ -2,7 +2,7 @@
 //!
 //! The tree's nodes, in layout order, are cut into clusters of `2^k`
 //! consecutive nodes ([`RacOptions::cluster_nodes`], 4096 by default, fewer
-//! when the cache budget is small: see *Cache* below), each
+//! when fitted to a small cache budget: see below), each
 //! compressed on its own with every coder context reset, so any cluster can
 //! be decompressed in any order. A meta table holds each cluster's start
 //! offset and node count. At runtime a cluster decompresses into 32-byte
@@ -107,10 +107,13 @@
 //!   node, the ordinal of its local root; completing a node loads the local
 //!   root's parent (recursively completing it), then completes the local
 //!   root's whole subtree inside the cluster, under the cluster's lock.
-//! - **Cluster size from the budget**: the encoder halves
-//!   [`RacOptions::cluster_nodes`] (down to 256, the paper's smallest) until
-//!   the cache budget holds [`RESIDENT_CLUSTERS`] (256) decoded clusters
-//!   ([`RacOptions::cluster_nodes_for_budget`]). A collision step touches
+//! - **Cluster size from the budget**: a front end that sets the cache
+//!   budget through [`AnyOptions::with_cache_budget`](crate::codec::AnyOptions::with_cache_budget)
+//!   (the drop tests' `-10pct` shapes do) gets [`RacOptions::cluster_nodes`]
+//!   halved (down to 256, the paper's smallest) until the budget holds
+//!   [`RESIDENT_CLUSTERS`] (256) decoded clusters
+//!   ([`RacOptions::cluster_nodes_for_budget`]); the encoder itself takes
+//!   the size it is given (`cbvh build --cluster-nodes`). A collision step touches
 //!   few nodes of each cluster it enters (depth-first layout, robot in
 //!   plant: 837 nodes of the robot's 32 k, in all 8 of its 4096-node
 //!   clusters or 50 of its 256-node ones), so a budget of a few large
