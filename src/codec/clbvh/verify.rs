@@ -37,24 +37,22 @@ impl Walk<'_> {
             .ok_or(bad(at, "a leaf block starts past the arena"))?;
         let (n, u) = ((hdr & 0xFFFF) as usize, (hdr >> 16) as usize);
         let nt = self.seen_tri.len();
-        // The block's words, checked before anything is allocated for its
-        // triangles (a forged count must not buy a large allocation).
+        // The block's words, bounded by the arena before anything is
+        // allocated for its triangles (a forged count must not buy a large
+        // allocation).
         let words = match t.options.leaves {
             LeafKind::Fast => 10 * n,
             LeafKind::Compact => u + n + (3 * n).div_ceil(4),
         };
-        if at + 1 + words > a.len() {
-            return Err(bad(at, "a leaf block runs past the arena"));
-        }
+        let body = a
+            .get(at + 1..at + 1 + words)
+            .ok_or(bad(at, "a leaf block runs past the arena"))?;
         let mut out = Vec::with_capacity(n);
         match t.options.leaves {
             LeafKind::Fast => {
                 if u != 0 {
                     return Err(bad(at, "a fast leaf block has a vertex list"));
                 }
-                let body = a
-                    .get(at + 1..at + 1 + 10 * n)
-                    .ok_or(bad(at, "a leaf block runs past the arena"))?;
                 for j in 0..n {
                     let id = body[j];
                     let c = &body[n + 9 * j..n + 9 * j + 9];
@@ -82,9 +80,6 @@ impl Walk<'_> {
                 if u > 256 {
                     return Err(bad(at, "a leaf block lists more than 256 vertices"));
                 }
-                let body = a
-                    .get(at + 1..at + 1 + u + n + (3 * n).div_ceil(4))
-                    .ok_or(bad(at, "a leaf block runs past the arena"))?;
                 let local: &[u8] = bytemuck::cast_slice(&body[u + n..]);
                 let nv = t.vertices.len();
                 if body[..u].iter().any(|&v| v as usize >= nv) {
