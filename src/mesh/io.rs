@@ -165,17 +165,80 @@ fn read<R: BufRead>(
     format: Format,
     path: &Path,
 ) -> Result<(Mesh, FormatDetail), MeshError> {
+    let mut tris = Tris::collect();
+    let (vertices, detail) = read_into(reader, len, format, path, &mut tris)?;
+    Ok((Mesh::new(vertices, tris.finish()?), detail))
+}
+
+/// Reads a mesh file's vertices, putting its triangles into `tris`.
+fn read_into<R: BufRead>(
+    reader: R,
+    len: u64,
+    format: Format,
+    path: &Path,
+    tris: &mut Tris<'_>,
+) -> Result<(Vec<[f32; 3]>, FormatDetail), MeshError> {
     let src = Src { path, len };
-    let (mesh, encoding) = match format {
-        Format::Off => (off::read(reader, &src)?, Encoding::Ascii),
-        Format::Ply => ply::read(reader, &src)?,
-        Format::Obj => (obj::read(reader, &src)?, Encoding::Ascii),
-        Format::Stl => stl::read(reader, &src)?,
+    let (vertices, encoding) = match format {
+        Format::Off => (off::read(reader, &src, tris)?, Encoding::Ascii),
+        Format::Ply => ply::read(reader, &src, tris)?,
+        Format::Obj => (obj::read(reader, &src, tris)?, Encoding::Ascii),
+        Format::Stl => stl::read(reader, &src, tris)?,
     };
-    if mesh.triangles.is_empty() {
+    if tris.count() == 0 {
         return Err(src.no_faces());
     }
-    Ok((mesh, FormatDetail { format, encoding }))
+    Ok((vertices, FormatDetail { format, encoding }))
+}
+
+/// What [`stream`] read: the vertices (all of them, in memory), the
+/// number of triangles it handed out, and the format found.
+#[derive(Debug)]
+pub struct Streamed {
+    /// Every vertex of the file.
+    pub vertices: Vec<[f32; 3]>,
+    /// Triangles handed to the callback.
+    pub triangles: u64,
+    /// The format and encoding found.
+    pub detail: FormatDetail,
+}
+
+/// Reads the mesh file at `path` as [`load`] does, but hands its
+/// triangles to `batches` as they are read, a batch of up to 65 536 at a
+/// time in file order, instead of collecting them: the faces of a model
+/// larger than memory never are all in memory (the vertices are, 12
+/// bytes each; OBJ faces may name vertices defined after them, so the
+/// indices of a batch are checked against the vertex count only when the
+/// whole file has been read, before this returns). The out-of-core
+/// builder reads its input this way.
+///
+/// # Errors
+/// As [`load`], and the first error `batches` returns (the file is then
+/// read to its end without calling it again).
+pub fn stream(path: impl AsRef<Path>, batches: TriangleBatches<'_>) -> Result<Streamed, MeshError> {
+    let path = path.as_ref();
+    let format = Format::from_path(path)?;
+    let io_err = |source| MeshError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let file = File::open(path).map_err(io_err)?;
+    let len = file.metadata().map_err(io_err)?.len();
+    let mut tris = Tris::batches(batches);
+    let (vertices, detail) = read_into(
+        BufReader::with_capacity(1 << 16, file),
+        len,
+        format,
+        path,
+        &mut tris,
+    )?;
+    let triangles = tris.count();
+    tris.finish()?;
+    Ok(Streamed {
+        vertices,
+        triangles,
+        detail,
+    })
 }
 
 /// Writes `mesh` to `path`: binary little-endian PLY for `.ply`, OBJ for
@@ -548,12 +611,94 @@ pub(super) fn finite(v: &[f32; 3]) -> bool {
     v.iter().all(|c| c.is_finite())
 }
 
-/// Appends the fan triangulation of `polygon` (at least 3 corners).
-#[inline]
-pub(super) fn fan(polygon: &[u32], triangles: &mut Vec<[u32; 3]>) {
-    if let Some((&first, rest)) = polygon.split_first() {
-        for pair in rest.windows(2) {
-            triangles.push([first, pair[0], pair[1]]);
+/// Triangles handed to a batch callback as they are read.
+pub type TriangleBatches<'a> = &'a mut dyn FnMut(&[[u32; 3]]) -> Result<(), MeshError>;
+
+/// Where a reader puts its triangles: a vector it returns ([`load`]), or
+/// batches of 65 536 handed to a callback as they are read
+/// ([`stream`]), so that the faces of a model larger than memory never
+/// are all in memory at once.
+pub(super) struct Tris<'a> {
+    buf: Vec<[u32; 3]>,
+    count: u64,
+    batches: Option<TriangleBatches<'a>>,
+    /// The callback's first error: later batches are dropped, and the
+    /// reader's result is this error.
+    failed: Option<MeshError>,
+}
+
+impl<'a> Tris<'a> {
+    /// Triangles a batch.
+    const BATCH: usize = 1 << 16;
+
+    /// Collects every triangle.
+    pub(super) fn collect() -> Self {
+        Self {
+            buf: Vec::new(),
+            count: 0,
+            batches: None,
+            failed: None,
+        }
+    }
+
+    /// Hands the triangles to `batches`.
+    pub(super) fn batches(batches: TriangleBatches<'a>) -> Self {
+        Self {
+            buf: Vec::with_capacity(Self::BATCH),
+            count: 0,
+            batches: Some(batches),
+            failed: None,
+        }
+    }
+
+    /// Reserves room for `n` more triangles when collecting.
+    pub(super) fn reserve(&mut self, n: usize) {
+        if self.batches.is_none() {
+            self.buf.reserve(n);
+        }
+    }
+
+    /// Triangles so far.
+    pub(super) fn count(&self) -> u64 {
+        self.count
+    }
+
+    #[inline]
+    pub(super) fn push(&mut self, t: [u32; 3]) {
+        self.buf.push(t);
+        self.count += 1;
+        if self.batches.is_some() && self.buf.len() >= Self::BATCH {
+            self.flush();
+        }
+    }
+
+    /// Fan-triangulates `polygon`: `(0 1 2) (0 2 3) …`.
+    pub(super) fn fan(&mut self, polygon: &[u32]) {
+        if let Some((&first, rest)) = polygon.split_first() {
+            for pair in rest.windows(2) {
+                self.push([first, pair[0], pair[1]]);
+            }
+        }
+    }
+
+    fn flush(&mut self) {
+        if let Some(f) = self.batches.as_mut() {
+            if self.failed.is_none()
+                && let Err(e) = f(&self.buf)
+            {
+                self.failed = Some(e);
+            }
+            self.buf.clear();
+        }
+    }
+
+    /// The collected triangles (none when streaming), or the batch
+    /// callback's first error.
+    pub(super) fn finish(mut self) -> Result<Vec<[u32; 3]>, MeshError> {
+        self.flush();
+        match self.failed {
+            Some(e) => Err(e),
+            None => Ok(self.buf),
         }
     }
 }
@@ -620,9 +765,9 @@ mod tests {
 
     #[test]
     fn fan_triangulates() {
-        let mut t = Vec::new();
-        fan(&[4, 5, 6, 7, 8], &mut t);
-        assert_eq!(t, vec![[4, 5, 6], [4, 6, 7], [4, 7, 8]]);
+        let mut t = Tris::collect();
+        t.fan(&[4, 5, 6, 7, 8]);
+        assert_eq!(t.finish().unwrap(), vec![[4, 5, 6], [4, 6, 7], [4, 7, 8]]);
     }
 
     #[test]

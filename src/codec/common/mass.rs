@@ -170,6 +170,104 @@ impl MassProps {
     }
 }
 
+/// Mass properties summed triangle by triangle, in `f64`, for a mesh that
+/// is never whole in memory (the out-of-core builder's): each triangle
+/// adds its tetrahedron from a fixed reference point (the volume, its
+/// first and second moments), and [`finish`](Self::finish) moves the
+/// second moments to the centre of mass. The result is the same body as
+/// [`MassProps::of_mesh`]'s up to rounding (that one follows parry in
+/// `f32`); the sum depends on the order the triangles come in, so a
+/// caller that wants the same bits every run adds them in a fixed order.
+#[derive(Clone, Copy, Debug)]
+pub struct MassAccumulator {
+    reference: [f64; 3],
+    volume: f64,
+    first: [f64; 3],
+    /// `∫ x_i x_j dV` about the reference, row-major.
+    second: [f64; 9],
+}
+
+impl MassAccumulator {
+    /// An empty sum about `reference` (a point near the mesh, such as the
+    /// mean of its vertices: the nearer, the less rounding).
+    pub fn new(reference: [f32; 3]) -> Self {
+        Self {
+            reference: reference.map(f64::from),
+            volume: 0.0,
+            first: [0.0; 3],
+            second: [0.0; 9],
+        }
+    }
+
+    /// Adds the triangle `(a, b, c)` (wound counter-clockwise seen from
+    /// outside for a positive volume).
+    pub fn add(&mut self, a: [f32; 3], b: [f32; 3], c: [f32; 3]) {
+        let r = self.reference;
+        let rel = |p: [f32; 3]| [0, 1, 2].map(|k| f64::from(p[k]) - r[k]);
+        let p = [rel(a), rel(b), rel(c)];
+        let det = p[0][0] * (p[1][1] * p[2][2] - p[1][2] * p[2][1])
+            - p[0][1] * (p[1][0] * p[2][2] - p[1][2] * p[2][0])
+            + p[0][2] * (p[1][0] * p[2][1] - p[1][1] * p[2][0]);
+        let v = det / 6.0;
+        let sum = [0, 1, 2].map(|k| p[0][k] + p[1][k] + p[2][k]);
+        self.volume += v;
+        for k in 0..3 {
+            self.first[k] += v * sum[k] / 4.0;
+        }
+        // The tetrahedron with corners 0, a, b, c:
+        // ∫ x_i x_j dV = V/20 (Σ p_i p_j + Σ p_i · Σ p_j).
+        for i in 0..3 {
+            for j in 0..3 {
+                let pp = p[0][i] * p[0][j] + p[1][i] * p[1][j] + p[2][i] * p[2][j];
+                self.second[3 * i + j] += v / 20.0 * (pp + sum[i] * sum[j]);
+            }
+        }
+    }
+
+    /// Adds another sum about the same reference.
+    pub fn merge(&mut self, o: &MassAccumulator) {
+        debug_assert_eq!(self.reference, o.reference);
+        self.volume += o.volume;
+        for k in 0..3 {
+            self.first[k] += o.first[k];
+        }
+        for k in 0..9 {
+            self.second[k] += o.second[k];
+        }
+    }
+
+    /// The mass properties; [`MassProps::ZERO`] without volume or where
+    /// the figures are not [`physical`](MassProps::physical) (an open
+    /// surface), as [`MassProps::of_mesh`].
+    pub fn finish(&self) -> MassProps {
+        if self.volume == 0.0 || !self.volume.is_finite() {
+            return MassProps::ZERO;
+        }
+        let m = self.volume;
+        let d = self.first.map(|f| f / m);
+        // Second moments about the centre of mass, then the inertia
+        // tr(S)·1 − S; a negative volume (wound inside out) flips signs.
+        let s: [f64; 9] = std::array::from_fn(|k| self.second[k] - m * d[k / 3] * d[k % 3]);
+        let trace = s[0] + s[4] + s[8];
+        let sign = m.signum();
+        let inertia: [f32; 9] = std::array::from_fn(|k| {
+            let (i, j) = (k % 3, k / 3); // column-major
+            let diag = if i == j { trace } else { 0.0 };
+            ((diag - s[3 * i + j]) * sign) as f32
+        });
+        let out = MassProps {
+            mass: (m * sign) as f32,
+            com: [0, 1, 2].map(|k| (self.reference[k] + d[k]) as f32),
+            inertia,
+        };
+        if out.physical().is_ok() {
+            out
+        } else {
+            MassProps::ZERO
+        }
+    }
+}
+
 fn tetra_signed_volume(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> f32 {
     Mat3::from_cols(b - a, c - a, d - a).determinant() / 6.0
 }
@@ -329,6 +427,70 @@ mod tests {
         let mut m = crate::sim::slide::cube_mesh(1.0);
         m.vertices.iter_mut().flatten().for_each(|c| *c += 0.5);
         m
+    }
+
+    #[test]
+    fn the_accumulator_agrees_with_of_mesh() {
+        for mesh in [
+            cube(),
+            crate::scene::generate(crate::scene::Kind::Robot, 3000, 1, &mut |_, _| {}).unwrap(),
+        ] {
+            let want = MassProps::of_mesh(&mesh);
+            let mut acc = MassAccumulator::new([0.3, -0.2, 0.1]);
+            let (half, rest) = mesh.triangles.split_at(mesh.triangles.len() / 2);
+            let mut other = acc;
+            for t in half {
+                acc.add(
+                    mesh.vertices[t[0] as usize],
+                    mesh.vertices[t[1] as usize],
+                    mesh.vertices[t[2] as usize],
+                );
+            }
+            for t in rest {
+                other.add(
+                    mesh.vertices[t[0] as usize],
+                    mesh.vertices[t[1] as usize],
+                    mesh.vertices[t[2] as usize],
+                );
+            }
+            acc.merge(&other);
+            let got = acc.finish();
+            assert!(want.mass > 0.0);
+            assert!(
+                (got.mass - want.mass).abs() <= 1e-4 * want.mass,
+                "{got:?} {want:?}"
+            );
+            let scale = want.inertia.iter().fold(0f32, |a, x| a.max(x.abs()));
+            for k in 0..3 {
+                assert!((got.com[k] - want.com[k]).abs() < 1e-4, "{got:?} {want:?}");
+            }
+            for k in 0..9 {
+                assert!(
+                    (got.inertia[k] - want.inertia[k]).abs() <= 1e-3 * scale,
+                    "{got:?} {want:?}"
+                );
+            }
+        }
+        // Inside out: the same body.
+        let mut flipped = cube();
+        flipped.triangles.iter_mut().for_each(|t| t.swap(1, 2));
+        let mut acc = MassAccumulator::new([0.0; 3]);
+        for t in &flipped.triangles {
+            acc.add(
+                flipped.vertices[t[0] as usize],
+                flipped.vertices[t[1] as usize],
+                flipped.vertices[t[2] as usize],
+            );
+        }
+        let got = acc.finish();
+        assert!(
+            (got.mass - 1.0).abs() < 1e-6 && (got.inertia[0] - 1.0 / 6.0).abs() < 1e-6,
+            "{got:?}"
+        );
+        // An open surface: no mass.
+        let mut acc = MassAccumulator::new([0.0; 3]);
+        acc.add([0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+        assert_eq!(acc.finish(), MassProps::ZERO);
     }
 
     #[test]

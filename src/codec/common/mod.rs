@@ -42,7 +42,7 @@ mod store;
 
 pub use crate::atomic::atomic_write;
 pub use error::FormatError;
-pub use mass::{MASS_BYTES, MassProps};
+pub use mass::{MASS_BYTES, MassAccumulator, MassProps};
 pub use store::Store;
 
 /// The first four bytes of every cbvh codec file (`CBVHRAC\0`, `CBVHPLN\0`).

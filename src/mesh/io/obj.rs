@@ -12,7 +12,7 @@ use std::io::{self, BufRead, Write};
 use rayon::prelude::*;
 
 use super::{
-    Lines, Src, fan, finite, parse_f32, parse_i64, show, tokens_before_comment, write_u64,
+    Lines, Src, Tris, finite, parse_f32, parse_i64, show, tokens_before_comment, write_u64,
 };
 use crate::mesh::{Mesh, MeshError, Place};
 
@@ -23,10 +23,13 @@ struct Forward {
     line: usize,
 }
 
-pub(super) fn read<R: BufRead>(reader: R, src: &Src) -> Result<Mesh, MeshError> {
+pub(super) fn read<R: BufRead>(
+    reader: R,
+    src: &Src,
+    triangles: &mut Tris<'_>,
+) -> Result<Vec<[f32; 3]>, MeshError> {
     let mut lines = Lines::new(reader);
     let mut vertices: Vec<[f32; 3]> = Vec::new();
-    let mut triangles: Vec<[u32; 3]> = Vec::new();
     let mut polygon: Vec<u32> = Vec::new();
     let mut forward: Vec<Forward> = Vec::new();
     let mut joined: Vec<u8> = Vec::new();
@@ -154,7 +157,7 @@ pub(super) fn read<R: BufRead>(reader: R, src: &Src) -> Result<Mesh, MeshError> 
                         ),
                     ));
                 }
-                fan(&polygon, &mut triangles);
+                triangles.fan(&polygon);
                 face += 1;
             }
             _ => {}
@@ -165,7 +168,7 @@ pub(super) fn read<R: BufRead>(reader: R, src: &Src) -> Result<Mesh, MeshError> 
         // Quote the index as the file writes it (1-based).
         return Err(src.out_of_range(Place::Line(bad.line), bad.face, bad.index + 1, n));
     }
-    Ok(Mesh::new(vertices, triangles))
+    Ok(vertices)
 }
 
 /// Writes `mesh` as OBJ: `v x y z` lines with shortest round-trip decimals,

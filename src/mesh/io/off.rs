@@ -9,8 +9,8 @@
 
 use std::io::BufRead;
 
-use super::{Lines, Src, fan, finite, parse_f32, parse_u64, show, tokens_before_comment};
-use crate::mesh::{Mesh, MeshError, Place};
+use super::{Lines, Src, Tris, finite, parse_f32, parse_u64, show, tokens_before_comment};
+use crate::mesh::{MeshError, Place};
 
 /// Reads the next line with content (comments stripped); `Ok(false)` at
 /// the end of the input.
@@ -85,7 +85,11 @@ fn counts<'a>(
     Ok((vertices, faces))
 }
 
-pub(super) fn read<R: BufRead>(reader: R, src: &Src) -> Result<Mesh, MeshError> {
+pub(super) fn read<R: BufRead>(
+    reader: R,
+    src: &Src,
+    triangles: &mut Tris<'_>,
+) -> Result<Vec<[f32; 3]>, MeshError> {
     let mut lines = Lines::new(reader);
     if !next_record(&mut lines, src)? {
         return Err(src.truncated(lines.eof_place(), "the OFF header"));
@@ -163,7 +167,7 @@ pub(super) fn read<R: BufRead>(reader: R, src: &Src) -> Result<Mesh, MeshError> 
         vertices.push(v);
     }
 
-    let mut triangles = Vec::with_capacity(src.capacity(nf, lines.offset(), 8));
+    triangles.reserve(src.capacity(nf, lines.offset(), 8));
     let mut polygon: Vec<u32> = Vec::new();
     let mut face = 0u64;
     while face < nf {
@@ -209,8 +213,8 @@ pub(super) fn read<R: BufRead>(reader: R, src: &Src) -> Result<Mesh, MeshError> 
             }
             polygon.push(index as u32); // < nv <= 2^32
         }
-        fan(&polygon, &mut triangles);
+        triangles.fan(&polygon);
         face += 1;
     }
-    Ok(Mesh::new(vertices, triangles))
+    Ok(vertices)
 }

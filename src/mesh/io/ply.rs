@@ -11,8 +11,8 @@
 use std::io::{self, BufRead, Write};
 
 use super::{
-    Bytes, Encoding, Lines, Src, fan, finite, flush_if_full, parse_f32, parse_i64, parse_u64, show,
-    tokens,
+    Bytes, Encoding, Lines, Src, Tris, finite, flush_if_full, parse_f32, parse_i64, parse_u64,
+    show, tokens,
 };
 use crate::mesh::{Mesh, MeshError, Place};
 
@@ -282,7 +282,11 @@ fn assign_roles(elements: &mut [Element], src: &Src) -> Result<(usize, usize), M
     Ok((vi, fi))
 }
 
-pub(super) fn read<R: BufRead>(reader: R, src: &Src) -> Result<(Mesh, Encoding), MeshError> {
+pub(super) fn read<R: BufRead>(
+    reader: R,
+    src: &Src,
+    tris: &mut Tris<'_>,
+) -> Result<(Vec<[f32; 3]>, Encoding), MeshError> {
     let mut lines = Lines::new(reader);
     let Header {
         encoding,
@@ -298,7 +302,7 @@ pub(super) fn read<R: BufRead>(reader: R, src: &Src) -> Result<(Mesh, Encoding),
     }
     let mut sink = Sink {
         vertices: Vec::new(),
-        triangles: Vec::new(),
+        triangles: tris,
         polygon: Vec::new(),
         nv,
     };
@@ -321,7 +325,7 @@ pub(super) fn read<R: BufRead>(reader: R, src: &Src) -> Result<(Mesh, Encoding),
             }
         }
     }
-    Ok((Mesh::new(sink.vertices, sink.triangles), encoding))
+    Ok((sink.vertices, encoding))
 }
 
 fn which(i: usize, vi: usize, fi: usize) -> Which {
@@ -336,7 +340,15 @@ fn which(i: usize, vi: usize, fi: usize) -> Which {
 
 /// Reserves room for the vertices or faces of `element`, capped by what the
 /// rest of the source could hold (`vmin`/`fmin` bytes per record at least).
-fn reserve(sink: &mut Sink, which: Which, e: &Element, at: u64, src: &Src, vmin: u64, fmin: u64) {
+fn reserve(
+    sink: &mut Sink<'_, '_>,
+    which: Which,
+    e: &Element,
+    at: u64,
+    src: &Src,
+    vmin: u64,
+    fmin: u64,
+) {
     match which {
         Which::Vertex => sink.vertices.reserve(src.capacity(e.count, at, vmin)),
         Which::Face => sink.triangles.reserve(src.capacity(e.count, at, fmin)),
@@ -345,14 +357,14 @@ fn reserve(sink: &mut Sink, which: Which, e: &Element, at: u64, src: &Src, vmin:
 }
 
 /// Where records go.
-struct Sink {
+struct Sink<'t, 'a> {
     vertices: Vec<[f32; 3]>,
-    triangles: Vec<[u32; 3]>,
+    triangles: &'t mut Tris<'a>,
     polygon: Vec<u32>,
     nv: u64,
 }
 
-impl Sink {
+impl Sink<'_, '_> {
     #[inline]
     fn push_vertex(&mut self, v: [f32; 3], place: Place, src: &Src) -> Result<(), MeshError> {
         if !finite(&v) {
@@ -395,7 +407,7 @@ impl Sink {
                 ),
             ));
         }
-        fan(&self.polygon, &mut self.triangles);
+        self.triangles.fan(&self.polygon);
         self.polygon.clear();
         Ok(())
     }
@@ -409,7 +421,7 @@ fn read_ascii_element<R: BufRead>(
     lines: &mut Lines<R>,
     element: &Element,
     which: Which,
-    sink: &mut Sink,
+    sink: &mut Sink<'_, '_>,
     src: &Src,
 ) -> Result<(), MeshError> {
     let name = element_name(element);
@@ -532,7 +544,7 @@ fn read_binary_element<R: BufRead>(
     element: &Element,
     which: Which,
     big: bool,
-    sink: &mut Sink,
+    sink: &mut Sink<'_, '_>,
     src: &Src,
 ) -> Result<(), MeshError> {
     let name = element_name(element);

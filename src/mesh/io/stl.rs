@@ -13,14 +13,18 @@
 use std::collections::hash_map::Entry;
 use std::io::{BufRead, Read};
 
-use super::{Bytes, Encoding, Lines, Src, fan, finite, parse_f32, show, tokens};
+use super::{Bytes, Encoding, Lines, Src, Tris, finite, parse_f32, show, tokens};
 use crate::hash::FastMap;
-use crate::mesh::{Mesh, MeshError, Place};
+use crate::mesh::{MeshError, Place};
 
 /// How many leading bytes decide between ASCII and binary.
 const PROBE: u64 = 512;
 
-pub(super) fn read<R: BufRead>(mut reader: R, src: &Src) -> Result<(Mesh, Encoding), MeshError> {
+pub(super) fn read<R: BufRead>(
+    mut reader: R,
+    src: &Src,
+    triangles: &mut Tris<'_>,
+) -> Result<(Vec<[f32; 3]>, Encoding), MeshError> {
     let mut head = Vec::with_capacity(PROBE as usize);
     (&mut reader)
         .take(PROBE)
@@ -37,9 +41,12 @@ pub(super) fn read<R: BufRead>(mut reader: R, src: &Src) -> Result<(Mesh, Encodi
     let text = head.iter().all(|&b| b >= 0x20 || b.is_ascii_whitespace());
     let rest = (&head[..]).chain(reader);
     if starts_solid && text && !exact_binary {
-        Ok((read_ascii(rest, src)?, Encoding::Ascii))
+        Ok((read_ascii(rest, src, triangles)?, Encoding::Ascii))
     } else {
-        Ok((read_binary(rest, src)?, Encoding::BinaryLittleEndian))
+        Ok((
+            read_binary(rest, src, triangles)?,
+            Encoding::BinaryLittleEndian,
+        ))
     }
 }
 
@@ -76,7 +83,11 @@ impl Welder {
     }
 }
 
-fn read_binary<R: BufRead>(reader: R, src: &Src) -> Result<Mesh, MeshError> {
+fn read_binary<R: BufRead>(
+    reader: R,
+    src: &Src,
+    triangles: &mut Tris<'_>,
+) -> Result<Vec<[f32; 3]>, MeshError> {
     let mut bytes = Bytes::new(reader, 0);
     let mut header = [0u8; 84];
     if !bytes.fill(&mut header).map_err(|e| src.io(e))? {
@@ -90,7 +101,7 @@ fn read_binary<R: BufRead>(reader: R, src: &Src) -> Result<Mesh, MeshError> {
     let mut welder = Welder::default();
     welder.map.reserve(cap / 2);
     welder.vertices.reserve(cap / 2);
-    let mut triangles = Vec::with_capacity(cap);
+    triangles.reserve(cap);
     let mut record = [0u8; 50];
     for t in 0..n {
         let start = bytes.offset();
@@ -121,7 +132,7 @@ fn read_binary<R: BufRead>(reader: R, src: &Src) -> Result<Mesh, MeshError> {
             ),
         ));
     }
-    Ok(Mesh::new(welder.vertices, triangles))
+    Ok(welder.vertices)
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -145,10 +156,13 @@ impl State {
     }
 }
 
-fn read_ascii<R: BufRead>(reader: R, src: &Src) -> Result<Mesh, MeshError> {
+fn read_ascii<R: BufRead>(
+    reader: R,
+    src: &Src,
+    triangles: &mut Tris<'_>,
+) -> Result<Vec<[f32; 3]>, MeshError> {
     let mut lines = Lines::new(reader);
     let mut welder = Welder::default();
-    let mut triangles = Vec::new();
     let mut polygon: Vec<u32> = Vec::new();
     let mut state = State::Outside;
     let mut facet = 0usize;
@@ -216,7 +230,7 @@ fn read_ascii<R: BufRead>(reader: R, src: &Src) -> Result<Mesh, MeshError> {
                         ),
                     ));
                 }
-                fan(&polygon, &mut triangles);
+                triangles.fan(&polygon);
                 State::LoopDone
             }
             State::LoopDone if is(b"endfacet") => {
@@ -229,5 +243,5 @@ fn read_ascii<R: BufRead>(reader: R, src: &Src) -> Result<Mesh, MeshError> {
     if state != State::Outside {
         return Err(src.truncated(lines.eof_place(), state.expected()));
     }
-    Ok(Mesh::new(welder.vertices, triangles))
+    Ok(welder.vertices)
 }
