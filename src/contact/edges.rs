@@ -139,7 +139,46 @@ impl EdgeFlags {
 
     /// The flags from each triangle's unit normal and its corners' position
     /// bits (corner `t * 3 + k` of triangle `t`).
-    fn from_corners(normals: Vec<Vec3A>, mut corners: Vec<([u32; 3], u32)>, flat_deg: f32) -> Self {
+    fn from_corners(normals: Vec<Vec3A>, corners: Vec<([u32; 3], u32)>, flat_deg: f32) -> Self {
+        Self::from_corners_open(normals, corners, flat_deg, None)
+    }
+
+    /// [`from_visit`](Self::from_visit), and also every *open* edge: one
+    /// with a single triangle among these (not degenerate), which another
+    /// part of a larger mesh may share. The out-of-core builder computes
+    /// each part's flags so, then pairs the parts' open edges across parts
+    /// with [`resolve_open`](Self::resolve_open).
+    pub fn from_visit_open(
+        count: usize,
+        visit: impl FnOnce(&mut dyn FnMut(u32, &Triangle)),
+    ) -> (Self, Vec<OpenEdge>) {
+        let mut normals = vec![Vec3A::NAN; count];
+        let mut corners = vec![([u32::MAX; 3], u32::MAX); 3 * count];
+        visit(&mut |id, t| {
+            if (id as usize) < count {
+                normals[id as usize] = unit_normal(t);
+                for k in 0..3 {
+                    corners[id as usize * 3 + k] = (key(t[k]), id * 3 + k as u32);
+                }
+            }
+        });
+        for (c, entry) in corners.iter_mut().enumerate() {
+            if entry.1 == u32::MAX {
+                *entry = ([u32::MAX, u32::MAX, c as u32], c as u32);
+            }
+        }
+        let mut open = Vec::new();
+        let flags =
+            Self::from_corners_open(normals, corners, Self::DEFAULT_FLAT_DEG, Some(&mut open));
+        (flags, open)
+    }
+
+    fn from_corners_open(
+        normals: Vec<Vec3A>,
+        mut corners: Vec<([u32; 3], u32)>,
+        flat_deg: f32,
+        mut open: Option<&mut Vec<OpenEdge>>,
+    ) -> Self {
         let count = normals.len();
         let cos_flat = flat_deg.to_radians().cos();
         corners.par_sort_unstable();
@@ -207,6 +246,20 @@ impl EdgeFlags {
             if degenerate || group.len() != 2 {
                 if group.len() == 1 {
                     out.boundary_edges += 1;
+                    if let Some(open) = open.as_deref_mut()
+                        && !degenerate
+                    {
+                        let c = corner(group[0].1);
+                        let a = self::key(positions[vertex_of[c] as usize]);
+                        let b =
+                            self::key(positions[vertex_of[(c / 3) * 3 + (c % 3 + 1) % 3] as usize]);
+                        open.push(OpenEdge {
+                            ends: [a.min(b), a.max(b)],
+                            corner: c as u64,
+                            reversed: a > b,
+                            normal: normals[c / 3].to_array(),
+                        });
+                    }
                 } else if !degenerate {
                     out.non_manifold_edges += 1;
                 }
@@ -218,30 +271,13 @@ impl EdgeFlags {
                 let (t1, t2) = (corner(h1) / 3, corner(h2) / 3);
                 let same_way = (h1 & 1) == (h2 & 1);
                 out.misoriented_edges += u64::from(same_way);
-                let (n1, n2) = (normals[t1], normals[t2]);
-                if !n1.is_finite() || !n2.is_finite() {
-                    set(h1, 0b1001);
-                    set(h2, 0b1001);
-                } else {
-                    // The neighbour's normal as if it were wound like this
-                    // triangle.
-                    let n2 = if same_way { -n2 } else { n2 };
-                    if n1.dot(n2) >= cos_flat {
-                        out.flat_edges += 1;
-                    } else {
-                        // Convex seen from t1's front: the neighbour bends
-                        // away, e · (n1 × n2) > 0 along t1's edge e.
-                        let c1 = corner(h1);
-                        let a = positions[vertex_of[c1] as usize];
-                        let b = positions[vertex_of[(c1 / 3) * 3 + (c1 % 3 + 1) % 3] as usize];
-                        let convex = (b - a).dot(n1.cross(n2)) > 0.0;
-                        // t2 sees the same edge convex from its front when
-                        // wound consistently, from its back otherwise.
-                        let front = |convex: bool| if convex { 0b0001 } else { 0b1000 };
-                        set(h1, front(convex));
-                        set(h2, front(convex != same_way));
-                    }
-                }
+                let c1 = corner(h1);
+                let a = positions[vertex_of[c1] as usize];
+                let b = positions[vertex_of[(c1 / 3) * 3 + (c1 % 3 + 1) % 3] as usize];
+                let (b1, b2) = pair_bits(normals[t1], normals[t2], same_way, b - a, cos_flat);
+                out.flat_edges += u64::from(b1 == 0 && b2 == 0);
+                set(h1, b1);
+                set(h2, b2);
             }
             start = end;
         }
@@ -313,6 +349,104 @@ impl EdgeFlags {
     }
 }
 
+/// The bits (edge 0's position: `0b1001` both sides, `0b0001` front,
+/// `0b1000` back, 0 neither) of an edge shared by two triangles with unit
+/// normals `n1`, `n2` (NaN without area), wound the same way round along
+/// it when `same_way` (misoriented), `e` the edge as the first triangle
+/// runs it: both active without area, neither within the flat angle,
+/// else each active from the side it is convex from.
+fn pair_bits(n1: Vec3A, n2: Vec3A, same_way: bool, e: Vec3A, cos_flat: f32) -> (u8, u8) {
+    if !n1.is_finite() || !n2.is_finite() {
+        return (0b1001, 0b1001);
+    }
+    // The neighbour's normal as if it were wound like this triangle.
+    let n2 = if same_way { -n2 } else { n2 };
+    if n1.dot(n2) >= cos_flat {
+        return (0, 0);
+    }
+    // Convex seen from t1's front: the neighbour bends away, e · (n1 × n2)
+    // > 0 along t1's edge e. t2 sees the same edge convex from its front
+    // when wound consistently, from its back otherwise.
+    let convex = e.dot(n1.cross(n2)) > 0.0;
+    let front = |convex: bool| if convex { 0b0001 } else { 0b1000 };
+    (front(convex), front(convex != same_way))
+}
+
+/// An edge with one triangle in a part of a mesh
+/// ([`EdgeFlags::from_visit_open`]), which a triangle of another part may
+/// share: what pairing it takes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OpenEdge {
+    /// The ends' position bits (`-0.0` as `0.0`), the lower first.
+    pub ends: [[u32; 3]; 2],
+    /// The corner the edge starts at: `3 · triangle + k` for edge `k`
+    /// (the caller moves it to the whole mesh's numbering).
+    pub corner: u64,
+    /// Whether the triangle runs the edge from the higher end.
+    pub reversed: bool,
+    /// The triangle's unit normal (NaN without area).
+    pub normal: [f32; 3],
+}
+
+impl EdgeFlags {
+    /// Pairs the open edges of a mesh's parts, each part's flags computed
+    /// alone ([`from_visit_open`](Self::from_visit_open)) and put end to
+    /// end in `self`, the counters summed: edges two parts share get the
+    /// flags one computation over the whole mesh gives them, and the
+    /// counters are corrected (a shared edge is no longer a boundary).
+    /// `open` is sorted in place; corners index `self`'s triangles.
+    ///
+    /// An edge with one triangle in one part and two or more in another
+    /// stays as each part saw it: the two are an ordinary pair, the third
+    /// a boundary (the whole mesh would call all three non-manifold).
+    pub fn resolve_open(&mut self, open: &mut [OpenEdge]) {
+        let cos_flat = Self::DEFAULT_FLAT_DEG.to_radians().cos();
+        open.sort_unstable_by(|x, y| (x.ends, x.corner).cmp(&(y.ends, y.corner)));
+        let mut flags = self.flags.to_vec();
+        let mut start = 0;
+        while start < open.len() {
+            let mut end = start + 1;
+            while end < open.len() && open[end].ends == open[start].ends {
+                end += 1;
+            }
+            let group = &open[start..end];
+            let mut set = |e: &OpenEdge, bits: u8| {
+                let (t, k) = ((e.corner / 3) as usize, (e.corner % 3) as u32);
+                if let Some(f) = flags.get_mut(t) {
+                    *f = (*f & !(0b1001 << k)) | (bits << k);
+                }
+            };
+            match group.len() {
+                1 => {}
+                2 => {
+                    let (e1, e2) = (&group[0], &group[1]);
+                    self.boundary_edges -= 2;
+                    let same_way = e1.reversed == e2.reversed;
+                    self.misoriented_edges += u64::from(same_way);
+                    let [lo, hi] = e1.ends.map(|p| Vec3A::from(p.map(f32::from_bits)));
+                    let e = if e1.reversed { lo - hi } else { hi - lo };
+                    let (b1, b2) = pair_bits(
+                        Vec3A::from(e1.normal),
+                        Vec3A::from(e2.normal),
+                        same_way,
+                        e,
+                        cos_flat,
+                    );
+                    self.flat_edges += u64::from(b1 == 0 && b2 == 0);
+                    set(e1, b1);
+                    set(e2, b2);
+                }
+                n => {
+                    self.boundary_edges -= n as u64;
+                    self.non_manifold_edges += 1;
+                }
+            }
+            start = end;
+        }
+        self.flags = flags.into();
+    }
+}
+
 /// The unit normal of a triangle's winding, NaN without area.
 #[inline]
 fn unit_normal(v: &Triangle) -> Vec3A {
@@ -344,6 +478,80 @@ mod tests {
         EdgeFlags::compute(t.len(), |i| {
             t[i as usize].map(|k| Vec3A::from(v[k as usize]))
         })
+    }
+
+    /// The flags of `t` computed in parts (`part[i]` names triangle `i`'s),
+    /// each part's numbered after the previous ones', then resolved: in
+    /// that numbering, what the whole computation gives.
+    fn flags_in_parts(
+        v: &[[f32; 3]],
+        t: &[[u32; 3]],
+        part: &[usize],
+        parts: usize,
+    ) -> (EdgeFlags, Vec<usize>) {
+        let mut order = Vec::new();
+        let mut all = Vec::new();
+        let mut open_all = Vec::new();
+        let mut sum = EdgeFlags::default();
+        for p in 0..parts {
+            let ids: Vec<usize> = (0..t.len()).filter(|&i| part[i] == p).collect();
+            let (f, open) = EdgeFlags::from_visit_open(ids.len(), |visit| {
+                for (local, &i) in ids.iter().enumerate() {
+                    visit(local as u32, &t[i].map(|k| Vec3A::from(v[k as usize])));
+                }
+            });
+            let base = all.len() as u64;
+            open_all.extend(open.into_iter().map(|mut e| {
+                e.corner += 3 * base;
+                e
+            }));
+            all.extend_from_slice(f.as_slice());
+            sum.boundary_edges += f.boundary_edges;
+            sum.non_manifold_edges += f.non_manifold_edges;
+            sum.misoriented_edges += f.misoriented_edges;
+            sum.flat_edges += f.flat_edges;
+            order.extend(ids);
+        }
+        let mut out = EdgeFlags::from_flags(all).unwrap();
+        out.boundary_edges = sum.boundary_edges;
+        out.non_manifold_edges = sum.non_manifold_edges;
+        out.misoriented_edges = sum.misoriented_edges;
+        out.flat_edges = sum.flat_edges;
+        out.resolve_open(&mut open_all);
+        (out, order)
+    }
+
+    #[test]
+    fn flags_computed_in_parts_and_resolved_equal_the_whole() {
+        let robot =
+            crate::scene::generate(crate::scene::Kind::Robot, 4000, 3, &mut |_, _| {}).unwrap();
+        let statue =
+            crate::scene::generate(crate::scene::Kind::Statue, 3000, 1, &mut |_, _| {}).unwrap();
+        for mesh in [robot, statue] {
+            let (v, t) = (&mesh.vertices, &mesh.triangles);
+            let whole = flags_of(v, t);
+            // Parts by position (cuts through the surface), by id, and
+            // every triangle its own part.
+            let by_x: Vec<usize> = t
+                .iter()
+                .map(|tri| {
+                    let x: f32 = tri.iter().map(|&k| v[k as usize][0]).sum();
+                    usize::from(x > 0.0) + usize::from(x > 0.3)
+                })
+                .collect();
+            let by_id: Vec<usize> = (0..t.len()).map(|i| i * 5 / t.len()).collect();
+            let alone: Vec<usize> = (0..t.len()).collect();
+            for (part, parts) in [(by_x, 3), (by_id, 5), (alone, t.len())] {
+                let (got, order) = flags_in_parts(v, t, &part, parts);
+                for (new, &old) in order.iter().enumerate() {
+                    assert_eq!(got.get(new as u32), whole.get(old as u32), "triangle {old}");
+                }
+                assert_eq!(got.boundary_edges, whole.boundary_edges);
+                assert_eq!(got.non_manifold_edges, whole.non_manifold_edges);
+                assert_eq!(got.misoriented_edges, whole.misoriented_edges);
+                assert_eq!(got.flat_edges, whole.flat_edges);
+            }
+        }
     }
 
     #[test]
