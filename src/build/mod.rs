@@ -13,6 +13,7 @@
 //! triangles ([`CanonicalBvh::height`]). The tree is the same whatever the
 //! number of threads.
 
+pub mod chunked;
 mod layout;
 mod sah;
 

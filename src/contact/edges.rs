@@ -401,7 +401,7 @@ impl EdgeFlags {
     /// a boundary (the whole mesh would call all three non-manifold).
     pub fn resolve_open(&mut self, open: &mut [OpenEdge]) {
         let cos_flat = Self::DEFAULT_FLAT_DEG.to_radians().cos();
-        open.sort_unstable_by(|x, y| (x.ends, x.corner).cmp(&(y.ends, y.corner)));
+        open.sort_unstable_by_key(|x| (x.ends, x.corner));
         let mut flags = self.flags.to_vec();
         let mut start = 0;
         while start < open.len() {

@@ -24,6 +24,7 @@ mod edge_flags;
 mod far_from_origin;
 mod hcc;
 mod hcc_ooc;
+mod hcc_ooc_stream;
 mod mesh_io;
 mod native_pairs;
 mod orientation;

@@ -62,20 +62,36 @@ impl Frame {
     /// If `out` does not end where the table starts, or `sections` is not
     /// one slice a name (a codec's own bug, not its input's).
     pub fn write(&self, out: &mut Vec<u8>, sections: &[&[u8]]) {
-        assert_eq!(out.len(), self.table, "the header fields end at the table");
-        assert_eq!(sections.len(), self.sections.len(), "one section a name");
-        let mut at = self.header_len() as u64;
-        for s in sections {
-            out.extend_from_slice(&at.to_le_bytes());
-            out.extend_from_slice(&(s.len() as u64).to_le_bytes());
-            out.extend_from_slice(&xxh3_64(s).to_le_bytes());
-            at += s.len() as u64;
-        }
-        let h = xxh3_64(out);
-        out.extend_from_slice(&h.to_le_bytes());
+        let entries: Vec<(u64, u64)> = sections
+            .iter()
+            .map(|s| (s.len() as u64, xxh3_64(s)))
+            .collect();
+        self.write_table(out, &entries);
         for s in sections {
             out.extend_from_slice(s);
         }
+    }
+
+    /// Completes the header whose fields are in `out` with the table of
+    /// sections of the given `(length, checksum)` (xxh3-64), stored back
+    /// to back after the header, and the header's checksum; the caller
+    /// writes the sections after it (a writer that streams a section too
+    /// large to hold, hashing it as it goes).
+    ///
+    /// # Panics
+    /// As [`write`](Self::write).
+    pub fn write_table(&self, out: &mut Vec<u8>, sections: &[(u64, u64)]) {
+        assert_eq!(out.len(), self.table, "the header fields end at the table");
+        assert_eq!(sections.len(), self.sections.len(), "one section a name");
+        let mut at = self.header_len() as u64;
+        for &(len, hash) in sections {
+            out.extend_from_slice(&at.to_le_bytes());
+            out.extend_from_slice(&len.to_le_bytes());
+            out.extend_from_slice(&hash.to_le_bytes());
+            at += len;
+        }
+        let h = xxh3_64(out);
+        out.extend_from_slice(&h.to_le_bytes());
     }
 
     /// Checks that `b` holds a whole header that starts with `magic` (of

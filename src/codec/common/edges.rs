@@ -69,7 +69,7 @@ use super::FormatError;
 use super::bits::{BitReader, BitWriter};
 use super::static_dict::{StaticDecoder, StaticDict};
 use crate::contact::EdgeFlags;
-use crate::contact::edges::ALL_ACTIVE;
+use crate::contact::edges::{ALL_ACTIVE, OpenEdge};
 use crate::cursor::{NodeCursor, TraversalStats};
 use crate::geom::Aabb;
 
@@ -89,14 +89,24 @@ const FIXED: usize = 48;
 /// precision), in one traversal of its tree: what every codec stores
 /// when it encodes.
 pub fn of_cursor<C: NodeCursor>(c: &C) -> EdgeFlags {
+    EdgeFlags::from_visit(c.triangle_count(), |f| visit_all(c, f))
+}
+
+/// [`of_cursor`] for one part of a larger mesh, with the part's open
+/// edges ([`EdgeFlags::from_visit_open`]), which the out-of-core builder
+/// pairs across parts.
+pub fn of_cursor_open<C: NodeCursor>(c: &C) -> (EdgeFlags, Vec<OpenEdge>) {
+    EdgeFlags::from_visit_open(c.triangle_count(), |f| visit_all(c, f))
+}
+
+/// Calls `f` with every triangle of `c` and its id.
+fn visit_all<C: NodeCursor>(c: &C, f: &mut dyn FnMut(u32, &crate::geom::Triangle)) {
     let everything = Aabb::new(Vec3A::splat(f32::MIN), Vec3A::splat(f32::MAX));
-    EdgeFlags::from_visit(c.triangle_count(), |f| {
-        let mut stats = TraversalStats::default();
-        crate::query::overlap(c, &everything, &mut stats, |id, t| {
-            f(id, t);
-            ControlFlow::Continue(())
-        });
-    })
+    let mut stats = TraversalStats::default();
+    crate::query::overlap(c, &everything, &mut stats, |id, t| {
+        f(id, t);
+        ControlFlow::Continue(())
+    });
 }
 
 /// The section's bytes (see the module docs).

@@ -211,8 +211,8 @@ impl MassAccumulator {
         let v = det / 6.0;
         let sum = [0, 1, 2].map(|k| p[0][k] + p[1][k] + p[2][k]);
         self.volume += v;
-        for k in 0..3 {
-            self.first[k] += v * sum[k] / 4.0;
+        for (f, s) in self.first.iter_mut().zip(sum) {
+            *f += v * s / 4.0;
         }
         // The tetrahedron with corners 0, a, b, c:
         // ∫ x_i x_j dV = V/20 (Σ p_i p_j + Σ p_i · Σ p_j).

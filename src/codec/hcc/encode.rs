@@ -225,6 +225,19 @@ impl HccBvh {
         mesh: &Mesh,
         options: &HccOptions,
     ) -> Result<Self, HccError> {
+        Self::encode_part(bvh, mesh, options, None)
+    }
+
+    /// [`encode_with`](Self::encode_with), or with `part` one chunk of a
+    /// larger model (the out-of-core builder's): quantized on the grid of
+    /// the whole model's bounds `part` gives, with neither mass nor edge
+    /// flags (the builder sums those over the chunks).
+    pub(super) fn encode_part(
+        bvh: &CanonicalBvh,
+        mesh: &Mesh,
+        options: &HccOptions,
+        part: Option<([f32; 3], [f32; 3])>,
+    ) -> Result<Self, HccError> {
         let multi = bvh.max_leaf_triangles > 1;
         if bvh.max_leaf_triangles > MAX_LEAF_TRIANGLES {
             return Err(HccError::LeafSize {
@@ -246,7 +259,7 @@ impl HccBvh {
                 limit: MAX_VERTEX_BITS,
             });
         }
-        let (quant, qcoords, points) = quantize(mesh, options.vertex_bits)?;
+        let (quant, qcoords, points) = quantize(mesh, options.vertex_bits, part)?;
         let points: &[[f32; 3]] = points.as_deref().unwrap_or(&mesh.vertices);
         let mut out = HccBvh {
             high: Vec::new(),
@@ -263,7 +276,10 @@ impl HccBvh {
             multi,
             triangle_count: mesh.triangles.len() as u32,
             mesh_vertices: mesh.vertices.len() as u32,
-            mass: MassProps::of_mesh(mesh),
+            mass: match part {
+                Some(_) => MassProps::ZERO,
+                None => MassProps::of_mesh(mesh),
+            },
             edges: EdgeFlags::default(),
             stats: HccStats::default(),
         };
@@ -332,7 +348,9 @@ impl HccBvh {
         out.stats.tree_vertices = s.stored.len();
         out.stats.mesh_vertices = used.iter().filter(|&&u| u).count();
         out.stats.high_nodes = out.high.len();
-        out.edges = crate::codec::common::edges::of_cursor(&out);
+        if part.is_none() {
+            out.edges = crate::codec::common::edges::of_cursor(&out);
+        }
         Ok(out)
     }
 
@@ -589,6 +607,7 @@ impl HccBvh {
 fn quantize(
     mesh: &Mesh,
     bits: Option<u32>,
+    bounds: Option<([f32; 3], [f32; 3])>,
 ) -> Result<
     (
         Option<Quantized>,
@@ -600,7 +619,9 @@ fn quantize(
     let Some(bits) = bits else {
         return Ok((None, None, None));
     };
-    let (lo, hi) = mesh.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
+    let (lo, hi) = bounds
+        .or_else(|| mesh.bounds())
+        .unwrap_or(([0.0; 3], [0.0; 3]));
     for a in 0..3 {
         let extent = hi[a] - lo[a];
         if !extent.is_finite() {

@@ -241,19 +241,18 @@ fn model_tree(
 
 /// The high-level tree's shape: a bit a node (1 inner, 0 a low-level
 /// tree), in the order the i-HCCMesh encoder allocated them.
-fn high_shape(hcc: &HccBvh) -> Result<Vec<u8>, OocError> {
+pub(super) fn high_shape(high: &[HighNode], trees_want: usize) -> Result<Vec<u8>, OocError> {
     let bad = |what| OocError::NotCanonical {
         tree: u32::MAX,
         what,
     };
     let mut w = BitWriter::default();
-    if hcc.high.is_empty() {
+    if high.is_empty() {
         return Ok(Vec::new());
     }
     let (mut stack, mut len, mut trees) = (vec![0u32], 1u32, 0u32);
     while let Some(h) = stack.pop() {
-        let n = hcc
-            .high
+        let n = high
             .get(h as usize)
             .ok_or(bad("a high-level child is out of range"))?;
         if n.is_leaf() {
@@ -272,7 +271,7 @@ fn high_shape(hcc: &HccBvh) -> Result<Vec<u8>, OocError> {
             len += 2;
         }
     }
-    if len as usize != hcc.high.len() || trees as usize != hcc.headers.len() {
+    if len as usize != high.len() || trees as usize != trees_want {
         return Err(bad(
             "the high-level tree has nodes or trees it does not reach",
         ));
@@ -284,7 +283,7 @@ fn high_shape(hcc: &HccBvh) -> Result<Vec<u8>, OocError> {
 /// docs of [`ooc`](super)): the root's grid coordinates, then per inner
 /// node (in node order, parents first) and per extent which child shares
 /// the parent's value and how far inside the parent the other child's is.
-fn high_boxes(hcc: &HccBvh, q: &Quantized) -> Result<Vec<u8>, OocError> {
+pub(super) fn high_boxes(high: &[HighNode], q: &Quantized) -> Result<Vec<u8>, OocError> {
     let bad = |what| OocError::NotCanonical {
         tree: u32::MAX,
         what,
@@ -300,7 +299,7 @@ fn high_boxes(hcc: &HccBvh, q: &Quantized) -> Result<Vec<u8>, OocError> {
         }
         Ok(g)
     };
-    let gs = hcc.high.iter().map(grid).collect::<Result<Vec<_>, _>>()?;
+    let gs = high.iter().map(grid).collect::<Result<Vec<_>, _>>()?;
     let mut w = BitWriter::default();
     let Some(root) = gs.first() else {
         return Ok(Vec::new());
@@ -308,7 +307,7 @@ fn high_boxes(hcc: &HccBvh, q: &Quantized) -> Result<Vec<u8>, OocError> {
     for &c in root {
         w.put(u64::from(c), q.bits);
     }
-    for (n, p) in hcc.high.iter().zip(&gs) {
+    for (n, p) in high.iter().zip(&gs) {
         if n.is_leaf() {
             continue;
         }
@@ -344,7 +343,7 @@ fn high_boxes(hcc: &HccBvh, q: &Quantized) -> Result<Vec<u8>, OocError> {
 /// that hold its largest difference (6 bits first, per column), the
 /// columns interleaved tree by tree: the sections `tree starts` and `tree
 /// firsts` (layout in the module docs of [`ooc`](super)).
-fn tree_columns(columns: &[&[u32]]) -> Vec<u8> {
+pub(super) fn tree_columns(columns: &[&[u32]]) -> Vec<u8> {
     let diffs: Vec<Vec<u32>> = columns
         .iter()
         .map(|c| c.windows(2).map(|p| p[1] - p[0]).collect())
@@ -365,45 +364,91 @@ fn tree_columns(columns: &[&[u32]]) -> Vec<u8> {
     w.finish()
 }
 
+/// Where the stream of tree `k` starts, `at` bytes into the streams: a
+/// `u32`, or the error that the streams outgrow 4 GiB.
+pub(super) fn stream_offset(at: u64, k: usize) -> Result<u32, OocError> {
+    u32::try_from(at).map_err(|_| OocError::Corrupt {
+        tree: k as u32,
+        what: "the coded trees outgrow 4 GiB",
+    })
+}
+
 /// Bits that hold `v` (0 for 0): an offset inside a range of `v`.
 pub(super) fn bits_for(v: u32) -> u32 {
     32 - v.leading_zeros()
 }
 
-/// Encodes `hcc` as an o-HCCMesh file; returns the bytes and their sizes
-/// by part.
-pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
-    let q = hcc.vertices.quantized().ok_or(OocError::NotQuantized)?;
-    let mut m = Model::default();
-    // Pass 1: each context's symbol counts.
-    let mut counts: Vec<FastMap<u32, u64>> = vec![FastMap::default(); CONTEXTS];
-    for k in 0..hcc.headers.len() {
-        model_tree(hcc, q, k, &mut m, &mut |ctx, sym| {
-            *counts[ctx].entry(sym).or_insert(0) += 1;
-        })?;
+/// Each context's symbol counts, summed over trees (pass 1).
+pub(super) struct SymbolCounts {
+    counts: Vec<FastMap<u32, u64>>,
+    m: Model,
+}
+
+impl SymbolCounts {
+    pub(super) fn new() -> Self {
+        Self {
+            counts: vec![FastMap::default(); CONTEXTS],
+            m: Model::default(),
+        }
     }
-    let dicts: Vec<StaticDict> = counts
-        .iter()
-        .map(|c| StaticDict::optimal(&c.iter().map(|(&s, &n)| (s, n)).collect::<Vec<_>>()))
-        .collect();
-    let mut w = BitWriter::default();
-    for d in &dicts {
-        d.write(&mut w);
+
+    /// Adds every tree of `hcc` (quantized on `q`).
+    pub(super) fn add(&mut self, hcc: &HccBvh, q: &Quantized) -> Result<(), OocError> {
+        let counts = &mut self.counts;
+        for k in 0..hcc.headers.len() {
+            model_tree(hcc, q, k, &mut self.m, &mut |ctx, sym| {
+                *counts[ctx].entry(sym).or_insert(0) += 1;
+            })?;
+        }
+        Ok(())
     }
-    let dict_bytes = w.finish();
-    // Pass 2: the trees' streams, each starting on a byte.
-    let mut encs: Vec<StaticEncoder> = dicts.iter().map(StaticDict::encoder).collect();
-    let mut streams = Vec::new();
-    let mut starts = Vec::with_capacity(hcc.headers.len() + 1);
-    let mut part_bits = [0u64; 3];
-    let mut residuals = Vec::new();
-    for k in 0..hcc.headers.len() {
-        let start = u32::try_from(streams.len()).map_err(|_| OocError::Corrupt {
-            tree: k as u32,
-            what: "the coded trees outgrow 4 GiB",
-        })?;
-        starts.push(start);
+
+    /// The dictionaries of optimal size for these counts, and the
+    /// section that stores them.
+    pub(super) fn dictionaries(&self) -> (Vec<StaticDict>, Vec<u8>) {
+        let dicts: Vec<StaticDict> = self
+            .counts
+            .iter()
+            .map(|c| StaticDict::optimal(&c.iter().map(|(&s, &n)| (s, n)).collect::<Vec<_>>()))
+            .collect();
         let mut w = BitWriter::default();
+        for d in &dicts {
+            d.write(&mut w);
+        }
+        (dicts, w.finish())
+    }
+}
+
+/// Codes trees through the file's dictionaries (pass 2).
+pub(super) struct StreamCoder {
+    encs: Vec<StaticEncoder>,
+    /// Bits of templates, corners and vertices coded so far.
+    pub(super) part_bits: [u64; 3],
+    residuals: Vec<(usize, u32)>,
+    m: Model,
+}
+
+impl StreamCoder {
+    pub(super) fn new(dicts: &[StaticDict]) -> Self {
+        Self {
+            encs: dicts.iter().map(StaticDict::encoder).collect(),
+            part_bits: [0; 3],
+            residuals: Vec::new(),
+            m: Model::default(),
+        }
+    }
+
+    /// Tree `k` of `hcc` (quantized on `q`), its stream starting on a
+    /// byte, appended to `out`.
+    pub(super) fn tree(
+        &mut self,
+        hcc: &HccBvh,
+        q: &Quantized,
+        k: usize,
+        out: &mut Vec<u8>,
+    ) -> Result<(), OocError> {
+        let mut w = BitWriter::default();
+        let (encs, part_bits) = (&mut self.encs, &mut self.part_bits);
         let mut put = |ctx: usize, sym: u32| {
             let before = w.bit_len();
             encs[ctx].put(&mut w, sym);
@@ -411,26 +456,44 @@ pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
         };
         // The templates and the corners as the model gives them, the
         // residuals after them (see the module docs).
+        let residuals = &mut self.residuals;
         residuals.clear();
-        model_tree(hcc, q, k, &mut m, &mut |ctx, sym| {
+        model_tree(hcc, q, k, &mut self.m, &mut |ctx, sym| {
             if part_of(ctx) == PART_VERTICES {
                 residuals.push((ctx, sym));
             } else {
                 put(ctx, sym);
             }
         })?;
-        for &(ctx, sym) in &residuals {
+        for &(ctx, sym) in residuals.iter() {
             put(ctx, sym);
         }
-        streams.extend_from_slice(&w.finish());
+        out.extend_from_slice(&w.finish());
+        Ok(())
     }
-    starts.push(u32::try_from(streams.len()).map_err(|_| OocError::Corrupt {
-        tree: u32::MAX,
-        what: "the coded trees outgrow 4 GiB",
-    })?);
+}
+
+/// Encodes `hcc` as an o-HCCMesh file; returns the bytes and their sizes
+/// by part.
+pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
+    let q = hcc.vertices.quantized().ok_or(OocError::NotQuantized)?;
+    // Pass 1: each context's symbol counts.
+    let mut counts = SymbolCounts::new();
+    counts.add(hcc, q)?;
+    let (dicts, dict_bytes) = counts.dictionaries();
+    // Pass 2: the trees' streams, each starting on a byte.
+    let mut coder = StreamCoder::new(&dicts);
+    let mut streams = Vec::new();
+    let mut starts = Vec::with_capacity(hcc.headers.len() + 1);
+    for k in 0..hcc.headers.len() {
+        starts.push(stream_offset(streams.len() as u64, k)?);
+        coder.tree(hcc, q, k, &mut streams)?;
+    }
+    starts.push(stream_offset(streams.len() as u64, hcc.headers.len())?);
+    let part_bits = coder.part_bits;
     let starts = tree_columns(&[&starts]);
-    let high = high_shape(hcc)?;
-    let boxes = high_boxes(hcc, q)?;
+    let high = high_shape(&hcc.high, hcc.headers.len())?;
+    let boxes = high_boxes(&hcc.high, q)?;
     let firsts = tree_columns(&[
         &hcc.headers
             .iter()

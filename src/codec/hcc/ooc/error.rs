@@ -46,6 +46,10 @@ pub enum OocError {
         /// What is wrong.
         what: &'static str,
     },
+    /// The out-of-core build cannot do what it was asked (id maps), or a
+    /// chunk could not be read or built.
+    #[error("out-of-core build: {0}")]
+    OutOfCore(String),
     /// Reading or writing a file failed.
     #[error("{path}: {message}")]
     Io {

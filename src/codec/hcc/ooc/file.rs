@@ -98,6 +98,22 @@ fn header_err(field: &'static str, why: impl Into<String>) -> OocError {
 pub fn write(h: &Header, sections: &[&[u8]; SECTIONS]) -> Vec<u8> {
     let len: usize = sections.iter().map(|s| s.len()).sum();
     let mut out = Vec::with_capacity(HEADER_LEN + len);
+    fields(h, &mut out);
+    FRAME.write(&mut out, sections);
+    out
+}
+
+/// The header of a file whose sections have these `(length, checksum)`:
+/// a writer that streams the sections after it.
+pub fn header(h: &Header, sections: &[(u64, u64); SECTIONS]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(HEADER_LEN);
+    fields(h, &mut out);
+    FRAME.write_table(&mut out, sections);
+    out
+}
+
+/// The header's fields, up to the section table.
+fn fields(h: &Header, out: &mut Vec<u8>) {
     out.extend_from_slice(&MAGIC);
     let flags = u32::from(h.vertex_ids) * FLAG_VERTEX_IDS
         + u32::from(h.tree_order) * FLAG_TREE_ORDER
@@ -122,8 +138,6 @@ pub fn write(h: &Header, sections: &[&[u8]; SECTIONS]) -> Vec<u8> {
     }
     debug_assert_eq!(out.len(), MASS_AT);
     out.extend_from_slice(&h.mass.to_bytes());
-    FRAME.write(&mut out, sections);
-    out
 }
 
 /// Parses the header and the section table of `b`, checking every

@@ -196,10 +196,12 @@ mod file;
 mod model;
 mod paged;
 mod rebuild;
+mod stream;
 
 pub use encode::OocSizes;
 pub use error::OocError;
 pub use file::MAGIC;
+pub use stream::{Progress, StreamedBuild, encode_streamed};
 
 use std::path::Path;
 use std::sync::Arc;
