@@ -31,6 +31,364 @@ pub struct BuildArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Memory the build may use, in MiB (default: half the machine's).
+    /// A model whose in-memory build would need more is built out of core
+    /// by `--codec hcc-ooc` (in chunks of the size this allows) and refused
+    /// by the other codecs, before any work.
+    #[arg(long, value_name = "MIB")]
+    pub memory_mib: Option<u64>,
+    /// Build out of core whatever the model's size (`--codec hcc-ooc`
+    /// from a mesh file, with `-o`).
+    #[arg(long)]
+    pub out_of_core: bool,
+    /// Out of core: the most triangles a chunk holds, instead of what the
+    /// memory budget allows (smaller chunks cost quality at the top of the
+    /// tree; for tests and experiments).
+    #[arg(long, value_name = "N")]
+    pub chunk_triangles: Option<u64>,
+}
+
+/// Bytes a triangle the in-memory build holds at its peak (the mesh, the
+/// canonical tree with its boxes, the codec's encoder; measured 232 on a
+/// 50 M-triangle statue for hcc-ooc): how the build chooses between memory
+/// and chunks, and how large a chunk is.
+const IN_MEMORY_BYTES_A_TRIANGLE: u64 = 260;
+
+/// The machine's memory (Linux `MemTotal`), if known.
+fn machine_memory() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = s.lines().find(|l| l.starts_with("MemTotal:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// The build's memory budget in bytes.
+fn budget(a: &BuildArgs) -> u64 {
+    a.memory_mib.map_or_else(
+        || machine_memory().map_or(8 << 30, |m| m / 2),
+        |m| m.saturating_mul(1 << 20),
+    )
+}
+
+/// How an out-of-core build goes: its input, output, chunk size.
+struct OutOfCore {
+    input: std::path::PathBuf,
+    output: std::path::PathBuf,
+    budget: u64,
+    chunk_triangles: u64,
+    estimated: (u64, u64),
+}
+
+fn gib(b: u64) -> String {
+    format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
+}
+
+/// Whether (and how) `a` builds out of core; an error for a model too
+/// large for the in-memory path of a codec that has no other.
+fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> {
+    let budget = budget(a);
+    let ooc = a.codec == Structure::Codec(CodecKind::HccOoc);
+    let file = a
+        .source
+        .mesh
+        .as_ref()
+        .filter(|p| CodecKind::of_file(p).is_none());
+    let (estimated, what) = match (file, a.source.gen_kind) {
+        (Some(p), _) => (crate::mesh::estimate_counts(p)?, p.display().to_string()),
+        (None, Some(kind)) => {
+            let t = a
+                .source
+                .tris
+                .unwrap_or_else(|| crate::scene::default_tris(kind)) as u64;
+            ((t / 2, t), format!("the generated {kind}"))
+        }
+        (None, None) => return Ok(None),
+    };
+    let need = estimated.1.saturating_mul(IN_MEMORY_BYTES_A_TRIANGLE);
+    let big = need > budget;
+    if !a.out_of_core && !big {
+        return Ok(None);
+    }
+    if !ooc {
+        let why = if a.out_of_core {
+            "--out-of-core builds --codec hcc-ooc only".to_string()
+        } else {
+            format!(
+                "{what} has about {} triangles: building it in memory needs about {}, over the \
+                 {} budget (--memory-mib)",
+                estimated.1,
+                gib(need),
+                gib(budget)
+            )
+        };
+        return Err(format!(
+            "{why}; of the codecs only hcc-ooc builds out of core (--codec hcc-ooc -o FILE)"
+        )
+        .into());
+    }
+    let Some(input) = file else {
+        return Err(format!(
+            "{what} would need about {} to build in memory, over the {} budget: an out-of-core \
+             build reads a mesh file; write the model with `cbvh gen ... -o FILE.ply` first",
+            gib(need),
+            gib(budget)
+        )
+        .into());
+    };
+    let Some(output) = a.output.clone() else {
+        return Err("an out-of-core build writes its file: give -o FILE".into());
+    };
+    // Held for the whole build: the vertices (12 bytes each), a flag byte
+    // a triangle, a bit a vertex, and the rest (chunks' high-level trees,
+    // buffers) at about a byte a triangle.
+    let resident = estimated.0 * 12 + estimated.1 * 2 + (16 << 20);
+    if resident.saturating_mul(5) > budget.saturating_mul(4) {
+        return Err(format!(
+            "{what}: its vertices and per-triangle flags alone need about {}, most of the {} \
+             budget; raise --memory-mib",
+            gib(resident),
+            gib(budget)
+        )
+        .into());
+    }
+    let chunk_triangles = a
+        .chunk_triangles
+        .unwrap_or((budget - resident) / IN_MEMORY_BYTES_A_TRIANGLE)
+        .max(1);
+    Ok(Some(OutOfCore {
+        input: input.clone(),
+        output,
+        budget,
+        chunk_triangles,
+        estimated,
+    }))
+}
+
+/// Temporary directories that builds of `output` killed half way left
+/// beside it (`.NAME.cbvh-build-PID`): those whose process is gone are
+/// removed, and said so.
+fn clear_stale(output: &std::path::Path) {
+    let dir = match output.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    let name = output
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    // The build's directory, and the output's temporary file
+    // (`crate::atomic`: `.NAME.tmp-PID-N`).
+    let (dir_prefix, file_prefix) = (format!(".{name}.cbvh-build-"), format!(".{name}.tmp-"));
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let n = e.file_name().to_string_lossy().into_owned();
+        let pid = match (n.strip_prefix(&dir_prefix), n.strip_prefix(&file_prefix)) {
+            (Some(pid), _) => pid,
+            (None, Some(rest)) => rest.split('-').next().unwrap_or(""),
+            _ => continue,
+        };
+        if pid.is_empty() || !pid.bytes().all(|b| b.is_ascii_digit()) {
+            continue;
+        }
+        let alive = std::path::Path::new(&format!("/proc/{pid}")).exists();
+        let removed = || {
+            let p = e.path();
+            if p.is_dir() {
+                std::fs::remove_dir_all(&p).is_ok()
+            } else {
+                std::fs::remove_file(&p).is_ok()
+            }
+        };
+        if alive {
+            eprintln!(
+                "note: {} belongs to a build still running (process {pid})",
+                e.path().display()
+            );
+        } else if removed() {
+            eprintln!(
+                "note: removed {}, left by a build that was stopped half way",
+                e.path().display()
+            );
+        }
+    }
+}
+
+/// The out-of-core build (see [`crate::build::chunked`] and
+/// [`crate::codec::hcc::ooc::encode_streamed`]).
+fn run_out_of_core(a: &BuildArgs, p: OutOfCore) -> CliResult {
+    use crate::build::chunked::{ChunkOptions, ChunkedMesh};
+    let options = a.settings.options(&[CodecKind::HccOoc])?;
+    clear_stale(&p.output);
+    let temp = {
+        let name = p
+            .output
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        p.output
+            .with_file_name(format!(".{name}.cbvh-build-{}", std::process::id()))
+    };
+    let t0 = Instant::now();
+    let bar = Phases::new();
+    let input = ChunkedMesh::from_path(
+        &p.input,
+        &ChunkOptions {
+            chunk_triangles: p.chunk_triangles,
+            temp_dir: temp,
+        },
+        &|phase, done, total| bar.show(phase, done, total.max(p.estimated.1)),
+    )?;
+    let read_s = t0.elapsed().as_secs_f64();
+    let build_options = BuildOptions {
+        layout: a.layout,
+        max_leaf_triangles: usize::from(a.settings.leaf_size),
+        ..Default::default()
+    };
+    let t1 = Instant::now();
+    let made = crate::codec::hcc::ooc::encode_streamed(
+        &input,
+        &build_options,
+        &options.hcc_ooc,
+        &p.output,
+        &|phase, done, total| bar.show(phase, done, total),
+    )?;
+    let build_s = t1.elapsed().as_secs_f64();
+    let tris = input.triangle_count();
+    let vertices = input.vertices.len();
+    drop(input);
+    // Read it back (and verify it) so that a bad file is caught here,
+    // with a cache inside the budget.
+    let t2 = Instant::now();
+    bar.show("verifying", 0, 0);
+    let codec = AnyCodec::open(
+        &p.output,
+        &OpenOptions {
+            verify: true,
+            cache_budget_bytes: (p.budget / 2) as usize,
+        },
+    )?;
+    drop(codec);
+    let verify_s = t2.elapsed().as_secs_f64();
+    bar.finish();
+    let secs = t0.elapsed().as_secs_f64();
+    let file_bytes = std::fs::metadata(&p.output).map(|m| m.len()).unwrap_or(0);
+    let peak = peak_rss_bytes();
+    let threads = rayon::current_num_threads();
+    let per_tri = file_bytes as f64 / tris.max(1) as f64;
+    let parts: Vec<(&str, f64)> = made.sizes.parts();
+    if a.json {
+        let by_part: serde_json::Map<String, serde_json::Value> = parts
+            .iter()
+            .map(|(k, v)| (k.to_string(), (*v).into()))
+            .collect();
+        let v = serde_json::json!({
+            "mesh": p.input.display().to_string(),
+            "triangles": tris,
+            "vertices": vertices,
+            "codec": "hcc-ooc",
+            "out_of_core": true,
+            "layout": a.layout.name(),
+            "memory_budget_bytes": p.budget,
+            "chunk_triangles": p.chunk_triangles,
+            "chunks": made.chunks,
+            "largest_chunk": made.largest_chunk,
+            "trees": made.trees,
+            "paired_edges": made.paired_edges,
+            "read_seconds": read_s,
+            "build_seconds": build_s,
+            "verify_seconds": verify_s,
+            "total_seconds": secs,
+            "triangles_per_second": tris as f64 / (read_s + build_s),
+            "threads": threads,
+            "bytes_total": file_bytes,
+            "bytes_per_triangle": per_tri,
+            "bytes_by_part": by_part,
+            "peak_rss_bytes": peak,
+            "peak_rss_bytes_per_triangle": peak.map(|b| b as f64 / tris.max(1) as f64),
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        println!("mesh              {}", p.input.display());
+        println!("triangles         {tris} ({vertices} vertices)");
+        println!(
+            "codec             hcc-ooc ({} layout), built out of core",
+            a.layout
+        );
+        println!(
+            "chunks            {} of at most {} triangles (largest {}), {} trees, {} edges paired across chunks",
+            made.chunks, p.chunk_triangles, made.largest_chunk, made.trees, made.paired_edges
+        );
+        println!(
+            "time              {secs:.1} s: read and grouped {read_s:.1} s, built and coded {build_s:.1} s \
+             ({:.2} M triangles/s on {threads} threads), verified {verify_s:.1} s",
+            tris as f64 / (read_s + build_s) / 1e6
+        );
+        for (k, v) in &parts {
+            println!(
+                "  {k:<15} {v:>14.0} bytes  {:>8.2} B/triangle",
+                v / tris.max(1) as f64
+            );
+        }
+        println!(
+            "total             {file_bytes} bytes, {per_tri:.2} B/triangle, written to {}",
+            p.output.display()
+        );
+        if let Some(b) = peak {
+            println!(
+                "peak memory       {:.1} MiB, {:.1} B/triangle (budget {:.0} MiB)",
+                b as f64 / 1048576.0,
+                b as f64 / tris.max(1) as f64,
+                p.budget as f64 / 1048576.0
+            );
+        }
+    }
+    Ok(())
+}
+
+/// A progress bar over the phases of a long job: one bar a phase on a
+/// terminal, one line a phase otherwise (for logs).
+struct Phases {
+    state: std::sync::Mutex<(String, Option<indicatif::ProgressBar>, Instant)>,
+}
+
+impl Phases {
+    fn new() -> Self {
+        Self {
+            state: std::sync::Mutex::new((String::new(), None, Instant::now())),
+        }
+    }
+
+    fn show(&self, phase: &str, done: u64, total: u64) {
+        let Ok(mut s) = self.state.lock() else {
+            return;
+        };
+        if s.0 != phase {
+            if let Some(pb) = s.1.take() {
+                pb.finish_and_clear();
+            }
+            if !s.0.is_empty() {
+                eprintln!("{:>12} done in {:.1} s", s.0, s.2.elapsed().as_secs_f64());
+            }
+            s.0 = phase.to_string();
+            s.2 = Instant::now();
+            s.1 = Some(progress_bar(phase, total));
+        }
+        if let Some(pb) = &s.1 {
+            pb.set_length(total.max(done));
+            pb.set_position(done);
+        }
+    }
+
+    fn finish(&self) {
+        self.show("", 0, 0);
+        if let Ok(mut s) = self.state.lock()
+            && let Some(pb) = s.1.take()
+        {
+            pb.finish_and_clear();
+        }
+    }
 }
 
 /// Peak resident memory of this process so far (Linux `VmHWM`), in bytes.
@@ -76,6 +434,9 @@ pub fn run(a: BuildArgs) -> CliResult {
         Structure::Parry => vec![],
     };
     let options = a.settings.options(&kinds)?;
+    if let Some(p) = plan(&a)? {
+        return run_out_of_core(&a, p);
+    }
     let (mesh, name) = a.source.load()?;
     let tris = mesh.triangle_count();
     let mesh_rss = peak_rss_bytes();

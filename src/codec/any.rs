@@ -518,6 +518,12 @@ impl AnyCodec {
         self.kind().name()
     }
 
+    /// The root's box: the bounds of every triangle, as the codec
+    /// decodes them.
+    pub fn root_box(&self) -> crate::geom::Aabb {
+        crate::with_codec!(self, |c| crate::cursor::NodeCursor::root(c).1)
+    }
+
     /// Number of triangles.
     pub fn triangle_count(&self) -> usize {
         crate::with_codec!(self, |c| c.triangle_count())

@@ -15,7 +15,7 @@ mod stl;
 
 use std::fmt;
 use std::fs::File;
-use std::io::{self, BufRead, BufReader, Write};
+use std::io::{self, BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 
 use super::{Mesh, MeshError, Place};
@@ -189,6 +189,84 @@ fn read_into<R: BufRead>(
         return Err(src.no_faces());
     }
     Ok((vertices, FormatDetail { format, encoding }))
+}
+
+/// The vertex and triangle counts of the mesh file at `path`, read from
+/// its header without reading the rest: exact for PLY and OFF (faces
+/// counted as triangles; a polygon gives more), binary STL (vertices
+/// estimated as half the triangles, as in a closed mesh); estimated from
+/// the file's length for OBJ and ASCII STL. For choosing how to build a
+/// model (in memory or out of core) before reading it.
+///
+/// # Errors
+/// An unknown extension, or the file cannot be opened.
+pub fn estimate_counts(path: impl AsRef<Path>) -> Result<(u64, u64), MeshError> {
+    let path = path.as_ref();
+    let format = Format::from_path(path)?;
+    let io_err = |source| MeshError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut file = File::open(path).map_err(io_err)?;
+    let len = file.metadata().map_err(io_err)?.len();
+    let mut head = Vec::new();
+    std::io::Read::take(&mut file, 1 << 16)
+        .read_to_end(&mut head)
+        .map_err(io_err)?;
+    let text = String::from_utf8_lossy(&head);
+    let mut words = text
+        .lines()
+        .map(|l| {
+            l.split('#')
+                .next()
+                .unwrap_or("")
+                .split_whitespace()
+                .collect::<Vec<_>>()
+        })
+        .filter(|w| !w.is_empty());
+    let num = |w: Option<&&str>| w.and_then(|x| x.parse::<u64>().ok());
+    let guess = |bytes_a_triangle: u64| (len / bytes_a_triangle / 2, len / bytes_a_triangle);
+    Ok(match format {
+        Format::Ply => {
+            let (mut nv, mut nf) = (None, None);
+            for w in words {
+                match w.as_slice() {
+                    ["element", "vertex", n, ..] => nv = n.parse().ok(),
+                    ["element", "face", n, ..] => nf = n.parse().ok(),
+                    ["end_header", ..] => break,
+                    _ => {}
+                }
+            }
+            (nv.unwrap_or(0), nf.unwrap_or(0))
+        }
+        Format::Off => {
+            let first = words.next().unwrap_or_default();
+            let counts = if first.first().is_some_and(|k| k.ends_with("OFF")) {
+                if first.len() >= 3 {
+                    first[1..].to_vec()
+                } else {
+                    words.next().unwrap_or_default()
+                }
+            } else {
+                first
+            };
+            (
+                num(counts.first()).unwrap_or(0),
+                num(counts.get(1)).unwrap_or(0),
+            )
+        }
+        Format::Stl => {
+            let n = head.get(80..84).map_or(0, |b| {
+                u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            });
+            if len == 84 + 50 * n {
+                (n / 2, n)
+            } else {
+                guess(250)
+            }
+        }
+        Format::Obj => guess(40),
+    })
 }
 
 /// What [`stream`] read: the vertices (all of them, in memory), the

@@ -18,7 +18,7 @@ use rapier3d::prelude::{
 
 use super::timed::{Timed, shape_address};
 use crate::build::BuildOptions;
-use crate::codec::{AnyCodec, AnyOptions, CacheStats, CodecKind};
+use crate::codec::{AnyCodec, AnyOptions, CacheStats, CodecKind, OpenOptions};
 use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 use crate::parry::cbvh_cbvh::interference;
@@ -95,7 +95,15 @@ impl FromStr for ShapeKind {
 #[derive(Clone, Debug)]
 pub struct DropScene {
     /// The dynamic mesh (the statue), already placed above the base.
+    /// Empty when [`dropped_codec`](Self::dropped_codec) serves every run.
     pub dropped: Mesh,
+    /// The dropped mesh's own codec file, when the statue came as one:
+    /// the runs of its codec open it as it is (a model too large to build
+    /// again in memory, built out of core) instead of building from
+    /// [`dropped`](Self::dropped), with the whole tree cached, or a tenth
+    /// of it for `-10pct`. Its coordinates are the scene's: the base is
+    /// placed around it.
+    pub dropped_file: Option<DroppedFile>,
     /// The fixed mesh (the turbine).
     pub base: Mesh,
     /// Number of steps.
@@ -113,6 +121,38 @@ pub struct DropScene {
     /// otherwise; CLBVH's leaves are its own, collapsed from that tree up to
     /// its `leaf_size`).
     pub build_options: BuildOptions,
+}
+
+/// A dropped mesh's codec file (see [`DropScene::dropped_file`]).
+#[derive(Clone, Debug)]
+pub struct DroppedFile {
+    /// The file (already verified once).
+    pub path: std::path::PathBuf,
+    /// Its codec.
+    pub kind: CodecKind,
+    /// Its triangles.
+    pub triangles: usize,
+    /// Its root box.
+    pub bounds: ([f32; 3], [f32; 3]),
+}
+
+impl DropScene {
+    /// The dropped mesh's bounds (its file's root box when the mesh is
+    /// not held).
+    pub fn dropped_bounds(&self) -> Option<([f32; 3], [f32; 3])> {
+        match &self.dropped_file {
+            Some(f) if self.dropped.triangles.is_empty() => Some(f.bounds),
+            _ => self.dropped.bounds(),
+        }
+    }
+
+    /// The dropped mesh's triangles.
+    pub fn dropped_triangles(&self) -> usize {
+        match &self.dropped_file {
+            Some(f) => f.triangles,
+            None => self.dropped.triangles.len(),
+        }
+    }
 }
 
 /// How to place a dropped mesh over a base mesh.
@@ -142,9 +182,44 @@ impl Default for Placement {
 /// `width_fraction` of the base's and it hangs just above the base's top,
 /// centred over it (plus the offset). Returns the scale applied.
 pub fn place(dropped: &mut Mesh, base: &Mesh, p: &Placement) -> f32 {
-    let (Some((dlo, dhi)), Some((blo, bhi))) = (dropped.bounds(), base.bounds()) else {
+    let (Some(d), Some(b)) = (dropped.bounds(), base.bounds()) else {
         return 1.0;
     };
+    let (scale, from, target) = placement(d, b, p);
+    for v in &mut dropped.vertices {
+        for k in 0..3 {
+            v[k] = (v[k] - from[k]) * scale + target[k];
+        }
+    }
+    scale
+}
+
+/// [`place`] the other way round, for a dropped mesh that must stay as it
+/// is (a codec file used as stored, [`DropScene::dropped_file`]): scales
+/// and moves `base` so that the dropped mesh of bounds `dropped` sits on
+/// it as [`place`] would have put it (the whole scene scaled by the
+/// inverse). Returns the scale [`place`] would have applied to the
+/// dropped mesh (the base's is its inverse).
+pub fn place_base(dropped: ([f32; 3], [f32; 3]), base: &mut Mesh, p: &Placement) -> f32 {
+    let Some(b) = base.bounds() else {
+        return 1.0;
+    };
+    let (scale, from, target) = placement(dropped, b, p);
+    for v in &mut base.vertices {
+        for k in 0..3 {
+            v[k] = (v[k] - target[k]) / scale + from[k];
+        }
+    }
+    scale
+}
+
+/// The scale and the two anchor points of [`place`]: the dropped mesh's
+/// point `from` goes to `target`, scaled by `scale` about it.
+fn placement(
+    (dlo, dhi): ([f32; 3], [f32; 3]),
+    (blo, bhi): ([f32; 3], [f32; 3]),
+    p: &Placement,
+) -> (f32, [f32; 3], [f32; 3]) {
     let width = |lo: [f32; 3], hi: [f32; 3]| (hi[0] - lo[0]).max(hi[2] - lo[2]).max(1e-12);
     let scale = p.width_fraction * width(blo, bhi) / width(dlo, dhi);
     let height = (dhi[1] - dlo[1]) * scale;
@@ -155,12 +230,7 @@ pub fn place(dropped: &mut Mesh, base: &Mesh, p: &Placement) -> f32 {
         0.5 * (blo[2] + bhi[2]) + p.offset_fraction[1] * bw,
     ];
     let from = [0.5 * (dlo[0] + dhi[0]), dlo[1], 0.5 * (dlo[2] + dhi[2])];
-    for v in &mut dropped.vertices {
-        for k in 0..3 {
-            v[k] = (v[k] - from[k]) * scale + target[k];
-        }
-    }
-    scale
+    (scale, from, target)
 }
 
 /// Summary statistics of per-step times, in milliseconds.
@@ -509,6 +579,9 @@ pub enum SimError {
     /// A small-cache run of a codec without a cache.
     #[error("{0}: the codec has no cache to limit")]
     NoCache(String),
+    /// The dropped mesh's codec file could not be opened again.
+    #[error("the dropped mesh's file: {0}")]
+    File(String),
 }
 
 /// Both meshes' shapes of a run.
@@ -631,12 +704,38 @@ fn make_shapes(kind: ShapeKind, scene: &DropScene) -> Result<Shapes, SimError> {
             m,
         ))
     };
-    Ok(Shapes::Cbvh(make(&scene.dropped)?, make(&scene.base)?))
+    let dropped = match &scene.dropped_file {
+        Some(f) if f.kind == codec => {
+            // The file's codec as it is: the whole tree cached, or opened
+            // with a 1 MiB cache (out of core, nothing decoded yet) and
+            // given a tenth of what it decodes to.
+            let open = |budget| {
+                AnyCodec::open(
+                    &f.path,
+                    &OpenOptions {
+                        verify: false,
+                        cache_budget_bytes: budget,
+                    },
+                )
+                .map_err(|e| SimError::File(e.to_string()))
+            };
+            let c = if small_cache {
+                open(1 << 20)?
+                    .with_cache_budget_of(&|decoded| decoded / 10)
+                    .ok_or_else(|| SimError::NoCache(kind.name()))??
+            } else {
+                open(usize::MAX)?
+            };
+            CbvhShape::new(c)
+        }
+        _ => make(&scene.dropped)?,
+    };
+    Ok(Shapes::Cbvh(dropped, make(&scene.base)?))
 }
 
 /// See [`RunReport::final_state`].
 fn final_state(scene: &DropScene, com: Vector, speed: f32) -> String {
-    let (Some((blo, bhi)), Some((dlo, dhi))) = (scene.base.bounds(), scene.dropped.bounds()) else {
+    let (Some((blo, bhi)), Some((dlo, dhi))) = (scene.base.bounds(), scene.dropped_bounds()) else {
         return "moving".into();
     };
     let size = (0..3).map(|k| dhi[k] - dlo[k]).fold(0.0f32, f32::max);
@@ -996,8 +1095,8 @@ fn report(scene: &DropScene, run: Run, s: Samples, replay: Replay<'_>, rounds: u
     let body = &world.bodies[run.drop_body];
     let tr = body.translation();
     let rot = body.rotation();
-    let tris = scene.dropped.triangles.len() + scene.base.triangles.len();
-    let size = scene.dropped.bounds().map_or(0.0, |(lo, hi)| {
+    let tris = scene.dropped_triangles() + scene.base.triangles.len();
+    let size = scene.dropped_bounds().map_or(0.0, |(lo, hi)| {
         (0..3).map(|k| hi[k] - lo[k]).fold(0.0f32, f32::max)
     });
     let drop_scale = body.mass() * world.gravity.length() * size;

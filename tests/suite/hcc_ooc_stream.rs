@@ -220,3 +220,180 @@ fn bad_and_truncated_input_files_give_clear_errors_and_leave_nothing() {
     assert!(!temp.exists());
     std::fs::remove_dir_all(&d).ok();
 }
+
+/// The command line: `cbvh build FILE --codec hcc-ooc` goes out of core
+/// when asked or when the model is over the budget, refuses other codecs
+/// then, and a build killed half way leaves nothing under the output's
+/// name; the next build removes what it left.
+#[cfg(feature = "app")]
+#[test]
+fn the_command_line_builds_out_of_core_and_a_killed_build_leaves_no_file() {
+    let d = dir("cli");
+    let mesh = generate(Kind::Statue, 100_000, 1, &mut |_, _| {}).unwrap();
+    let ply = d.join("m.ply");
+    cbvh::mesh::save(&mesh, &ply).unwrap();
+    let (p, o) = (ply.to_str().unwrap(), d.join("o.hco"));
+    let out = o.to_str().unwrap();
+    let (ok, stdout, stderr) = cbvh(&[
+        "build",
+        p,
+        "--codec",
+        "hcc-ooc",
+        "--out-of-core",
+        "--chunk-triangles",
+        "12000",
+        "-o",
+        out,
+        "--json",
+    ]);
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["out_of_core"], true);
+    assert!(v["chunks"].as_u64().unwrap() >= 7, "{stdout}");
+    assert_eq!(v["triangles"], mesh.triangles.len() as u64);
+    let (ok, info, stderr) = cbvh(&["info", out]);
+    assert!(ok && info.contains("hcc-ooc"), "{info}{stderr}");
+    // Over the budget: hcc-ooc goes out of core by itself, the others
+    // refuse before any work, naming the way out.
+    let (ok, stdout, stderr) = cbvh(&[
+        "build",
+        p,
+        "--codec",
+        "hcc-ooc",
+        "--memory-mib",
+        "24",
+        "-o",
+        out,
+    ]);
+    assert!(
+        ok && stdout.contains("built out of core"),
+        "{stdout}{stderr}"
+    );
+    let plain = d.join("p.bin");
+    let (ok, _, stderr) = cbvh(&[
+        "build",
+        p,
+        "--codec",
+        "plain",
+        "--memory-mib",
+        "1",
+        "-o",
+        plain.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && stderr.contains("only hcc-ooc builds out of core"),
+        "{stderr}"
+    );
+    assert!(!plain.exists());
+    let (ok, _, stderr) = cbvh(&["build", p, "--codec", "hcc-ooc", "--out-of-core"]);
+    assert!(!ok && stderr.contains("-o"), "{stderr}");
+    // Killed half way: no file under the name; the next build says what
+    // it removed.
+    let k = d.join("k.hco");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_cbvh"))
+        .args([
+            "build",
+            p,
+            "--codec",
+            "hcc-ooc",
+            "--out-of-core",
+            "--chunk-triangles",
+            "500",
+            "-o",
+        ])
+        .arg(&k)
+        .stderr(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let temp_of = |d: &Path| {
+        std::fs::read_dir(d)
+            .unwrap()
+            .flatten()
+            .any(|e| e.file_name().to_string_lossy().starts_with(".k.hco."))
+    };
+    let t0 = std::time::Instant::now();
+    while !temp_of(&d) && t0.elapsed().as_secs() < 60 {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!k.exists(), "a killed build left its output");
+    assert!(
+        temp_of(&d),
+        "the killed build's temporary directory is there to be found"
+    );
+    let (ok, _, stderr) = cbvh(&[
+        "build",
+        p,
+        "--codec",
+        "hcc-ooc",
+        "--out-of-core",
+        "-o",
+        k.to_str().unwrap(),
+    ]);
+    assert!(
+        ok && stderr.contains("left by a build that was stopped"),
+        "{stderr}"
+    );
+    assert!(k.exists() && !temp_of(&d));
+    std::fs::remove_dir_all(&d).ok();
+}
+
+/// A drop test whose statue is a codec file built out of core uses the
+/// file as stored for the runs of its codec (whole cache and a tenth),
+/// builds the other runs from its decoded mesh, and places the base
+/// around it: the same geometry in every run, so the same fall.
+#[cfg(feature = "app")]
+#[test]
+fn a_drop_test_uses_an_out_of_core_file_as_stored() {
+    let d = dir("drop");
+    let mesh = generate(Kind::Statue, 6000, 2, &mut |_, _| {}).unwrap();
+    let out = d.join("s.hco");
+    let r = streamed(&mesh, 1500, 1, &OocOptions::default(), &out).unwrap();
+    assert!(r.chunks >= 4);
+    let json = d.join("drop.json");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_lucy-on-turbine"))
+        .args([
+            "--statue",
+            out.to_str().unwrap(),
+            "--turbine-tris",
+            "2000",
+            "--steps",
+            "40",
+        ])
+        .args([
+            "--shapes",
+            "hcc-ooc,hcc-ooc-10pct,plain",
+            "--contacts",
+            "patches",
+            "--json",
+        ])
+        .arg(&json)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(stderr.contains("used as stored"), "{stderr}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["scene"]["dropped_triangles"], mesh.triangles.len() as u64);
+    let runs = v["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 3);
+    let y = |r: &serde_json::Value| r["final_translation"][1].as_f64().unwrap();
+    let size = v["scene"]["dropped_size"].as_f64().unwrap();
+    assert!(size > 0.0);
+    for r in runs {
+        // It fell (the body starts where its mesh is) and the three
+        // agree.
+        assert!(y(r) < 0.0, "{}: did not fall", r["shape"]);
+        assert!(
+            (y(r) - y(&runs[2])).abs() < 0.02 * size,
+            "{} ends at {} against plain's {}",
+            r["shape"],
+            y(r),
+            y(&runs[2])
+        );
+    }
+    std::fs::remove_dir_all(&d).ok();
+}

@@ -202,6 +202,7 @@ fn small_drop_scene(steps: usize) -> DropScene {
     droptest::place(&mut statue, &turbine, &Placement::default());
     DropScene {
         dropped: statue,
+        dropped_file: None,
         base: turbine,
         steps,
         dt: 1.0 / 60.0,

@@ -37,7 +37,7 @@ pub fn run(mut a: LucyArgs) -> Result<(), String> {
     a.sim.width_fraction.get_or_insert(0.5);
     super::start(&a.sim)?;
     let (statue, sn) =
-        super::mesh_from(&a.statue, Kind::Statue, a.statue_tris, a.sim.seed, "statue")?;
+        super::dropped_from(&a.statue, Kind::Statue, a.statue_tris, a.sim.seed, "statue")?;
     let (mut turbine, tn) = super::mesh_from(
         &a.turbine,
         Kind::Turbine,

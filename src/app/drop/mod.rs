@@ -12,7 +12,9 @@ use crate::build::BuildOptions;
 use crate::codec::{AnyCodec, CodecKind, OpenOptions};
 use crate::parry::ContactMode;
 use crate::scene::Kind;
-use crate::sim::droptest::{self, DropScene, Placement, Replay, RunReport, RunSpec, ShapeKind};
+use crate::sim::droptest::{
+    self, DropScene, DroppedFile, Placement, Replay, RunReport, RunSpec, ShapeKind,
+};
 
 use super::progress_bar as bar;
 
@@ -275,6 +277,52 @@ fn options(args: &SimArgs, specs: &[RunSpec]) -> Result<crate::codec::AnyOptions
     args.codecs.options(&kinds).map_err(|e| e.to_string())
 }
 
+/// The dropped mesh of a drop test: a mesh, or a cbvh codec file used as
+/// stored (see [`DropScene::dropped_file`]).
+pub enum Dropped {
+    /// A mesh (loaded or generated): placed over the base.
+    Mesh(Mesh),
+    /// A codec file: the runs of its codec open it as it is (a model
+    /// built out of core need never be held as a mesh), the other runs
+    /// build from its decoded mesh; the base is placed around it.
+    File(DroppedFile),
+}
+
+/// The dropped mesh from a file (a mesh, or a codec file used as stored),
+/// or generated.
+pub fn dropped_from(
+    file: &Option<PathBuf>,
+    kind: Kind,
+    tris: usize,
+    seed: u64,
+    what: &str,
+) -> Result<(Dropped, String), String> {
+    match file {
+        // Opened and verified once, out of core (1 MiB cache): nothing of
+        // it is held but what verify reads.
+        Some(p) if CodecKind::of_file(p).is_some() => {
+            let codec = AnyCodec::open(
+                p,
+                &OpenOptions {
+                    verify: true,
+                    cache_budget_bytes: 1 << 20,
+                },
+            )
+            .map_err(|e| format!("{}: {e}", p.display()))?;
+            let b = codec.root_box();
+            let f = DroppedFile {
+                path: p.clone(),
+                kind: codec.kind(),
+                triangles: codec.triangle_count(),
+                bounds: (b.min.to_array(), b.max.to_array()),
+            };
+            let name = format!("{} ({} file, used as stored)", p.display(), codec.name());
+            Ok((Dropped::File(f), name))
+        }
+        _ => mesh_from(file, kind, tris, seed, what).map(|(m, n)| (Dropped::Mesh(m), n)),
+    }
+}
+
 /// A mesh from a file (a mesh, or a cbvh codec file's stored mesh), or
 /// generated.
 pub fn mesh_from(
@@ -334,44 +382,84 @@ pub fn init_threads(args: &SimArgs) -> Result<(), String> {
 /// writes the JSON and plot. `names` = (dropped, base) for the report.
 pub fn run_sim(
     title: &str,
-    mut dropped: Mesh,
-    base: Mesh,
+    dropped: Dropped,
+    mut base: Mesh,
     names: (String, String),
     args: &SimArgs,
 ) -> Result<(), String> {
     if args.steps == 0 {
         return Err("--steps must be at least 1".into());
     }
-    for _ in 0..args.subdivide {
-        dropped = dropped.subdivided();
-    }
-    let names = match args.subdivide {
-        0 => names,
-        n => (format!("{}, subdivided {n}×", names.0), names.1),
-    };
+    let specs = run_specs(args)?;
     let placement = Placement {
         width_fraction: args.width_fraction(),
         gap_fraction: args.gap,
         offset_fraction: args.offset.0,
     };
-    let scale = droptest::place(&mut dropped, &base, &placement);
+    let (mut dropped, dropped_file, scale) = match dropped {
+        Dropped::Mesh(mut m) => {
+            for _ in 0..args.subdivide {
+                m = m.subdivided();
+            }
+            let scale = droptest::place(&mut m, &base, &placement);
+            (m, None, scale)
+        }
+        Dropped::File(f) => {
+            if args.subdivide > 0 {
+                return Err(
+                    "--subdivide needs a mesh to subdivide: a codec file is used as \
+                            stored; give the mesh file instead"
+                        .into(),
+                );
+            }
+            // The file as stored; the base goes around it.
+            let scale = droptest::place_base(f.bounds, &mut base, &placement);
+            (Mesh::default(), Some(f), scale)
+        }
+    };
+    if let Some(f) = &dropped_file {
+        // Runs of other codecs (and parry) build from the decoded mesh.
+        let own = |k: &ShapeKind| matches!(k, ShapeKind::Cbvh(c) | ShapeKind::CbvhTenthCache(c) if *c == f.kind);
+        if specs.iter().any(|s| !own(&s.kind)) {
+            let codec = AnyCodec::open(
+                &f.path,
+                &OpenOptions {
+                    verify: false,
+                    cache_budget_bytes: usize::MAX,
+                },
+            )
+            .map_err(|e| e.to_string())?;
+            dropped = codec.decoded_mesh();
+        }
+    }
+    let names = match args.subdivide {
+        0 => names,
+        n => (format!("{}, subdivided {n}×", names.0), names.1),
+    };
     // A large base times a large fraction can still leave the supported
     // coordinates: say which flags placed it there.
-    dropped.validate(&names.0).map_err(|e| {
+    let (moved, name) = match dropped_file {
+        None => (&dropped, &names.0),
+        Some(_) => (&base, &names.1),
+    };
+    moved.validate(name).map_err(|e| {
         format!(
-            "the dropped mesh as placed by --width-fraction {} --gap {} --offset {}: {e}",
+            "the {} mesh as placed by --width-fraction {} --gap {} --offset {}: {e}",
+            if dropped_file.is_none() {
+                "dropped"
+            } else {
+                "base"
+            },
             args.width_fraction(),
             args.gap,
             args.offset
         )
     })?;
-    let (dlo, dhi) = dropped.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
     let (blo, bhi) = base.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
-    let statue_size = (0..3).map(|k| dhi[k] - dlo[k]).fold(0.0f32, f32::max);
-    let specs = run_specs(args)?;
     let leaf_size = usize::from(args.codecs.leaf_size);
     let scene = DropScene {
         dropped,
+        dropped_file,
         base,
         steps: args.steps,
         dt: 1.0 / 60.0,
@@ -382,11 +470,17 @@ pub fn run_sim(
             ..Default::default()
         },
     };
+    let (dlo, dhi) = scene.dropped_bounds().unwrap_or(([0.0; 3], [0.0; 3]));
+    let statue_size = (0..3).map(|k| dhi[k] - dlo[k]).fold(0.0f32, f32::max);
     let threads = rayon::current_num_threads();
+    let scaled = match &scene.dropped_file {
+        None => format!("scaled ×{scale:.4}"),
+        Some(_) => format!("as stored, the base scaled ×{:.4}", 1.0 / scale),
+    };
     eprintln!(
-        "{title}: dropping {} ({} triangles, scaled ×{scale:.4}) onto {} ({} triangles), {} steps at 60 Hz, cbvh trees of up to {leaf_size} triangle(s) a leaf",
+        "{title}: dropping {} ({} triangles, {scaled}) onto {} ({} triangles), {} steps at 60 Hz, cbvh trees of up to {leaf_size} triangle(s) a leaf",
         names.0,
-        scene.dropped.triangle_count(),
+        scene.dropped_triangles(),
         names.1,
         scene.base.triangle_count(),
         scene.steps
@@ -423,7 +517,7 @@ pub fn run_sim(
         "title": title,
         "dropped": names.0,
         "base": names.1,
-        "dropped_triangles": scene.dropped.triangle_count(),
+        "dropped_triangles": scene.dropped_triangles(),
         "base_triangles": scene.base.triangle_count(),
         "dropped_scale": scale,
         "dropped_size": statue_size,
@@ -446,7 +540,12 @@ pub fn run_sim(
         .map_err(|e| format!("{}: {e}", path.display()))?;
         eprintln!("wrote {}", path.display());
     }
-    if let (Some(path), Some(last)) = (&args.render, runs.last()) {
+    if args.render.is_some() && scene.dropped.triangles.is_empty() {
+        eprintln!(
+            "note: --render draws the meshes, and the dropped one was used as stored without \
+             decoding it: render it with `cbvh render` instead"
+        );
+    } else if let (Some(path), Some(last)) = (&args.render, runs.last()) {
         let r = last.final_rotation;
         let t = last.final_translation;
         let pose = crate::geom::Pose::from_rotation_translation(

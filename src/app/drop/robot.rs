@@ -33,7 +33,8 @@ pub fn run(mut a: RobotArgs) -> Result<(), String> {
     // user chose a width.
     a.sim.width_fraction.get_or_insert(0.1);
     super::start(&a.sim)?;
-    let (robot, rn) = super::mesh_from(&a.robot, Kind::Robot, a.robot_tris, a.sim.seed, "robot")?;
+    let (robot, rn) =
+        super::dropped_from(&a.robot, Kind::Robot, a.robot_tris, a.sim.seed, "robot")?;
     let (plant, pn) = super::mesh_from(&a.plant, Kind::Plant, a.plant_tris, a.sim.seed, "plant")?;
     super::run_sim("robot-in-plant", robot, plant, (rn, pn), &a.sim)
 }
