@@ -33,8 +33,12 @@ pub struct BuildArgs {
     pub json: bool,
     /// Memory the build may use, in MiB (default: half the machine's).
     /// A model whose in-memory build would need more is built out of core
-    /// by `--codec hcc-ooc` (in chunks of the size this allows) and refused
-    /// by the other codecs, before any work.
+    /// by `--codec hcc-ooc` and refused by the other codecs, before any
+    /// work. Out of core, the chunks are as large as this allows; without
+    /// it, as large as 32 bytes a triangle of the model allow beside the
+    /// vertices and flags the build holds (within half the machine's
+    /// memory): about 40 bytes a triangle in all for a closed mesh, at any
+    /// size.
     #[arg(long, value_name = "MIB")]
     pub memory_mib: Option<u64>,
     /// Build out of core whatever the model's size (`--codec hcc-ooc`
@@ -53,6 +57,10 @@ pub struct BuildArgs {
 /// 50 M-triangle statue for hcc-ooc): how the build chooses between memory
 /// and chunks, and how large a chunk is.
 const IN_MEMORY_BYTES_A_TRIANGLE: u64 = 260;
+
+/// The memory an out-of-core build gives its chunks by default, in bytes
+/// a triangle of the model (see `--memory-mib`).
+const CHUNK_BYTES_A_TRIANGLE: u64 = 32;
 
 /// The machine's memory (Linux `MemTotal`), if known.
 fn machine_memory() -> Option<u64> {
@@ -151,6 +159,14 @@ fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> 
         )
         .into());
     }
+    // Chunks as large as the budget allows; without a budget given, as
+    // large as 32 bytes a triangle above what the build holds anyway allow
+    // (40 a triangle in all for a closed mesh; small chunks cost little at
+    // the top of the tree: see the note of issue 32).
+    let budget = match a.memory_mib {
+        Some(_) => budget,
+        None => budget.min(resident + estimated.1.saturating_mul(CHUNK_BYTES_A_TRIANGLE)),
+    };
     let chunk_triangles = a
         .chunk_triangles
         .unwrap_or((budget - resident) / IN_MEMORY_BYTES_A_TRIANGLE)

@@ -12,6 +12,13 @@
 //! split at a median, and no tree is taller than `2⌊log2 n⌋ + 16` over `n`
 //! triangles ([`CanonicalBvh::height`]). The tree is the same whatever the
 //! number of threads.
+//!
+//! A model larger than memory is split first ([`chunked`]): read from its
+//! file as it is parsed, partitioned into spatial chunks on disk, each
+//! small enough for this builder; a codec's out-of-core encoder builds the
+//! chunks one at a time and joins them under the tree over the chunks
+//! (o-HCCMesh's [`encode_streamed`](crate::codec::hcc::ooc::encode_streamed)).
+//! The builder itself stays in-memory and format-blind.
 
 pub mod chunked;
 mod layout;

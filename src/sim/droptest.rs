@@ -104,6 +104,13 @@ pub struct DropScene {
     /// of it for `-10pct`. Its coordinates are the scene's: the base is
     /// placed around it.
     pub dropped_file: Option<DroppedFile>,
+    /// Metres a scene unit stands for, inverted: rapier's
+    /// `IntegrationParameters::length_unit`, which scales its tolerances,
+    /// and gravity (9.81 of them a second squared). 1 but for a scene
+    /// scaled as a whole (a codec-file statue kept as stored, the base
+    /// scaled around it by `1 / length_unit`), so that it falls as the
+    /// same scene at unit scale would.
+    pub length_unit: f32,
     /// The fixed mesh (the turbine).
     pub base: Mesh,
     /// Number of steps.
@@ -839,10 +846,11 @@ impl Run {
         let call_log = call_log.expect("both dispatchers record");
         let base_address = shape_address(&*s_base.0);
         let mut world = PhysicsWorld {
-            gravity: Vector::new(0.0, -9.81, 0.0),
+            gravity: Vector::new(0.0, -9.81 * scene.length_unit, 0.0),
             ..Default::default()
         };
         world.integration_parameters.dt = scene.dt;
+        world.integration_parameters.length_unit = scene.length_unit;
         // Contact recycling skips the narrow phase while a pair's relative
         // pose drifts less than a threshold, reusing old contacts: that
         // would time nothing. The drop test measures collision detection,

@@ -203,6 +203,7 @@ fn small_drop_scene(steps: usize) -> DropScene {
     DropScene {
         dropped: statue,
         dropped_file: None,
+        length_unit: 1.0,
         base: turbine,
         steps,
         dt: 1.0 / 60.0,

@@ -458,6 +458,11 @@ pub fn run_sim(
     let (blo, bhi) = base.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
     let leaf_size = usize::from(args.codecs.leaf_size);
     let scene = DropScene {
+        length_unit: if dropped_file.is_some() {
+            1.0 / scale
+        } else {
+            1.0
+        },
         dropped,
         dropped_file,
         base,
@@ -475,7 +480,10 @@ pub fn run_sim(
     let threads = rayon::current_num_threads();
     let scaled = match &scene.dropped_file {
         None => format!("scaled ×{scale:.4}"),
-        Some(_) => format!("as stored, the base scaled ×{:.4}", 1.0 / scale),
+        Some(_) => format!(
+            "as stored, the base and the scene's unit (gravity, tolerances) scaled ×{:.4}",
+            1.0 / scale
+        ),
     };
     eprintln!(
         "{title}: dropping {} ({} triangles, {scaled}) onto {} ({} triangles), {} steps at 60 Hz, cbvh trees of up to {leaf_size} triangle(s) a leaf",
@@ -520,6 +528,7 @@ pub fn run_sim(
         "dropped_triangles": scene.dropped_triangles(),
         "base_triangles": scene.base.triangle_count(),
         "dropped_scale": scale,
+        "length_unit": scene.length_unit,
         "dropped_size": statue_size,
         "base_bounds": [blo, bhi],
         "steps": scene.steps,

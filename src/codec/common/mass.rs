@@ -1,14 +1,15 @@
 //! Mass properties at density 1, computed once when a codec is encoded and
 //! stored in its file, so that a shape opened from a file needs no mesh.
 //!
-//! The integration is parry's `MassProperties::from_trimesh` (signed volume
-//! of the tetrahedra from the mesh's centre, then the inertia tensor of each
-//! about the centre of mass), ported operation for operation in `f32` so
-//! that a shape from a file and a parry `TriMesh` of the same mesh get the
-//! same figures; the parry layer turns the stored tensor into principal axes
-//! with parry's own `MassProperties::with_inertia_matrix`.
-
-use glam::{Mat3, Vec3};
+//! The integration is parry's `MassProperties::from_trimesh`'s (the solid
+//! the triangles enclose, as tetrahedra from a point near the mesh), summed
+//! in `f64` instead of parry's `f32`, whose error grows with the triangle
+//! count (3.5 % of the mass on a 50 M-triangle statue): a shape from a file
+//! and a parry `TriMesh` of the same small mesh get the same figures to
+//! about 1e-6, a large one gets the right ones ([`MassProps::of_mesh`]). A
+//! model built out of core sums its chunks the same way
+//! ([`MassAccumulator`]). The parry layer turns the stored tensor into
+//! principal axes with parry's own `MassProperties::with_inertia_matrix`.
 
 use crate::mesh::Mesh;
 
@@ -45,40 +46,49 @@ impl MassProps {
         inertia: [0.0; 9],
     };
 
-    /// Signed-volume integration over `mesh` (as parry's
-    /// `MassProperties::from_trimesh` at density 1); [`MassProps::ZERO`]
-    /// where the figures are not [`physical`](Self::physical).
+    /// Signed-volume integration over `mesh` (the solid it encloses, as
+    /// parry's `MassProperties::from_trimesh` at density 1), summed in
+    /// `f64` ([`MassAccumulator`], about the mean of the vertices, in
+    /// fixed chunks of triangles added in order: the same bits whatever
+    /// the threads); [`MassProps::ZERO`] where the figures are not
+    /// [`physical`](Self::physical).
+    ///
+    /// parry sums in `f32`, one triangle after the other, which is exact
+    /// enough for thousands of triangles and not for millions: on a
+    /// 50 M-triangle statue its mass is 3.5 % low and its centre of mass
+    /// 4.5 mm off (of 2 m); this sum agrees with parry's to about 1e-6 on
+    /// small meshes and stays right on large ones.
     pub fn of_mesh(mesh: &Mesh) -> MassProps {
+        use rayon::prelude::*;
         if mesh.vertices.is_empty() || mesh.triangles.is_empty() {
             return MassProps::ZERO;
         }
-        let v = |i: u32| Vec3::from(mesh.vertices[i as usize]);
-        let (volume, com) = signed_volume_and_center_of_mass(mesh);
-        if volume == 0.0 {
-            return MassProps::ZERO;
+        let mut mean = [0f64; 3];
+        for v in &mesh.vertices {
+            for k in 0..3 {
+                mean[k] += f64::from(v[k]);
+            }
         }
-        let mut itot = Mat3::ZERO;
-        for t in &mesh.triangles {
-            let (p2, p3, p4) = (v(t[0]), v(t[1]), v(t[2]));
-            let vol = tetra_signed_volume(com, p2, p3, p4);
-            let ipart = tetrahedron_unit_inertia_tensor_wrt_point(com, com, p2, p3, p4);
-            itot += ipart * vol;
-        }
-        let sign = volume.signum();
-        let (mass, inertia) = (volume * sign, itot * sign);
-        let m = MassProps {
-            mass,
-            com: com.to_array(),
-            inertia: inertia.to_cols_array(),
-        };
-        // A mesh that does not enclose a volume (an open or
-        // self-intersecting surface) can integrate to figures no body has:
-        // it gets none, as one without volume does.
-        if m.physical().is_ok() {
-            m
-        } else {
-            MassProps::ZERO
-        }
+        let n = mesh.vertices.len() as f64;
+        let reference = mean.map(|m| (m / n) as f32);
+        const CHUNK: usize = 1 << 16;
+        let v = |i: u32| mesh.vertices[i as usize];
+        mesh.triangles
+            .par_chunks(CHUNK)
+            .map(|ts| {
+                let mut acc = MassAccumulator::new(reference);
+                for t in ts {
+                    acc.add(v(t[0]), v(t[1]), v(t[2]));
+                }
+                acc
+            })
+            .collect::<Vec<_>>()
+            .iter()
+            .fold(MassAccumulator::new(reference), |mut a, b| {
+                a.merge(b);
+                a
+            })
+            .finish()
     }
 
     /// The bytes as stored.
@@ -268,156 +278,6 @@ impl MassAccumulator {
     }
 }
 
-fn tetra_signed_volume(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> f32 {
-    Mat3::from_cols(b - a, c - a, d - a).determinant() / 6.0
-}
-
-fn center(pts: &[Vec3]) -> Vec3 {
-    let denom: f32 = 1.0 / (pts.len() as f32);
-    let mut res = pts[0] * denom;
-    for pt in &pts[1..] {
-        res += *pt * denom;
-    }
-    res
-}
-
-fn signed_volume_and_center_of_mass(mesh: &Mesh) -> (f32, Vec3) {
-    let pts: Vec<Vec3> = mesh.vertices.iter().map(|v| Vec3::from(*v)).collect();
-    let geometric_center = center(&pts);
-    let mut res = Vec3::ZERO;
-    let mut vol = 0.0;
-    for t in &mesh.triangles {
-        let (p2, p3, p4) = (pts[t[0] as usize], pts[t[1] as usize], pts[t[2] as usize]);
-        let volume = tetra_signed_volume(geometric_center, p2, p3, p4);
-        let c = center(&[geometric_center, p2, p3, p4]);
-        res += c * volume;
-        vol += volume;
-    }
-    if vol == 0.0 {
-        (vol, geometric_center)
-    } else {
-        (vol, res / vol)
-    }
-}
-
-/// The unit inertia tensor of a tetrahedron about `point` (parry's
-/// `tetrahedron_unit_inertia_tensor_wrt_point`).
-fn tetrahedron_unit_inertia_tensor_wrt_point(
-    point: Vec3,
-    p1: Vec3,
-    p2: Vec3,
-    p3: Vec3,
-    p4: Vec3,
-) -> Mat3 {
-    let p1 = p1 - point;
-    let p2 = p2 - point;
-    let p3 = p3 - point;
-    let p4 = p4 - point;
-
-    // Just for readability.
-    let x1 = p1.x;
-    let y1 = p1.y;
-    let z1 = p1.z;
-    let x2 = p2.x;
-    let y2 = p2.y;
-    let z2 = p2.z;
-    let x3 = p3.x;
-    let y3 = p3.y;
-    let z3 = p3.z;
-    let x4 = p4.x;
-    let y4 = p4.y;
-    let z4 = p4.z;
-
-    let diag_x = x1 * x1
-        + x1 * x2
-        + x2 * x2
-        + x1 * x3
-        + x2 * x3
-        + x3 * x3
-        + x1 * x4
-        + x2 * x4
-        + x3 * x4
-        + x4 * x4;
-    let diag_y = y1 * y1
-        + y1 * y2
-        + y2 * y2
-        + y1 * y3
-        + y2 * y3
-        + y3 * y3
-        + y1 * y4
-        + y2 * y4
-        + y3 * y4
-        + y4 * y4;
-    let diag_z = z1 * z1
-        + z1 * z2
-        + z2 * z2
-        + z1 * z3
-        + z2 * z3
-        + z3 * z3
-        + z1 * z4
-        + z2 * z4
-        + z3 * z4
-        + z4 * z4;
-
-    let a0 = (diag_y + diag_z) * 0.1;
-    let b0 = (diag_z + diag_x) * 0.1;
-    let c0 = (diag_x + diag_y) * 0.1;
-
-    let a1 = (y1 * z1 * 2.0
-        + y2 * z1
-        + y3 * z1
-        + y4 * z1
-        + y1 * z2
-        + y2 * z2 * 2.0
-        + y3 * z2
-        + y4 * z2
-        + y1 * z3
-        + y2 * z3
-        + y3 * z3 * 2.0
-        + y4 * z3
-        + y1 * z4
-        + y2 * z4
-        + y3 * z4
-        + y4 * z4 * 2.0)
-        * 0.05;
-    let b1 = (x1 * z1 * 2.0
-        + x2 * z1
-        + x3 * z1
-        + x4 * z1
-        + x1 * z2
-        + x2 * z2 * 2.0
-        + x3 * z2
-        + x4 * z2
-        + x1 * z3
-        + x2 * z3
-        + x3 * z3 * 2.0
-        + x4 * z3
-        + x1 * z4
-        + x2 * z4
-        + x3 * z4
-        + x4 * z4 * 2.0)
-        * 0.05;
-    let c1 = (x1 * y1 * 2.0
-        + x2 * y1
-        + x3 * y1
-        + x4 * y1
-        + x1 * y2
-        + x2 * y2 * 2.0
-        + x3 * y2
-        + x4 * y2
-        + x1 * y3
-        + x2 * y3
-        + x3 * y3 * 2.0
-        + x4 * y3
-        + x1 * y4
-        + x2 * y4
-        + x3 * y4
-        + x4 * y4 * 2.0)
-        * 0.05;
-
-    Mat3::from_cols_array(&[a0, -c1, -b1, -c1, b0, -a1, -b1, -a1, c0])
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -427,6 +287,46 @@ mod tests {
         let mut m = crate::sim::slide::cube_mesh(1.0);
         m.vertices.iter_mut().flatten().for_each(|c| *c += 0.5);
         m
+    }
+
+    #[test]
+    fn a_million_triangle_box_has_the_mass_of_a_box() {
+        // The cube [-1, 1]³, each face a 290 × 290 grid: 1 009 200
+        // triangles, where an f32 sum drifts.
+        let n = 290u32;
+        let (mut vertices, mut triangles) = (Vec::new(), Vec::new());
+        for k in 0..3 {
+            for sign in [1.0f32, -1.0] {
+                let base = vertices.len() as u32;
+                for j in 0..=n {
+                    for i in 0..=n {
+                        let mut p = [0f32; 3];
+                        p[k] = sign;
+                        p[(k + 1) % 3] = -1.0 + 2.0 * i as f32 / n as f32;
+                        p[(k + 2) % 3] = -1.0 + 2.0 * j as f32 / n as f32;
+                        vertices.push(p);
+                    }
+                }
+                let at = |i: u32, j: u32| base + j * (n + 1) + i;
+                for j in 0..n {
+                    for i in 0..n {
+                        let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+                        if sign > 0.0 {
+                            triangles.extend([[a, b, c], [a, c, d]]);
+                        } else {
+                            triangles.extend([[a, c, b], [a, d, c]]);
+                        }
+                    }
+                }
+            }
+        }
+        let m = MassProps::of_mesh(&Mesh::new(vertices, triangles));
+        assert!((m.mass - 8.0).abs() < 1e-5, "{m:?}");
+        assert!(m.com.iter().all(|c| c.abs() < 1e-6), "{m:?}");
+        for (k, &x) in m.inertia.iter().enumerate() {
+            let want = if k % 4 == 0 { 16.0 / 3.0 } else { 0.0 };
+            assert!((x - want).abs() < 1e-4, "{m:?}");
+        }
     }
 
     #[test]

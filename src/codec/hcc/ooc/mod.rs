@@ -36,6 +36,16 @@
 //! open: about 6 bytes a node rather than 24 (on the 75 k-triangle bunny,
 //! 0.075 → 0.018 bytes a triangle for the high-level tree).
 //!
+//! # Built out of core
+//!
+//! A model too large to build in memory is built chunk by chunk
+//! ([`encode_streamed`], over a [`ChunkedMesh`](crate::build::chunked::ChunkedMesh)):
+//! every chunk's trees on the whole model's grid, one set of dictionaries
+//! for all, the chunks' high-level trees joined under the tree over the
+//! chunks, edge flags paired across chunks. The file is an ordinary
+//! o-HCCMesh file (module `stream`); `cbvh build FILE --codec hcc-ooc`
+//! takes that path when the model is over its memory budget.
+//!
 //! # Why a sub-module of `hcc`
 //!
 //! o-HCCMesh is not a traversable structure of its own: it is a coding of
