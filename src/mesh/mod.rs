@@ -18,8 +18,8 @@ mod subdivide;
 
 pub use error::{MeshError, Place};
 pub use io::{
-    Encoding, Format, FormatDetail, load, load_bytes, load_bytes_with_detail, load_with_detail,
-    save,
+    Encoding, Format, FormatDetail, PlyWriter, load, load_bytes, load_bytes_with_detail,
+    load_with_detail, save,
 };
 pub use stats::{MeshStats, boundary_edges, degenerate_triangles};
 
