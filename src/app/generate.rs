@@ -3,7 +3,8 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use crate::scene::Kind;
+use crate::atomic::AtomicFile;
+use crate::scene::{GenWriteError, Kind};
 
 use super::CliResult;
 
@@ -18,23 +19,28 @@ pub struct GenArgs {
     /// Seed: the same seed gives the same mesh.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Output file, .ply (binary) or .obj.
+    /// Output file, .ply (binary) or .obj. PLY is written as it is
+    /// generated, in bounded memory, for every kind but the isosurface (up
+    /// to 1 000 000 000 triangles; the isosurface and .obj files: 200 000 000).
     #[arg(short, long)]
     pub output: PathBuf,
 }
 
-/// Runs `cbvh gen`.
+/// Runs `cbvh gen`. A .ply file is written by [`crate::scene::generate_to_ply`]
+/// (streamed, in bounded memory, for every kind but the isosurface), an
+/// .obj file from the mesh in memory; either atomically, through a
+/// temporary file beside the output, so that a failed or killed run leaves
+/// nothing under the output's name.
 pub fn run(a: GenArgs) -> CliResult {
     // Check the output extension before spending time generating.
-    match crate::mesh::Format::from_path(&a.output)? {
-        crate::mesh::Format::Ply | crate::mesh::Format::Obj => {}
-        _ => {
-            return Err(
-                format!("{}: can only write .ply or .obj files", a.output.display()).into(),
-            );
-        }
+    let format = crate::mesh::Format::from_path(&a.output)?;
+    if !matches!(format, crate::mesh::Format::Ply | crate::mesh::Format::Obj) {
+        return Err(format!("{}: can only write .ply or .obj files", a.output.display()).into());
     }
     let tris = a.tris.unwrap_or_else(|| crate::scene::default_tris(a.kind));
+    if format == crate::mesh::Format::Ply {
+        return write_ply(&a, tris);
+    }
     let t0 = Instant::now();
     let mesh = super::generate(a.kind, tris, a.seed, "generating")?;
     let gen_s = t0.elapsed().as_secs_f64();
@@ -50,6 +56,42 @@ pub fn run(a: GenArgs) -> CliResult {
         gen_s,
         mesh.triangle_count() as f64 / gen_s / 1e6,
         t1.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// `cbvh gen ... -o FILE.ply`: generates and writes in one pass, with a
+/// progress bar over both.
+fn write_ply(a: &GenArgs, tris: usize) -> CliResult {
+    let path = &a.output;
+    let io_err = |e: std::io::Error| format!("{}: {e}", path.display());
+    let t0 = Instant::now();
+    // Created first: an unwritable directory fails before any work.
+    let mut out = AtomicFile::create(path).map_err(io_err)?;
+    let pb = super::progress_bar("generating", 1);
+    let written =
+        crate::scene::generate_to_ply(a.kind, tris, a.seed, &mut out, &mut |done, total| {
+            pb.set_length(total);
+            pb.set_position(done);
+        });
+    pb.finish_and_clear();
+    let written = match written {
+        Ok(w) => w,
+        Err(GenWriteError::Io(e)) => return Err(io_err(e).into()),
+        Err(e) => return Err(e.into()),
+    };
+    out.commit().map_err(io_err)?;
+    let s = t0.elapsed().as_secs_f64();
+    eprintln!(
+        "{}: {} triangles, {} vertices ({} requested, seed {}); generated and written in {:.2} s ({:.2} M triangles/s{})",
+        path.display(),
+        written.triangles,
+        written.vertices,
+        tris,
+        a.seed,
+        s,
+        written.triangles as f64 / s / 1e6,
+        if a.kind.streams() { ", streamed" } else { "" }
     );
     Ok(())
 }

@@ -1,5 +1,6 @@
 //! Mesh file input and output: format detection by extension, the loaders
-//! (OFF, PLY, OBJ, STL) and the writers (binary PLY, OBJ).
+//! (OFF, PLY, OBJ, STL) and the writers (binary PLY, OBJ; [`PlyWriter`]
+//! writes binary PLY batch by batch, for meshes not held in memory).
 //!
 //! Every reader is hand-written and streams from a [`BufRead`], so the same
 //! code serves files ([`load`]) and memory ([`load_bytes`]). Readers check
@@ -13,9 +14,11 @@ mod off;
 mod ply;
 mod stl;
 
+pub use ply::PlyWriter;
+
 use std::fmt;
 use std::fs::File;
-use std::io::{self, BufRead, BufReader, Read, Write};
+use std::io::{self, BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
 use super::{Mesh, MeshError, Place};
@@ -794,19 +797,6 @@ pub(super) fn write_u64(out: &mut Vec<u8>, mut value: u64) {
         }
     }
     out.extend_from_slice(&digits[i..]);
-}
-
-/// Writes `buf` to `out` and empties it once it holds more than `limit` bytes.
-pub(super) fn flush_if_full(
-    buf: &mut Vec<u8>,
-    out: &mut impl Write,
-    limit: usize,
-) -> io::Result<()> {
-    if buf.len() >= limit {
-        out.write_all(buf)?;
-        buf.clear();
-    }
-    Ok(())
 }
 
 #[cfg(test)]

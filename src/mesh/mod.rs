@@ -18,8 +18,8 @@ mod subdivide;
 
 pub use error::{MeshError, Place};
 pub use io::{
-    Encoding, Format, FormatDetail, Streamed, TriangleBatches, estimate_counts, load, load_bytes,
-    load_bytes_with_detail, load_with_detail, save, stream,
+    Encoding, Format, FormatDetail, PlyWriter, Streamed, TriangleBatches, estimate_counts, load,
+    load_bytes, load_bytes_with_detail, load_with_detail, save, stream,
 };
 pub use stats::{MeshStats, boundary_edges, degenerate_triangles};
 

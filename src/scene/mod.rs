@@ -26,12 +26,22 @@
 //! grids (module `grid`) bent into shapes (module `shapes`): their counts
 //! follow from a formula, `4(nx·ny + ny·nz + nz·nx)` per part, so they are
 //! planned exactly before anything is generated ([`planned_triangles`]).
-//! Output buffers are allocated at their final size and filled in
-//! parallel, disjoint chunks, so generating takes little more memory than
-//! the mesh itself. The isosurface is steered by counting passes and
-//! built slab by slab (module `iso`).
+//! Every vertex and triangle is computed from its index alone, so output
+//! buffers are allocated at their final size and filled in parallel,
+//! disjoint chunks: generating takes little more memory than the mesh
+//! itself. The isosurface is steered by counting passes and built slab by
+//! slab (module `iso`).
+//!
+//! [`generate_to_ply`] writes a scene straight to a binary PLY file
+//! ([`crate::mesh::PlyWriter`]), the same bytes as [`crate::mesh::save`] of
+//! [`generate`]. The part-based kinds *stream* ([`Kind::streams`]): their
+//! vertices, then their triangles, are computed and written batch by batch,
+//! in a few MiB whatever the size, up to [`MAX_STREAMED_TRIS`] triangles.
+//! The isosurface is generated in memory and then written, up to
+//! [`MAX_TRIS`] like [`generate`].
 
 use std::fmt;
+use std::io::{self, Write};
 use std::str::FromStr;
 
 use crate::mesh::Mesh;
@@ -50,8 +60,13 @@ mod turbine;
 
 /// Smallest triangle count [`generate`] accepts.
 pub const MIN_TRIS: usize = 1_000;
-/// Largest triangle count [`generate`] accepts.
+/// Largest triangle count [`generate`] accepts (the mesh is held in
+/// memory: about 3.6 GB at this size).
 pub const MAX_TRIS: usize = 200_000_000;
+/// Largest triangle count [`generate_to_ply`] accepts for the kinds that
+/// stream ([`Kind::streams`]): about 19 GB of PLY, written in a few MiB of
+/// memory (the limit keeps the vertices far within `u32` indices).
+pub const MAX_STREAMED_TRIS: usize = 1_000_000_000;
 
 /// The kinds of scene [`generate`] can build.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -88,6 +103,13 @@ impl Kind {
             Kind::Robot => "robot",
             Kind::Isosurface => "isosurface",
         }
+    }
+
+    /// Whether [`generate_to_ply`] streams this kind (computes and writes
+    /// it batch by batch in bounded memory): every kind but the isosurface,
+    /// which is generated in memory and then written.
+    pub fn streams(self) -> bool {
+        self != Kind::Isosurface
     }
 }
 
@@ -171,18 +193,23 @@ pub fn default_tris(kind: Kind) -> usize {
 }
 
 fn check(kind: Kind, tris: usize) -> Result<(), GenError> {
-    if (MIN_TRIS..=MAX_TRIS).contains(&tris) {
+    check_max(kind, tris, MAX_TRIS)
+}
+
+fn check_max(kind: Kind, tris: usize, max: usize) -> Result<(), GenError> {
+    if (MIN_TRIS..=max).contains(&tris) {
         Ok(())
     } else {
         Err(GenError::TrisOutOfRange {
             kind,
             requested: tris,
             min: MIN_TRIS,
-            max: MAX_TRIS,
+            max,
         })
     }
 }
 
+/// The parts and grids of a part-based kind (not the isosurface).
 fn plan_parts(kind: Kind, tris: usize, seed: u64) -> (Vec<parts::Part>, Vec<grid::BoxGrid>) {
     match kind {
         Kind::Statue => statue::plan(tris, seed),
@@ -221,9 +248,122 @@ pub fn generate(
     check(kind, tris)?;
     Ok(match kind {
         Kind::Isosurface => iso::generate(tris, seed, progress),
-        _ => {
-            let (parts, grids) = plan_parts(kind, tris, seed);
-            parts::build(&parts, &grids, progress)
-        }
+        _ => assembly(kind, tris, seed).build(progress),
     })
+}
+
+fn assembly(kind: Kind, tris: usize, seed: u64) -> parts::Assembly {
+    let (parts, grids) = plan_parts(kind, tris, seed);
+    parts::Assembly::new(parts, grids)
+}
+
+/// The counts of a mesh written by [`generate_to_ply`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Written {
+    /// Vertices written.
+    pub vertices: u64,
+    /// Triangles written.
+    pub triangles: u64,
+}
+
+/// Why [`generate_to_ply`] failed.
+#[derive(Debug, thiserror::Error)]
+pub enum GenWriteError {
+    /// The arguments name no scene that can be generated.
+    #[error(transparent)]
+    Gen(#[from] GenError),
+    /// Writing failed.
+    #[error(transparent)]
+    Io(#[from] io::Error),
+}
+
+/// Generates a `kind` scene like [`generate`] and writes it to `out` as
+/// binary little-endian PLY: the same bytes as [`crate::mesh::save`] of
+/// the mesh [`generate`] returns for these arguments. The kinds that
+/// stream ([`Kind::streams`]) are computed and written batch by batch in
+/// a few MiB of memory, and accept up to [`MAX_STREAMED_TRIS`] triangles;
+/// the isosurface is generated in memory, then written, and accepts up to
+/// [`MAX_TRIS`]. `progress(done, total)` is called about every 1 % of the
+/// work (and at least every 262 144 vertices or triangles when streaming),
+/// with `done == total` at the end; for a streamed kind the work includes
+/// the writing.
+///
+/// `out` gets the bytes in writes of about 64 KiB; give it a file through
+/// a [`std::io::BufWriter`] or [`crate::atomic::AtomicFile`], which `cbvh
+/// gen` uses so that a run that fails or is killed leaves nothing under
+/// the file's name.
+///
+/// # Errors
+/// [`GenWriteError::Gen`] for a triangle count out of range,
+/// [`GenWriteError::Io`] when `out` fails.
+pub fn generate_to_ply<W: Write + Send>(
+    kind: Kind,
+    tris: usize,
+    seed: u64,
+    out: W,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<Written, GenWriteError> {
+    let ply = if kind.streams() {
+        check_max(kind, tris, MAX_STREAMED_TRIS)?;
+        let scene = assembly(kind, tris, seed);
+        let mut ply = crate::mesh::PlyWriter::new(out, scene.vertices(), scene.triangles())?;
+        scene.write_ply(&mut ply, progress)?;
+        ply
+    } else {
+        let mesh = generate(kind, tris, seed, progress)?;
+        let mut ply = crate::mesh::PlyWriter::new(
+            out,
+            mesh.vertices.len() as u64,
+            mesh.triangles.len() as u64,
+        )?;
+        ply.write_vertices(&mesh.vertices)?;
+        ply.write_triangles(&mesh.triangles)?;
+        ply
+    };
+    let (vertices, triangles) = ply.counts();
+    ply.finish()?;
+    Ok(Written {
+        vertices,
+        triangles,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn streamed_counts_hold_up_to_the_streaming_maximum() {
+        // Above MAX_TRIS only generate_to_ply plans; sweep that range in
+        // 1 % steps, exactly as the formula promises.
+        for kind in Kind::ALL.into_iter().filter(|k| k.streams()) {
+            let mut t = MAX_TRIS as f64;
+            while t <= MAX_STREAMED_TRIS as f64 {
+                let tris = t as usize;
+                let scene = assembly(kind, tris, 1);
+                let got = scene.triangles() as f64;
+                assert!((got / t - 1.0).abs() < 0.01, "{kind} {tris}: plans {got}");
+                assert!(scene.vertices() < u64::from(u32::MAX) / 2);
+                t *= 1.01;
+            }
+        }
+    }
+
+    #[test]
+    fn streaming_limits() {
+        let mut sink = Vec::new();
+        for kind in Kind::ALL {
+            let max = if kind.streams() {
+                MAX_STREAMED_TRIS
+            } else {
+                MAX_TRIS
+            };
+            let err = generate_to_ply(kind, max + 1, 0, &mut sink, &mut |_, _| {}).unwrap_err();
+            assert!(
+                matches!(err, GenWriteError::Gen(GenError::TrisOutOfRange { max: m, .. }) if m == max),
+                "{kind}: {err}"
+            );
+        }
+        assert!(sink.is_empty());
+    }
 }

@@ -709,3 +709,53 @@ proptest! {
         no_panic(&bytes, format);
     }
 }
+
+#[test]
+fn ply_writer_streams_the_saved_bytes_and_refuses_wrong_counts() {
+    use cbvh::mesh::PlyWriter;
+    use std::io::ErrorKind;
+    let dir = temp_dir("ply-writer");
+    let mesh = sample();
+    let path = dir.join("m.ply");
+    save(&mesh, &path).unwrap();
+    let saved = std::fs::read(&path).unwrap();
+    let (nv, nt) = (mesh.vertices.len() as u64, mesh.triangles.len() as u64);
+
+    // One element per batch gives the same bytes as save.
+    let mut ply = PlyWriter::new(Vec::new(), nv, nt).unwrap();
+    assert_eq!(ply.counts(), (nv, nt));
+    for v in &mesh.vertices {
+        ply.write_vertices(std::slice::from_ref(v)).unwrap();
+    }
+    for t in &mesh.triangles {
+        ply.write_triangles(std::slice::from_ref(t)).unwrap();
+    }
+    assert_eq!(ply.written(), (nv, nt));
+    assert_eq!(ply.finish().unwrap(), saved);
+
+    let refused = |r: std::io::Result<()>| {
+        let e = r.unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::InvalidInput, "{e}");
+        e.to_string()
+    };
+    // Too many vertices: refused, nothing written.
+    let mut ply = PlyWriter::new(Vec::new(), nv - 1, nt).unwrap();
+    let msg = refused(ply.write_vertices(&mesh.vertices));
+    assert!(msg.contains("vertices"), "{msg}");
+    assert_eq!(ply.written(), (0, 0));
+    // Triangles before the last vertex.
+    let mut ply = PlyWriter::new(Vec::new(), nv, nt).unwrap();
+    ply.write_vertices(&mesh.vertices[1..]).unwrap();
+    let msg = refused(ply.write_triangles(&mesh.triangles));
+    assert!(msg.contains("before the last vertex"), "{msg}");
+    // Too many triangles.
+    ply.write_vertices(&mesh.vertices[..1]).unwrap();
+    let msg = refused(ply.write_triangles(&[mesh.triangles[0]; 4]));
+    assert!(msg.contains("triangles"), "{msg}");
+    // Too few at the end: finish fails.
+    ply.write_triangles(&mesh.triangles[..1]).unwrap();
+    let e = ply.finish().unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::InvalidInput);
+    assert!(e.to_string().contains("announces"), "{e}");
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -235,3 +235,149 @@ fn kinds_parse_and_print() {
     assert_eq!(default_tris(Kind::Isosurface), 100_000);
     assert_eq!(GenOptions::default().seed, 0);
 }
+
+/// A fresh directory under the system temp dir for one test.
+fn temp_dir(test: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("cbvh-scene-gen-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The bytes `mesh::save` writes for `mesh` as PLY.
+fn saved_ply(mesh: &Mesh, dir: &std::path::Path) -> Vec<u8> {
+    let path = dir.join("saved.ply");
+    cbvh::mesh::save(mesh, &path).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    bytes
+}
+
+#[test]
+fn streamed_ply_is_the_saved_mesh_byte_for_byte() {
+    use cbvh::scene::{Written, generate_to_ply};
+    let dir = temp_dir("streamed");
+    for kind in Kind::ALL {
+        for (tris, seed) in [(2_000, 1), (5_000, 8)] {
+            let mesh = gen_quiet(kind, tris, seed);
+            let mut calls = Vec::new();
+            let mut streamed = Vec::new();
+            let written = generate_to_ply(kind, tris, seed, &mut streamed, &mut |d, t| {
+                calls.push((d, t))
+            })
+            .unwrap();
+            assert_eq!(
+                written,
+                Written {
+                    vertices: mesh.vertices.len() as u64,
+                    triangles: mesh.triangles.len() as u64,
+                },
+                "{kind} {tris} {seed}"
+            );
+            assert!(
+                streamed == saved_ply(&mesh, &dir),
+                "{kind} {tris} {seed}: the streamed PLY differs from mesh::save's"
+            );
+            let &(done, total) = calls.last().unwrap();
+            assert!(
+                total > 0 && done == total,
+                "{kind}: ended at {done}/{total}"
+            );
+            assert!(calls.windows(2).all(|w| w[0].0 <= w[1].0));
+            // Read back, it is the generated mesh.
+            let path = dir.join("streamed.ply");
+            std::fs::write(&path, &streamed).unwrap();
+            let back = cbvh::mesh::load(&path).unwrap();
+            assert_eq!(back.triangles, mesh.triangles, "{kind} {tris} {seed}");
+            assert!(
+                back.vertices
+                    .iter()
+                    .zip(&mesh.vertices)
+                    .all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits))
+                    && back.vertices.len() == mesh.vertices.len(),
+                "{kind} {tris} {seed}: vertices differ"
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn streaming_accepts_more_than_generate_for_the_part_kinds() {
+    use cbvh::scene::{GenWriteError, MAX_STREAMED_TRIS, generate_to_ply};
+    assert!(
+        Kind::ALL
+            .iter()
+            .all(|k| k.streams() == (*k != Kind::Isosurface))
+    );
+    let mut sink = Vec::new();
+    for kind in Kind::ALL {
+        let max = if kind.streams() {
+            MAX_STREAMED_TRIS
+        } else {
+            MAX_TRIS
+        };
+        for tris in [MIN_TRIS - 1, max + 1] {
+            let err = generate_to_ply(kind, tris, 0, &mut sink, &mut |_, _| {}).unwrap_err();
+            let GenWriteError::Gen(err) = err else {
+                panic!("{kind} {tris}: {err}")
+            };
+            assert_eq!(
+                err,
+                GenError::TrisOutOfRange {
+                    kind,
+                    requested: tris,
+                    min: MIN_TRIS,
+                    max
+                }
+            );
+        }
+    }
+    assert!(sink.is_empty(), "wrote before checking the count");
+}
+
+#[cfg(feature = "app")]
+#[test]
+fn cbvh_gen_writes_ply_atomically() {
+    let dir = temp_dir("cli");
+    let names = |dir: &std::path::Path| -> Vec<String> {
+        let mut n: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        n.sort();
+        n
+    };
+    for (kind, name) in [(Kind::Statue, "s.ply"), (Kind::Isosurface, "i.ply")] {
+        let out = dir.join(name);
+        let (ok, _, err) = crate::common::cbvh(&[
+            "gen",
+            kind.name(),
+            "--tris",
+            "3000",
+            "--seed",
+            "4",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(ok, "{kind}: {err}");
+        assert!(err.contains("3000 requested"), "{err}");
+        let mesh = gen_quiet(kind, 3000, 4);
+        assert!(
+            std::fs::read(&out).unwrap() == saved_ply(&mesh, &dir),
+            "{kind}"
+        );
+    }
+    // A failed run (a count out of range) leaves no file, temporary or not.
+    let (ok, _, err) = crate::common::cbvh(&[
+        "gen",
+        "robot",
+        "--tris",
+        "10",
+        "-o",
+        dir.join("bad.ply").to_str().unwrap(),
+    ]);
+    assert!(!ok && err.contains("between"), "{err}");
+    assert_eq!(names(&dir), ["i.ply", "s.ply"]);
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -11,8 +11,7 @@
 use std::io::{self, BufRead, Write};
 
 use super::{
-    Bytes, Encoding, Lines, Src, Tris, finite, flush_if_full, parse_f32, parse_i64, parse_u64,
-    show, tokens,
+    Bytes, Encoding, Lines, Src, Tris, finite, parse_f32, parse_i64, parse_u64, show, tokens,
 };
 use crate::mesh::{Mesh, MeshError, Place};
 
@@ -659,31 +658,189 @@ fn read_binary_element<R: BufRead>(
     Ok(())
 }
 
-/// Writes `mesh` as binary little-endian PLY: float x y z, and faces as
-/// `uchar` counts with `uint` indices.
+/// Writes `mesh` as binary little-endian PLY (see [`PlyWriter`]).
 pub(super) fn write(mesh: &Mesh, out: &mut impl Write) -> io::Result<()> {
-    write!(
-        out,
-        "ply\nformat binary_little_endian 1.0\ncomment written by cbvh\n\
-         element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
-         element face {}\nproperty list uchar uint vertex_indices\nend_header\n",
-        mesh.vertices.len(),
-        mesh.triangles.len()
-    )?;
-    const CHUNK: usize = 1 << 16;
-    let mut buf = Vec::with_capacity(CHUNK + 64);
-    for v in &mesh.vertices {
-        for c in v {
-            buf.extend_from_slice(&c.to_le_bytes());
-        }
-        flush_if_full(&mut buf, out, CHUNK)?;
+    let mut ply = PlyWriter::new(out, mesh.vertices.len() as u64, mesh.triangles.len() as u64)?;
+    ply.write_vertices(&mesh.vertices)?;
+    ply.write_triangles(&mesh.triangles)?;
+    ply.finish().map(drop)
+}
+
+/// A binary little-endian PLY file written as it is produced, for meshes
+/// too large to hold in memory: the header with the vertex and face counts
+/// given up front, then the vertices in batches, then the triangles in
+/// batches. Vertices are `float x y z`, faces a `uchar` count (3) and
+/// `uint` indices; [`save`](super::save) writes the same bytes for a mesh
+/// in memory.
+///
+/// The writer keeps the file consistent with its header: a batch that
+/// would write more vertices or triangles than announced, or triangles
+/// before every vertex, is refused (an [`io::ErrorKind::InvalidInput`]
+/// error, nothing written), and [`finish`](Self::finish) fails unless
+/// exactly the announced counts were written. Indices are written as
+/// given, without checking them against the vertex count.
+///
+/// ```
+/// use cbvh::mesh::PlyWriter;
+/// let mut ply = PlyWriter::new(Vec::new(), 3, 1)?;
+/// ply.write_vertices(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])?;
+/// ply.write_vertices(&[[0.0, 1.0, 0.0]])?;
+/// ply.write_triangles(&[[0, 1, 2]])?;
+/// let bytes = ply.finish()?;
+/// assert!(bytes.starts_with(b"ply\n"));
+/// # Ok::<(), std::io::Error>(())
+/// ```
+#[derive(Debug)]
+pub struct PlyWriter<W: Write> {
+    out: W,
+    /// Vertices and faces announced by the header.
+    vertices: u64,
+    faces: u64,
+    /// Vertices and faces written so far.
+    vertices_written: u64,
+    faces_written: u64,
+    /// Encoding buffer, reused across batches.
+    buf: Vec<u8>,
+}
+
+/// Bytes encoded before each write to the output.
+const WRITE_CHUNK: usize = 1 << 16;
+
+impl<W: Write> PlyWriter<W> {
+    /// Writes the header of a mesh of `vertices` vertices and `faces`
+    /// triangles to `out`.
+    ///
+    /// # Errors
+    /// Any error of `out`.
+    pub fn new(mut out: W, vertices: u64, faces: u64) -> io::Result<Self> {
+        write!(
+            out,
+            "ply\nformat binary_little_endian 1.0\ncomment written by cbvh\n\
+             element vertex {vertices}\nproperty float x\nproperty float y\nproperty float z\n\
+             element face {faces}\nproperty list uchar uint vertex_indices\nend_header\n"
+        )?;
+        Ok(Self {
+            out,
+            vertices,
+            faces,
+            vertices_written: 0,
+            faces_written: 0,
+            buf: Vec::with_capacity(WRITE_CHUNK),
+        })
     }
-    for t in &mesh.triangles {
-        buf.push(3);
-        for i in t {
-            buf.extend_from_slice(&i.to_le_bytes());
-        }
-        flush_if_full(&mut buf, out, CHUNK)?;
+
+    /// The vertex and face counts of the header.
+    pub fn counts(&self) -> (u64, u64) {
+        (self.vertices, self.faces)
     }
-    out.write_all(&buf)
+
+    /// The vertices and faces written so far.
+    pub fn written(&self) -> (u64, u64) {
+        (self.vertices_written, self.faces_written)
+    }
+
+    /// Writes the next vertices.
+    ///
+    /// # Errors
+    /// [`io::ErrorKind::InvalidInput`] (and nothing written) when the batch
+    /// would make more vertices than the header announces; any error of
+    /// the output.
+    pub fn write_vertices(&mut self, batch: &[[f32; 3]]) -> io::Result<()> {
+        let n = batch.len() as u64;
+        if self.vertices - self.vertices_written < n {
+            return Err(invalid(format!(
+                "PLY writer: {n} more vertices would make {} of the {} the header announces",
+                self.vertices_written + n,
+                self.vertices
+            )));
+        }
+        encode(
+            batch,
+            &mut self.buf,
+            &mut self.out,
+            |v, rec: &mut [u8; 12]| {
+                for (c, bytes) in v.iter().zip(rec.chunks_exact_mut(4)) {
+                    bytes.copy_from_slice(&c.to_le_bytes());
+                }
+            },
+        )?;
+        self.vertices_written += n;
+        Ok(())
+    }
+
+    /// Writes the next triangles; every vertex must have been written.
+    ///
+    /// # Errors
+    /// [`io::ErrorKind::InvalidInput`] (and nothing written) when vertices
+    /// are still missing, or when the batch would make more triangles than
+    /// the header announces; any error of the output.
+    pub fn write_triangles(&mut self, batch: &[[u32; 3]]) -> io::Result<()> {
+        let n = batch.len() as u64;
+        if self.vertices_written < self.vertices {
+            return Err(invalid(format!(
+                "PLY writer: triangles before the last vertex ({} of {} vertices written)",
+                self.vertices_written, self.vertices
+            )));
+        }
+        if self.faces - self.faces_written < n {
+            return Err(invalid(format!(
+                "PLY writer: {n} more triangles would make {} of the {} the header announces",
+                self.faces_written + n,
+                self.faces
+            )));
+        }
+        encode(
+            batch,
+            &mut self.buf,
+            &mut self.out,
+            |t, rec: &mut [u8; 13]| {
+                rec[0] = 3;
+                for (i, bytes) in t.iter().zip(rec[1..].chunks_exact_mut(4)) {
+                    bytes.copy_from_slice(&i.to_le_bytes());
+                }
+            },
+        )?;
+        self.faces_written += n;
+        Ok(())
+    }
+
+    /// Checks that the header's counts were written, flushes the output
+    /// and returns it.
+    ///
+    /// # Errors
+    /// [`io::ErrorKind::InvalidInput`] when fewer vertices or triangles
+    /// were written than the header announces; any error of the output.
+    pub fn finish(mut self) -> io::Result<W> {
+        if (self.vertices_written, self.faces_written) != (self.vertices, self.faces) {
+            return Err(invalid(format!(
+                "PLY writer: wrote {} vertices and {} triangles, but the header announces {} and {}",
+                self.vertices_written, self.faces_written, self.vertices, self.faces
+            )));
+        }
+        self.out.flush()?;
+        Ok(self.out)
+    }
+}
+
+fn invalid(message: String) -> io::Error {
+    io::Error::new(io::ErrorKind::InvalidInput, message)
+}
+
+/// Encodes `items` as `N`-byte records with `f`, and writes them to `out`
+/// in chunks of about [`WRITE_CHUNK`] bytes through `buf`.
+fn encode<T, const N: usize>(
+    items: &[T],
+    buf: &mut Vec<u8>,
+    out: &mut impl Write,
+    f: impl Fn(&T, &mut [u8; N]),
+) -> io::Result<()> {
+    for chunk in items.chunks(WRITE_CHUNK / N) {
+        buf.clear();
+        buf.resize(chunk.len() * N, 0);
+        for (item, rec) in chunk.iter().zip(buf.chunks_exact_mut(N)) {
+            f(item, rec.try_into().expect("N-byte chunks"));
+        }
+        out.write_all(buf)?;
+    }
+    Ok(())
 }
