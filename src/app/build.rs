@@ -180,63 +180,12 @@ fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> 
     }))
 }
 
-/// Temporary directories that builds of `output` killed half way left
-/// beside it (`.NAME.cbvh-build-PID`): those whose process is gone are
-/// removed, and said so.
-fn clear_stale(output: &std::path::Path) {
-    let dir = match output.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
-    let name = output
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    // The build's directory, and the output's temporary file
-    // (`crate::atomic`: `.NAME.tmp-PID-N`).
-    let (dir_prefix, file_prefix) = (format!(".{name}.cbvh-build-"), format!(".{name}.tmp-"));
-    let Ok(entries) = std::fs::read_dir(&dir) else {
-        return;
-    };
-    for e in entries.flatten() {
-        let n = e.file_name().to_string_lossy().into_owned();
-        let pid = match (n.strip_prefix(&dir_prefix), n.strip_prefix(&file_prefix)) {
-            (Some(pid), _) => pid,
-            (None, Some(rest)) => rest.split('-').next().unwrap_or(""),
-            _ => continue,
-        };
-        if pid.is_empty() || !pid.bytes().all(|b| b.is_ascii_digit()) {
-            continue;
-        }
-        let alive = std::path::Path::new(&format!("/proc/{pid}")).exists();
-        let removed = || {
-            let p = e.path();
-            if p.is_dir() {
-                std::fs::remove_dir_all(&p).is_ok()
-            } else {
-                std::fs::remove_file(&p).is_ok()
-            }
-        };
-        if alive {
-            eprintln!(
-                "note: {} belongs to a build still running (process {pid})",
-                e.path().display()
-            );
-        } else if removed() {
-            eprintln!(
-                "note: removed {}, left by a build that was stopped half way",
-                e.path().display()
-            );
-        }
-    }
-}
-
 /// The out-of-core build (see [`crate::build::chunked`] and
 /// [`crate::codec::hcc::ooc::encode_streamed`]).
 fn run_out_of_core(a: &BuildArgs, p: OutOfCore) -> CliResult {
     use crate::build::chunked::{ChunkOptions, ChunkedMesh};
     let options = a.settings.options(&[CodecKind::HccOoc])?;
-    clear_stale(&p.output);
+    super::clear_stale(&p.output);
     let temp = {
         let name = p
             .output

@@ -38,6 +38,7 @@ pub fn run(a: GenArgs) -> CliResult {
         return Err(format!("{}: can only write .ply or .obj files", a.output.display()).into());
     }
     let tris = a.tris.unwrap_or_else(|| crate::scene::default_tris(a.kind));
+    super::clear_stale(&a.output);
     if format == crate::mesh::Format::Ply {
         return write_ply(&a, tris);
     }

@@ -51,6 +51,59 @@ pub fn progress_bar(message: &str, total: u64) -> ProgressBar {
     pb
 }
 
+/// What a `cbvh gen` or `cbvh build` of `output` killed half way left
+/// beside it: the output's temporary file (`.NAME.tmp-PID-N`, see
+/// [`crate::atomic`]) and an out-of-core build's directory
+/// (`.NAME.cbvh-build-PID`). Those whose process is gone are removed, and
+/// said so; those of a running process are named.
+pub fn clear_stale(output: &std::path::Path) {
+    let dir = match output.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    let name = output
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    // The build's directory, and the output's temporary file
+    // (`crate::atomic`: `.NAME.tmp-PID-N`).
+    let (dir_prefix, file_prefix) = (format!(".{name}.cbvh-build-"), format!(".{name}.tmp-"));
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let n = e.file_name().to_string_lossy().into_owned();
+        let pid = match (n.strip_prefix(&dir_prefix), n.strip_prefix(&file_prefix)) {
+            (Some(pid), _) => pid,
+            (None, Some(rest)) => rest.split('-').next().unwrap_or(""),
+            _ => continue,
+        };
+        if pid.is_empty() || !pid.bytes().all(|b| b.is_ascii_digit()) {
+            continue;
+        }
+        let alive = std::path::Path::new(&format!("/proc/{pid}")).exists();
+        let removed = || {
+            let p = e.path();
+            if p.is_dir() {
+                std::fs::remove_dir_all(&p).is_ok()
+            } else {
+                std::fs::remove_file(&p).is_ok()
+            }
+        };
+        if alive {
+            eprintln!(
+                "note: {} belongs to a build still running (process {pid})",
+                e.path().display()
+            );
+        } else if removed() {
+            eprintln!(
+                "note: removed {}, left by a run that was stopped half way",
+                e.path().display()
+            );
+        }
+    }
+}
+
 /// Where a subcommand's mesh comes from: a file, or a generator.
 #[derive(clap::Args, Debug, Clone)]
 pub struct MeshSource {
