@@ -194,9 +194,25 @@ pub fn run(mut a: RenderArgs) -> CliResult {
         Loaded::Codec(codec, name)
             if a.codec.is_none_or(|c| c == Structure::Codec(codec.kind())) =>
         {
-            // The file's own codec, as stored: nothing is rebuilt.
+            // The file's own codec, as stored: nothing is rebuilt. Smooth
+            // normals need the decoded mesh (about 18 bytes a triangle);
+            // a model larger than the cache budget is shaded flat instead
+            // of being decoded whole (one out of core stays so).
             a.codec = Some(Structure::Codec(codec.kind()));
-            (codec.decoded_mesh(), name, any_target(*codec))
+            let mesh_bytes = codec.triangle_count().saturating_mul(18);
+            let budget = a.source.cache_mib.saturating_mul(1 << 20);
+            let mesh = if mesh_bytes > budget {
+                eprintln!(
+                    "note: flat shading: smooth normals would decode the whole mesh ({:.1} GiB, \
+                     over --cache-mib {})",
+                    mesh_bytes as f64 / (1u64 << 30) as f64,
+                    a.source.cache_mib
+                );
+                None
+            } else {
+                Some(codec.decoded_mesh())
+            };
+            (mesh, name, any_target(*codec))
         }
         loaded => {
             let (mesh, name) = match loaded {
@@ -206,14 +222,14 @@ pub fn run(mut a: RenderArgs) -> CliResult {
             mesh.validate(&name)?;
             let codec = *a.codec.get_or_insert(Structure::Codec(CodecKind::Plain));
             let target = make_target(codec, &mesh, a.layout)?;
-            (mesh, name, target)
+            (Some(mesh), name, target)
         }
     };
     let build_seconds = t0.elapsed().as_secs_f64();
-    let tris = mesh.triangle_count();
-    let normals = VertexNormals::from_mesh(&mesh);
+    let tris = target.triangle_count();
+    let normals = mesh.as_ref().map(VertexNormals::from_mesh);
     drop(mesh);
-    let scene = Scene::single(target.as_ref(), Some(&normals));
+    let scene = Scene::single(target.as_ref(), normals.as_ref());
     let mut opts = RenderOptions {
         width: a.width,
         height: a.height,
