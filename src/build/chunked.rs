@@ -171,21 +171,9 @@ impl ChunkedMesh {
         opts: &ChunkOptions,
         progress: Progress<'_>,
     ) -> Result<Self, ChunkError> {
-        let dir = make_dir(&opts.temp_dir)?;
-        let faces = dir.0.join("faces.bin");
-        let mut w = Writer::create(&faces)?;
-        let mut sample = Sample::default();
-        let streamed = crate::mesh::stream(path, &mut |batch| {
-            sample.add(batch);
-            w.triangles(batch).map_err(|source| MeshError::Io {
-                path: faces.clone(),
-                source,
-            })?;
-            progress("reading", sample.seen, 0);
-            Ok(())
-        })?;
-        w.finish()?;
-        Self::partition(dir, faces, streamed.vertices, sample, opts, progress)
+        Self::read(opts, progress, |take| {
+            Ok(crate::mesh::stream(path, take)?.vertices)
+        })
     }
 
     /// Splits a mesh in memory into chunks as [`from_path`](Self::from_path)
@@ -199,19 +187,37 @@ impl ChunkedMesh {
         opts: &ChunkOptions,
         progress: Progress<'_>,
     ) -> Result<Self, ChunkError> {
+        Self::read(opts, progress, |take| {
+            for batch in mesh.triangles.chunks(1 << 16) {
+                take(batch)?;
+            }
+            Ok(mesh.vertices.clone())
+        })
+    }
+
+    /// The triangles `source` hands to its argument, batch by batch, to
+    /// the temporary file and the sample; `source` returns the vertices.
+    /// Then the partition.
+    fn read(
+        opts: &ChunkOptions,
+        progress: Progress<'_>,
+        source: impl FnOnce(crate::mesh::TriangleBatches<'_>) -> Result<Vec<[f32; 3]>, ChunkError>,
+    ) -> Result<Self, ChunkError> {
         let dir = make_dir(&opts.temp_dir)?;
         let faces = dir.0.join("faces.bin");
         let mut w = Writer::create(&faces)?;
         let mut sample = Sample::default();
-        for batch in mesh.triangles.chunks(1 << 16) {
+        let vertices = source(&mut |batch| {
             sample.add(batch);
-            w.triangles(batch).map_err(|source| ChunkError::Io {
+            w.triangles(batch).map_err(|source| MeshError::Io {
                 path: faces.clone(),
                 source,
             })?;
-        }
+            progress("reading", sample.seen, 0);
+            Ok(())
+        })?;
         w.finish()?;
-        Self::partition(dir, faces, mesh.vertices.clone(), sample, opts, progress)
+        Self::partition(dir, faces, vertices, sample, opts, progress)
     }
 
     fn partition(

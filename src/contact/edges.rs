@@ -114,26 +114,7 @@ impl EdgeFlags {
     /// cheaper than looking every id up); ids it skips get every edge
     /// active. Default flat angle.
     pub fn from_visit(count: usize, visit: impl FnOnce(&mut dyn FnMut(u32, &Triangle))) -> Self {
-        assert!(
-            count <= (u32::MAX / 3) as usize,
-            "edge flags index corners with u32"
-        );
-        let mut normals = vec![Vec3A::NAN; count];
-        let mut corners = vec![([u32::MAX; 3], u32::MAX); 3 * count];
-        visit(&mut |id, t| {
-            if (id as usize) < count {
-                normals[id as usize] = unit_normal(t);
-                for k in 0..3 {
-                    corners[id as usize * 3 + k] = (key(t[k]), id * 3 + k as u32);
-                }
-            }
-        });
-        // An id never visited: its corners stand apart from every other.
-        for (c, entry) in corners.iter_mut().enumerate() {
-            if entry.1 == u32::MAX {
-                *entry = ([u32::MAX, u32::MAX, c as u32], c as u32);
-            }
-        }
+        let (normals, corners) = visited(count, visit);
         Self::from_corners(normals, corners, Self::DEFAULT_FLAT_DEG)
     }
 
@@ -152,21 +133,7 @@ impl EdgeFlags {
         count: usize,
         visit: impl FnOnce(&mut dyn FnMut(u32, &Triangle)),
     ) -> (Self, Vec<OpenEdge>) {
-        let mut normals = vec![Vec3A::NAN; count];
-        let mut corners = vec![([u32::MAX; 3], u32::MAX); 3 * count];
-        visit(&mut |id, t| {
-            if (id as usize) < count {
-                normals[id as usize] = unit_normal(t);
-                for k in 0..3 {
-                    corners[id as usize * 3 + k] = (key(t[k]), id * 3 + k as u32);
-                }
-            }
-        });
-        for (c, entry) in corners.iter_mut().enumerate() {
-            if entry.1 == u32::MAX {
-                *entry = ([u32::MAX, u32::MAX, c as u32], c as u32);
-            }
-        }
+        let (normals, corners) = visited(count, visit);
         let mut open = Vec::new();
         let flags =
             Self::from_corners_open(normals, corners, Self::DEFAULT_FLAT_DEG, Some(&mut open));
@@ -347,6 +314,37 @@ impl EdgeFlags {
     pub fn outward(&self) -> f32 {
         if self.signed_volume < 0.0 { -1.0 } else { 1.0 }
     }
+}
+
+/// The unit normals and the corners (position bits, corner index) of the
+/// `count` triangles `visit` hands out, for
+/// [`from_corners`](EdgeFlags::from_corners).
+#[allow(clippy::type_complexity)]
+fn visited(
+    count: usize,
+    visit: impl FnOnce(&mut dyn FnMut(u32, &Triangle)),
+) -> (Vec<Vec3A>, Vec<([u32; 3], u32)>) {
+    assert!(
+        count <= (u32::MAX / 3) as usize,
+        "edge flags index corners with u32"
+    );
+    let mut normals = vec![Vec3A::NAN; count];
+    let mut corners = vec![([u32::MAX; 3], u32::MAX); 3 * count];
+    visit(&mut |id, t| {
+        if (id as usize) < count {
+            normals[id as usize] = unit_normal(t);
+            for k in 0..3 {
+                corners[id as usize * 3 + k] = (key(t[k]), id * 3 + k as u32);
+            }
+        }
+    });
+    // An id never visited: its corners stand apart from every other.
+    for (c, entry) in corners.iter_mut().enumerate() {
+        if entry.1 == u32::MAX {
+            *entry = ([u32::MAX, u32::MAX, c as u32], c as u32);
+        }
+    }
+    (normals, corners)
 }
 
 /// The bits (edge 0's position: `0b1001` both sides, `0b0001` front,
