@@ -196,15 +196,16 @@ pub fn run(mut a: RenderArgs) -> CliResult {
         {
             // The file's own codec, as stored: nothing is rebuilt. Smooth
             // normals need the decoded mesh (about 18 bytes a triangle);
-            // a model larger than the cache budget is shaded flat instead
-            // of being decoded whole (one out of core stays so).
+            // a model whose mesh is over both the cache budget and 1 GiB
+            // is shaded flat instead of being decoded whole (one out of
+            // core stays so). Small models look the same at any budget.
             a.codec = Some(Structure::Codec(codec.kind()));
             let mesh_bytes = codec.triangle_count().saturating_mul(18);
-            let budget = a.source.cache_mib.saturating_mul(1 << 20);
+            let budget = a.source.cache_mib.saturating_mul(1 << 20).max(1 << 30);
             let mesh = if mesh_bytes > budget {
                 eprintln!(
                     "note: flat shading: smooth normals would decode the whole mesh ({:.1} GiB, \
-                     over --cache-mib {})",
+                     over --cache-mib {} and 1 GiB)",
                     mesh_bytes as f64 / (1u64 << 30) as f64,
                     a.source.cache_mib
                 );
