@@ -95,7 +95,7 @@ impl FromStr for ShapeKind {
 #[derive(Clone, Debug)]
 pub struct DropScene {
     /// The dynamic mesh (the statue), already placed above the base.
-    /// Empty when [`dropped_codec`](Self::dropped_codec) serves every run.
+    /// Empty when [`dropped_file`](Self::dropped_file) serves every run.
     pub dropped: Mesh,
     /// The dropped mesh's own codec file, when the statue came as one:
     /// the runs of its codec open it as it is (a model too large to build
