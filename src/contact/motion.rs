@@ -112,6 +112,14 @@ impl Prediction for MotionBound {
                 .min(self.prediction),
         }
     }
+
+    #[inline]
+    fn floor(&self) -> f32 {
+        match &self.motion {
+            None => self.prediction,
+            Some(m) => m.floor,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -185,5 +193,10 @@ mod tests {
         let f = m.within(&far);
         assert!(f > 0.009 && f < 0.0111, "far box: {f}");
         assert_eq!(MotionBound::constant(0.02).within(&far), 0.02);
+        // `floor` is the least `within` gives: the traversal keeps a
+        // prediction at the floor without computing the bound.
+        assert_eq!(m.floor(), m.within(&near));
+        assert!(m.floor() < f);
+        assert_eq!(MotionBound::constant(0.02).floor(), 0.02);
     }
 }

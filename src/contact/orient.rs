@@ -185,9 +185,22 @@ impl<'a> Side<'a> {
         }
     }
 
+    /// For a side without active edges: whether it may accept (either sign
+    /// of) any direction in `other`'s plane, such as `other`'s in-plane edge
+    /// normals. It accepts only directions within the cone of its normal,
+    /// and the plane holds one only when the two normals lean at least
+    /// nearly the cone's complement apart (a small margin keeps rounding on
+    /// the accepting side).
+    #[inline]
+    fn may_accept_in_plane_of(&self, other: &Side, cone_cos: f32) -> bool {
+        let d = self.out.dot(other.raw);
+        let c = (cone_cos - 1e-4).max(0.0);
+        1.0 - d * d >= c * c
+    }
+
     /// Whether the feature farthest along `n` (a unit direction out of this
     /// side) accepts `n`, and how.
-    fn support(&self, n: Vec3A, cone_cos: f32, near: &crate::geom::Aabb) -> Option<Support> {
+    fn support(&self, n: Vec3A, cone_cos: f32, near: &Near) -> Option<Support> {
         let p = self.t.map(|v| n.dot(v));
         let max = p[0].max(p[1]).max(p[2]);
         let min = p[0].min(p[1]).min(p[2]);
@@ -204,18 +217,15 @@ impl<'a> Side<'a> {
         // side face, tilting a little on the ground it stands on, meeting
         // the ground along its bottom edge.
         let outward = facing >= OUTWARD_MIN;
-        let m = |k: usize| {
-            (self.t[(k + 1) % 3] - self.t[k])
-                .cross(self.raw)
-                .normalize_or_zero()
-        };
+        // Edge `k`'s in-plane outward normal (unnormalized).
+        let m = |k: usize| (self.t[(k + 1) % 3] - self.t[k]).cross(self.raw);
         match count {
             3 => within_cone.then_some(Support::Face),
             2 => {
                 let k = (0..3)
                     .find(|&k| tied[k] && tied[(k + 1) % 3])
                     .expect("two of three corners tied share an edge");
-                if active(k) && outward && n.dot(m(k)) >= -0.05 {
+                if active(k) && outward && at_most_a_little_behind(n, m(k)) {
                     Some(Support::Active)
                 } else {
                     within_cone.then_some(Support::Inactive)
@@ -230,7 +240,7 @@ impl<'a> Side<'a> {
                 let (e1, e2) = (k, (k + 2) % 3);
                 let over = || {
                     let r = self.t[k] - (self.t[0] + self.t[1] + self.t[2]) * (1.0 / 3.0);
-                    near.contains_point(self.t[k]) && n.dot(r.normalize_or_zero()) >= -0.05
+                    near.get().contains_point(self.t[k]) && at_most_a_little_behind(n, r)
                 };
                 if outward && (active(e1) || active(e2)) && over() {
                     Some(Support::Active)
@@ -239,6 +249,40 @@ impl<'a> Side<'a> {
                 }
             }
         }
+    }
+}
+
+/// Whether the unit direction `n` makes an angle of at most about 93°
+/// with `v` (`n · v̂ ≥ −0.05`; true for `v = 0`), without normalizing `v`.
+#[inline]
+fn at_most_a_little_behind(n: Vec3A, v: Vec3A) -> bool {
+    let d = n.dot(v);
+    d >= 0.0 || d * d <= 0.0025 * v.length_squared()
+}
+
+/// A triangle's box grown by its own size and the slack: where the corners
+/// of the other triangle lie that can be where the two meet. Made only
+/// when a corner asks, which most pairs never do.
+struct Near<'t> {
+    t: &'t Triangle,
+    slack: f32,
+    made: std::cell::OnceCell<crate::geom::Aabb>,
+}
+
+impl<'t> Near<'t> {
+    fn new(t: &'t Triangle, slack: f32) -> Self {
+        Self {
+            t,
+            slack,
+            made: std::cell::OnceCell::new(),
+        }
+    }
+
+    fn get(&self) -> &crate::geom::Aabb {
+        self.made.get_or_init(|| {
+            let b = crate::geom::Aabb::of_triangle(self.t);
+            b.loosened(b.extent().length() + self.slack)
+        })
     }
 }
 
@@ -284,13 +328,7 @@ pub fn oriented_axis_from(
     let sa = Side::new(a, fa, facing.a)?;
     let sb = Side::new(b, fb, facing.b)?;
     let cone = facing.cone_cos;
-    // Each triangle's box grown by its own size and the slack: the corners
-    // of the other triangle that can be where the two meet.
-    let near = |t: &Triangle| {
-        let b = crate::geom::Aabb::of_triangle(t);
-        b.loosened(b.extent().length() + slack)
-    };
-    let (near_a, near_b) = (near(a), near(b));
+    let (near_a, near_b) = (Near::new(a, slack), Near::new(b, slack));
     let mut best: Option<(OrientedAxis, Support, Support)> = None;
     // The plain separating-axis result, whichever way round and whatever
     // the features: the pair's true separation or penetration depth.
@@ -398,7 +436,7 @@ pub fn oriented_axis_from(
                 }
             }
         }
-        if !flat_a {
+        if !flat_a && (!flat_b || sb.may_accept_in_plane_of(&sa, cone)) {
             for (k, x) in ea.iter().enumerate() {
                 if let Some(n) = sa.raw.cross(*x).try_normalize() {
                     consider(n, 11 + k as u8);
@@ -406,7 +444,7 @@ pub fn oriented_axis_from(
                 }
             }
         }
-        if !flat_b {
+        if !flat_b && (!flat_a || sa.may_accept_in_plane_of(&sb, cone)) {
             for (k, y) in eb.iter().enumerate() {
                 if let Some(n) = sb.raw.cross(*y).try_normalize() {
                     consider(n, 14 + k as u8);
@@ -511,7 +549,7 @@ mod tests {
         let mut rnd = move || rng.range(-1.0, 1.0);
         let cone = PairFacing::new(Facing::OneSided(1.0), Facing::OneSided(1.0)).cone_cos;
         let cos_2 = 2.0 * cone * cone - 1.0;
-        let (mut accepted, mut both) = (0, 0);
+        let (mut accepted, mut both, mut skipped_in_plane) = (0, 0, 0);
         for round in 0..20_000 {
             // Flat triangles some of the time: normals near ±y, so that
             // two cones often meet.
@@ -544,11 +582,27 @@ mod tests {
                 n = n * 0.1 - sb.out;
             }
             let Some(n) = n.try_normalize() else { continue };
-            let near = crate::geom::Aabb::of_triangle(&a).loosened(10.0);
+            let near = Near::new(&a, 10.0);
             for (side, dir) in [(&sa, n), (&sb, -n)] {
                 if side.support(dir, cone, &near).is_some() {
                     accepted += 1;
                     assert!(side.may_accept(dir, cone), "round {round}: {dir} dropped");
+                }
+            }
+            // A's in-plane edge normals, skipped when B has no active edge
+            // and cannot accept any direction in A's plane.
+            if sb.active == 0 && !sb.may_accept_in_plane_of(&sa, cone) {
+                for x in [a[1] - a[0], a[2] - a[1], a[0] - a[2]] {
+                    let Some(m) = sa.raw.cross(x).try_normalize() else {
+                        continue;
+                    };
+                    for m in [m, -m] {
+                        assert!(
+                            sb.support(-m, cone, &near).is_none(),
+                            "round {round}: in-plane {m} dropped"
+                        );
+                        skipped_in_plane += 1;
+                    }
                 }
             }
             let ka = sa.support(n, cone, &near);
@@ -559,8 +613,8 @@ mod tests {
             }
         }
         assert!(
-            accepted > 5000 && both > 100,
-            "{accepted} accepted, {both} both inactive"
+            accepted > 5000 && both > 100 && skipped_in_plane > 1000,
+            "{accepted} accepted, {both} both inactive, {skipped_in_plane} in-plane skipped"
         );
     }
 

@@ -33,6 +33,21 @@ pub trait Prediction: Sync {
     /// The distance for the points of `B` inside `b_box` (in `A`'s frame);
     /// never above [`at_most`](Self::at_most).
     fn within(&self, b_box: &Aabb) -> f32;
+    /// The least distance [`within`](Self::within) gives anywhere: a node
+    /// pair whose prediction is at most this keeps it for all its
+    /// descendants, and the traversal skips their bounds.
+    fn floor(&self) -> f32;
+
+    /// `within(b_box)`, capped at the enclosing pair's `prediction`; the
+    /// bound is not computed when that cap is at the floor already.
+    #[inline]
+    fn within_capped(&self, b_box: &Aabb, prediction: f32) -> f32 {
+        if prediction <= self.floor() {
+            prediction
+        } else {
+            self.within(b_box).min(prediction)
+        }
+    }
 }
 
 impl Prediction for f32 {
@@ -42,6 +57,10 @@ impl Prediction for f32 {
     }
     #[inline]
     fn within(&self, _: &Aabb) -> f32 {
+        *self
+    }
+    #[inline]
+    fn floor(&self) -> f32 {
         *self
     }
 }
@@ -133,7 +152,7 @@ fn descend<A: NodeCursor, B: NodeCursor>(
         let mask = moved.overlaps(&grown_a);
         moved.for_each_in(mask, |i| {
             let child = moved.get(i);
-            let p = bound.within(&child).min(prediction);
+            let p = bound.within_capped(&child, prediction);
             push((na, box_a, kids.node(i), child), p)
         });
     }
@@ -214,7 +233,7 @@ fn traverse<A: NodeCursor, B: NodeCursor>(
             b.for_each_triangle_keyed(&nb, |j, tj| {
                 let moved = tj.map(|p| b_to_a.transform_point(p));
                 let own = Aabb::of_triangle(&moved);
-                let p = bound.within(&own).min(prediction);
+                let p = bound.within_capped(&own, prediction);
                 b_tris.push((j, *tj, moved, own.loosened(p), p));
             });
             let mut stop = false;
