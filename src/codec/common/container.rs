@@ -140,8 +140,22 @@ impl Frame {
         len_ok: impl Fn(usize, u64) -> Result<(), String>,
         lazy: impl Fn(usize) -> bool,
     ) -> Result<Vec<std::ops::Range<usize>>, FormatError> {
+        Ok(self.sections_with_checksums(b, len_ok, lazy)?.0)
+    }
+
+    /// [`sections`](Self::sections) with each section's stored checksum, in
+    /// table order, read in the same pass: for a reader that checks its
+    /// lazy sections later, piece by piece or in `verify`.
+    #[allow(clippy::type_complexity)]
+    pub fn sections_with_checksums(
+        &self,
+        b: &[u8],
+        len_ok: impl Fn(usize, u64) -> Result<(), String>,
+        lazy: impl Fn(usize) -> bool,
+    ) -> Result<(Vec<std::ops::Range<usize>>, Vec<u64>), FormatError> {
         let mut at = self.header_len() as u64;
         let mut ranges = Vec::with_capacity(self.sections.len());
+        let mut checksums = Vec::with_capacity(self.sections.len());
         for (k, &name) in self.sections.iter().enumerate() {
             let (off, len, hash) = self.entry(b, k);
             if off != at {
@@ -164,6 +178,7 @@ impl Frame {
                 return Err(FormatError::Checksum { section: name });
             }
             ranges.push(r);
+            checksums.push(hash);
             at = end;
         }
         if at != b.len() as u64 {
@@ -172,7 +187,7 @@ impl Frame {
                 format!("{} bytes follow the last section", b.len() as u64 - at),
             ));
         }
-        Ok(ranges)
+        Ok((ranges, checksums))
     }
 
     /// Entry `k` of the section table of a checked header: the section's
@@ -244,6 +259,11 @@ mod tests {
         let r = FRAME.sections(&b, |_, _| Ok(()), |_| false).unwrap();
         assert_eq!(&b[r[0].clone()], b"hello");
         assert_eq!(&b[r[1].clone()], b"world!");
+        let (r2, sums) = FRAME
+            .sections_with_checksums(&b, |_, _| Ok(()), |_| false)
+            .unwrap();
+        assert_eq!(r2, r);
+        assert_eq!(sums, [xxh3_64(b"hello"), xxh3_64(b"world!")]);
     }
 
     #[test]

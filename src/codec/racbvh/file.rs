@@ -280,9 +280,10 @@ impl RacBvh {
         // The clusters are checked cluster by cluster as they are decoded
         // (the meta table holds their checksums), the mesh's two sections
         // when the mesh is unpacked; the meta table and the edge flags here.
-        let ranges = FRAME.sections(b, |_, _| Ok(()), |k| (1..=3).contains(&k))?;
+        let (ranges, hashes) =
+            FRAME.sections_with_checksums(b, |_, _| Ok(()), |k| (1..=3).contains(&k))?;
         let sections: [&[u8]; SECTIONS] = std::array::from_fn(|k| &b[ranges[k].clone()]);
-        let hashes: [u64; SECTIONS] = std::array::from_fn(|k| FRAME.entry(b, k).2);
+        let hashes: [u64; SECTIONS] = std::array::from_fn(|k| hashes[k]);
         let csize = 1u64 << cluster_bits;
         let clusters = u64::from(node_count).div_ceil(csize);
         let need = clusters * META_ENTRY as u64;
