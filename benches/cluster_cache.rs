@@ -47,6 +47,7 @@ use cbvh::codec::plain::PlainBvh;
 use cbvh::codec::racbvh::{RacBvh, RacOptions};
 use cbvh::cursor::NodeCursor;
 use cbvh::geom::{Aabb, Triangle};
+use cbvh::query::RayCursor;
 use cbvh::scene::{Kind, generate};
 use cbvh::{TraversalStats, query};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
@@ -122,6 +123,9 @@ impl NodeCursor for Recorder<'_> {
         self.plain.triangle_count()
     }
 }
+
+/// The generic ray traversals (which log through the methods above).
+impl RayCursor for Recorder<'_> {}
 
 /// The look-ups one thread sends to the shared cache: its rays' cluster
 /// accesses, minus those its [`PINS`] direct-mapped pins serve.

@@ -17,7 +17,7 @@ use cbvh::build::{BuildOptions, build};
 use cbvh::codec::ByteSize;
 use cbvh::codec::clbvh::{COMPACT_LEAF_SIZE, ClBvh, ClOptions, LeafKind};
 use cbvh::codec::plain::PlainBvh;
-use cbvh::cursor::NodeCursor;
+use cbvh::query::RayCursor;
 use cbvh::geom::Ray;
 use cbvh::scene::{Kind, generate};
 use cbvh::{TraversalStats, query};
@@ -57,7 +57,7 @@ struct Args {
     json: bool,
 }
 
-fn cast<C: NodeCursor>(c: &C, rays: &[Ray]) -> (f64, TraversalStats, u64) {
+fn cast<C: RayCursor>(c: &C, rays: &[Ray]) -> (f64, TraversalStats, u64) {
     let mut stats = TraversalStats::default();
     let t = Instant::now();
     let mut sum = 0u64;

@@ -1,7 +1,8 @@
-//! Every query over [`NodeCursor`] on one thread, for every codec of the
-//! registry, same tree and same queries: camera rays one at a time (closest
-//! hit), shadow rays (any hit), 8×8 packets, closest points, box overlaps
-//! and two-tree pair enumeration (statue against a turned copy of itself).
+//! Every query over [`NodeCursor`] (rays through [`RayCursor`]) on one
+//! thread, for every codec of the registry, same tree and same queries:
+//! camera rays one at a time (closest hit), shadow rays (any hit), 8×8
+//! packets, closest points, box overlaps and two-tree pair enumeration
+//! (statue against a turned copy of itself).
 //! Prints one JSON object per (codec, query) with nanoseconds per query
 //! (the minimum and median of the timed passes) and a checksum of the
 //! answers, so that two builds of the crate can be compared run against run
@@ -23,7 +24,7 @@ use cbvh::build::{BuildOptions, build};
 use cbvh::codec::{AnyCodec, AnyOptions, CodecKind, OpenOptions};
 use cbvh::cursor::NodeCursor;
 use cbvh::geom::{Aabb, Pose, Ray};
-use cbvh::query;
+use cbvh::query::{self, RayCursor};
 use cbvh::scene::{Kind, generate};
 use cbvh::with_codec;
 use glam::{Quat, Vec3, Vec3A};
@@ -52,7 +53,7 @@ fn uniform(seed: u64) -> impl FnMut() -> f32 {
     }
 }
 
-fn queries<C: NodeCursor>(c: &C, lo: Vec3A, hi: Vec3A) -> Queries {
+fn queries<C: RayCursor>(c: &C, lo: Vec3A, hi: Vec3A) -> Queries {
     let (eye, dirs) = ray_sets::camera_tiles(lo, hi, 256);
     let camera: Vec<Ray> = dirs.iter().map(|&d| Ray::new(eye, d)).collect();
     // Shadow rays from the camera rays' hit points towards a light.
@@ -122,7 +123,7 @@ fn mix(h: u64, x: u64) -> u64 {
     (h ^ x).wrapping_mul(0x0100_0000_01b3).rotate_left(17)
 }
 
-fn bench<C: NodeCursor>(codec: &str, c: &C, q: &Queries, passes: usize) {
+fn bench<C: RayCursor>(codec: &str, c: &C, q: &Queries, passes: usize) {
     time(codec, "closest_hit", q.camera.len(), passes, || {
         let mut s = TraversalStats::default();
         q.camera.iter().fold(0, |h, r| {

@@ -25,6 +25,7 @@ use cbvh::codec::hcc::{HccBvh, HccOptions};
 use cbvh::codec::plain::PlainBvh;
 use cbvh::codec::racbvh::{RacBvh, RacOptions};
 use cbvh::cursor::NodeCursor;
+use cbvh::query::RayCursor;
 use cbvh::geom::Ray;
 use cbvh::scene::{Kind, generate};
 use cbvh::{Mesh, TraversalStats, query};
@@ -71,7 +72,7 @@ struct Args {
 }
 
 /// Closest hits of every ray; the number of hits.
-fn trace<C: NodeCursor>(c: &C, rays: &[Ray]) -> usize {
+fn trace<C: RayCursor>(c: &C, rays: &[Ray]) -> usize {
     let mut stats = TraversalStats::default();
     rays.iter()
         .filter(|r| query::closest_hit(c, r, f32::INFINITY, &mut stats).is_some())

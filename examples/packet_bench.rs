@@ -11,16 +11,15 @@ use std::time::Instant;
 use cbvh::TraversalStats;
 use cbvh::build::{BuildOptions, build};
 use cbvh::codec::{AnyCodec, AnyOptions, CodecKind};
-use cbvh::cursor::NodeCursor;
 use cbvh::geom::Ray;
-use cbvh::query::{self, RayHit};
+use cbvh::query::{self, RayCursor, RayHit};
 use cbvh::scene::{Kind, generate};
 use glam::Vec3A;
 
 #[path = "support/rays.rs"]
 mod ray_sets;
 
-fn bench<C: NodeCursor>(c: &C, rays: &[Ray]) {
+fn bench<C: RayCursor>(c: &C, rays: &[Ray]) {
     let single = |out: &mut Vec<Option<RayHit>>| {
         out.clear();
         let mut s = TraversalStats::default();

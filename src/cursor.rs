@@ -23,19 +23,19 @@
 //! Which child a query descends into first is the query's choice (nearest
 //! first for closest hits, lane order elsewhere), never the cursor's.
 //!
-//! Three ray queries have a default over the batches that a codec may
-//! replace with a traversal of its own when its layout allows a faster
-//! one, giving the same hits bit for bit: [`NodeCursor::closest_hit`],
-//! [`NodeCursor::any_hit`] and, for packets,
-//! [`NodeCursor::closest_hits_within`] (CLBVH and i-HCCMesh replace the
-//! first two; CLBVH casts a packet's rays one by one).
+//! This module calls no query. The three ray queries that a codec may
+//! answer with a traversal of its own (closest hit, any hit, a packet's
+//! closest hits) are methods of
+//! [`query::RayCursor`](crate::query::RayCursor), a trait over this one in
+//! the query layer, which every codec's cursor implements: the codecs
+//! depend on the queries, the queries on this trait, and this trait on
+//! nothing above it.
 
 mod batch;
 
 pub use batch::ChildBoxes;
 
-use crate::geom::{Aabb, Ray, Triangle};
-use crate::query::RayHit;
+use crate::geom::{Aabb, Triangle};
 
 /// The most children an inner node may have (8-wide trees).
 pub const MAX_CHILDREN: usize = 8;
@@ -138,66 +138,6 @@ pub trait NodeCursor: Sync {
 
     /// Number of triangles in the tree.
     fn triangle_count(&self) -> usize;
-
-    /// The closest hit of `ray` within `[0, t_max]`, as
-    /// [`query::closest_hit`](crate::query::closest_hit) defines it.
-    ///
-    /// The default is the generic traversal over
-    /// [`children`](Self::children) and
-    /// [`for_each_triangle`](Self::for_each_triangle)
-    /// ([`closest_hit_generic`](crate::query::ray::closest_hit_generic)).
-    /// A codec whose layout allows a faster traversal overrides it (CLBVH
-    /// tests eight stored boxes per AVX2 instruction without building
-    /// batches; i-HCCMesh descends into the nearer of a decoded pair
-    /// without copying its 32-byte handles through a batch and the stack);
-    /// the override must give the same hit, bit for bit, and is tested
-    /// against the default.
-    #[inline]
-    fn closest_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> Option<RayHit>
-    where
-        Self: Sized,
-    {
-        crate::query::ray::closest_hit_generic(self, ray, t_max, stats)
-    }
-
-    /// Whether `ray` hits a triangle within `[0, t_max]`, as
-    /// [`query::any_hit`](crate::query::any_hit) defines it; overridden,
-    /// like [`closest_hit`](Self::closest_hit), by codecs with a faster
-    /// traversal.
-    #[inline]
-    fn any_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> bool
-    where
-        Self: Sized,
-    {
-        crate::query::ray::any_hit_generic(self, ray, t_max, stats)
-    }
-
-    /// The closest hits of a packet of coherent rays, as
-    /// [`query::closest_hits_within`](crate::query::closest_hits_within)
-    /// defines them (the same hits as [`closest_hit`](Self::closest_hit)
-    /// ray by ray).
-    ///
-    /// The default is the generic packet traversal, one walk of the tree
-    /// for the whole packet
-    /// ([`closest_hits_generic`](crate::query::packet::closest_hits_generic)).
-    /// A codec whose own single-ray traversal is faster than that walk
-    /// overrides it with a loop over [`closest_hit`](Self::closest_hit):
-    /// CLBVH, whose AVX2 traversal casts 17.0 M camera rays/s one by one
-    /// on the 1 M statue against 10.1 M in 8×8 packets
-    /// (`examples/packet_bench.rs`). Called with `rays`, `t_max` and `out`
-    /// of one length, at most [`MAX_PACKET`](crate::query::packet::MAX_PACKET).
-    #[inline]
-    fn closest_hits_within(
-        &self,
-        rays: &[Ray],
-        t_max: &[f32],
-        out: &mut [Option<RayHit>],
-        stats: &mut TraversalStats,
-    ) where
-        Self: Sized,
-    {
-        crate::query::packet::closest_hits_generic(self, rays, t_max, out, stats)
-    }
 }
 
 /// [`NodeCursor::children`] for a node with more than two children, by

@@ -362,6 +362,21 @@ pub struct TriHit {
     pub v: f32,
 }
 
+/// The closest intersection of a ray with a mesh: a [`TriHit`] with the
+/// id of the triangle hit (what the ray queries of [`crate::query`]
+/// return).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayHit {
+    /// Ray parameter of the hit (distance if the direction is a unit vector).
+    pub t: f32,
+    /// Id of the triangle hit.
+    pub triangle: u32,
+    /// Barycentric coordinate of the triangle's second corner.
+    pub u: f32,
+    /// Barycentric coordinate of the triangle's third corner.
+    pub v: f32,
+}
+
 /// Watertight ray/triangle intersection (Woop, Benthin and Wald, JCGT
 /// 2013), two-sided. Returns the hit if `t` lies in `[0, t_max]`.
 ///

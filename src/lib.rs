@@ -13,7 +13,9 @@
 //! - [`cursor`]: [`NodeCursor`], the traversal trait every codec implements.
 //! - [`codec`]: the storage forms, the [`Codec`](codec::Codec) contract they
 //!   implement, and the registry ([`codec::any`]) that names every codec once.
-//! - [`query`]: ray, overlap, closest-point and tree-vs-tree queries over any cursor.
+//! - [`query`]: ray, overlap, closest-point and tree-vs-tree queries over any
+//!   cursor, and [`RayCursor`](query::RayCursor), through which a codec may
+//!   answer the ray queries with a traversal of its own.
 //! - [`contact`]: cbvh's own contacts: the batched triangle-pair kernel,
 //!   active edges, oriented normals, and contact patches.
 //! - [`parry`]: the parry3d / rapier3d integration.

@@ -616,10 +616,10 @@ impl Subject {
     /// a second parent, a path of children named twice: a DAG), so that
     /// every checksum and bit is as the codec writes them; trees the
     /// encoder refuses (or panics on: the canonical tree is trusted input)
-    /// are skipped. The encoder may also turn such a tree into a valid file
-    /// of another mesh (hcc's tree order numbers the triangles it reaches,
-    /// o-HCCMesh rebuilds its trees), so a consistent other file is
-    /// allowed; an inconsistent one is not.
+    /// are skipped (hcc and hcc-ooc check the tree first and refuse them
+    /// all). An encoder may also turn such a tree into a valid file of
+    /// another mesh, so a consistent other file is allowed; an
+    /// inconsistent one is not.
     pub fn corrupt_trees(
         &self,
         bvh: &CanonicalBvh,

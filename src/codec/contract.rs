@@ -11,19 +11,20 @@ use super::common::page_cache::CacheStats;
 use super::settings::{Settings, SettingsError};
 use crate::build::CanonicalBvh;
 use crate::contact::EdgeFlags;
-use crate::cursor::NodeCursor;
 use crate::mesh::Mesh;
+use crate::query::RayCursor;
 
 /// One storage form of a BVH with its mesh: encoded from the canonical tree,
-/// traversed through [`NodeCursor`], sized by part through [`ByteSize`],
-/// stored in a self-contained file.
+/// traversed through [`NodeCursor`](crate::cursor::NodeCursor) and ray cast
+/// through [`RayCursor`] (a trait over it), sized by part through
+/// [`ByteSize`], stored in a self-contained file.
 ///
 /// The registry ([`super::any`]) names every codec once and dispatches to
 /// its implementation of this trait; the parry shape, the renderer, the CLI
 /// and the sims go through the registry, never through a codec directly.
 /// Implementations are thin: each codec's `contract.rs` delegates to the
 /// codec's own methods.
-pub trait Codec: NodeCursor + ByteSize + Send + Sync + Sized + 'static {
+pub trait Codec: RayCursor + ByteSize + Send + Sync + Sized + 'static {
     /// The codec's registry entry (its name in the CLI, the sims and JSON).
     const KIND: CodecKind;
 

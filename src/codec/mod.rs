@@ -1,7 +1,8 @@
 //! Codecs: each turns a [`CanonicalBvh`](crate::build::CanonicalBvh) and its
 //! mesh into one storage form, owns that form's bit layouts, and implements
 //! the [`Codec`] contract (traversal through
-//! [`NodeCursor`](crate::cursor::NodeCursor), sizes by part, vertex indices,
+//! [`NodeCursor`](crate::cursor::NodeCursor), rays through
+//! [`RayCursor`](crate::query::RayCursor), sizes by part, vertex indices,
 //! the decoded mesh, mass properties, its self-contained file).
 //!
 //! - [`any`]: the registry, the one place that names every codec:
@@ -46,7 +47,11 @@
 //!    cursor (`decode.rs`, [`NodeCursor`](crate::cursor::NodeCursor) with
 //!    conservative boxes; a binary codec needs only `for_each_child`, a
 //!    wide one also overrides `children` to write its child boxes into the
-//!    batch's lanes at once), `file.rs` (its self-contained file: magic,
+//!    batch's lanes at once; and [`RayCursor`](crate::query::RayCursor),
+//!    an empty `impl` for the generic ray traversals, or overriding
+//!    `closest_hit`, `any_hit` or `closest_hits_within` with a traversal of
+//!    its own that gives the same hits, tested against the generic one),
+//!    `file.rs` (its self-contained file: magic,
 //!    version, two-tier validation, atomic save), `error.rs` (a `thiserror`
 //!    enum with fields), [`ByteSize`], and `mod.rs` with the module docs
 //!    (the paper's choices and ours).

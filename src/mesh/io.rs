@@ -130,15 +130,7 @@ pub fn load(path: impl AsRef<Path>) -> Result<Mesh, MeshError> {
 /// # Errors
 /// As [`load`].
 pub fn load_with_detail(path: impl AsRef<Path>) -> Result<(Mesh, FormatDetail), MeshError> {
-    let path = path.as_ref();
-    let format = Format::from_path(path)?;
-    let io_err = |source| MeshError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let file = File::open(path).map_err(io_err)?;
-    let len = file.metadata().map_err(io_err)?.len();
-    read(BufReader::with_capacity(1 << 16, file), len, format, path)
+    collect(|tris| read_file(path.as_ref(), tris))
 }
 
 /// Loads a mesh of the given `format` from memory; `name` names it in
@@ -159,19 +151,43 @@ pub fn load_bytes_with_detail(
     format: Format,
     name: &Path,
 ) -> Result<(Mesh, FormatDetail), MeshError> {
-    read(bytes, bytes.len() as u64, format, name)
+    collect(|tris| read_into(bytes, bytes.len() as u64, format, name, tris))
 }
 
-fn read<R: BufRead>(
-    reader: R,
-    len: u64,
-    format: Format,
-    path: &Path,
-) -> Result<(Mesh, FormatDetail), MeshError> {
+/// The mesh that `read` reads, its triangles collected ([`Tris::collect`]).
+fn collect(read: impl FnOnce(&mut Tris<'_>) -> Parsed) -> Result<(Mesh, FormatDetail), MeshError> {
     let mut tris = Tris::collect();
-    let (vertices, detail) = read_into(reader, len, format, path, &mut tris)?;
+    let (vertices, detail) = read(&mut tris)?;
     Ok((Mesh::new(vertices, tris.finish()?), detail))
 }
+
+/// Opens the mesh file at `path`: its format (by extension), the file
+/// and its length.
+fn open(path: &Path) -> Result<(Format, File, u64), MeshError> {
+    let format = Format::from_path(path)?;
+    let file = File::open(path).map_err(|e| io_error(path, e))?;
+    let len = file.metadata().map_err(|e| io_error(path, e))?.len();
+    Ok((format, file, len))
+}
+
+/// An I/O error on `path`.
+fn io_error(path: &Path, source: io::Error) -> MeshError {
+    MeshError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Reads the mesh file at `path` (the format by its extension): its
+/// vertices, its triangles into `tris` ([`load`] and [`stream`]).
+fn read_file(path: &Path, tris: &mut Tris<'_>) -> Parsed {
+    let (format, file, len) = open(path)?;
+    read_into(BufReader::with_capacity(1 << 16, file), len, format, path, tris)
+}
+
+/// What a reader gives: the file's vertices and the format found (its
+/// triangles went to a [`Tris`]).
+type Parsed = Result<(Vec<[f32; 3]>, FormatDetail), MeshError>;
 
 /// Reads a mesh file's vertices, putting its triangles into `tris`.
 fn read_into<R: BufRead>(
@@ -180,7 +196,7 @@ fn read_into<R: BufRead>(
     format: Format,
     path: &Path,
     tris: &mut Tris<'_>,
-) -> Result<(Vec<[f32; 3]>, FormatDetail), MeshError> {
+) -> Parsed {
     let src = Src { path, len };
     let (vertices, encoding) = match format {
         Format::Off => (off::read(reader, &src, tris)?, Encoding::Ascii),
@@ -205,17 +221,11 @@ fn read_into<R: BufRead>(
 /// An unknown extension, or the file cannot be opened.
 pub fn estimate_counts(path: impl AsRef<Path>) -> Result<(u64, u64), MeshError> {
     let path = path.as_ref();
-    let format = Format::from_path(path)?;
-    let io_err = |source| MeshError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let mut file = File::open(path).map_err(io_err)?;
-    let len = file.metadata().map_err(io_err)?.len();
+    let (format, mut file, len) = open(path)?;
     let mut head = Vec::new();
     std::io::Read::take(&mut file, 1 << 16)
         .read_to_end(&mut head)
-        .map_err(io_err)?;
+        .map_err(|e| io_error(path, e))?;
     let text = String::from_utf8_lossy(&head);
     let mut words = text
         .lines()
@@ -297,22 +307,8 @@ pub struct Streamed {
 /// As [`load`], and the first error `batches` returns (the file is then
 /// read to its end without calling it again).
 pub fn stream(path: impl AsRef<Path>, batches: TriangleBatches<'_>) -> Result<Streamed, MeshError> {
-    let path = path.as_ref();
-    let format = Format::from_path(path)?;
-    let io_err = |source| MeshError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let file = File::open(path).map_err(io_err)?;
-    let len = file.metadata().map_err(io_err)?.len();
     let mut tris = Tris::batches(batches);
-    let (vertices, detail) = read_into(
-        BufReader::with_capacity(1 << 16, file),
-        len,
-        format,
-        path,
-        &mut tris,
-    )?;
+    let (vertices, detail) = read_file(path.as_ref(), &mut tris)?;
     let triangles = tris.count();
     tris.finish()?;
     Ok(Streamed {
@@ -341,10 +337,7 @@ pub fn save(mesh: &Mesh, path: impl AsRef<Path>) -> Result<(), MeshError> {
             });
         }
     };
-    let io_err = |source| MeshError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
+    let io_err = |source| io_error(path, source);
     // Atomic: a reader never sees half a mesh, and one that has the old
     // file mapped keeps its pages.
     let mut out = crate::atomic::AtomicFile::create(path).map_err(io_err)?;
@@ -376,10 +369,7 @@ impl Src<'_> {
     }
 
     pub(super) fn io(&self, source: io::Error) -> MeshError {
-        MeshError::Io {
-            path: self.path(),
-            source,
-        }
+        io_error(self.path, source)
     }
 
     pub(super) fn malformed(&self, place: Place, message: impl Into<String>) -> MeshError {

@@ -14,6 +14,13 @@
 //!   pairs whose boxes come within a prediction distance.
 //!
 //! Every query counts [`TraversalStats`](crate::cursor::TraversalStats).
+//!
+//! The ray queries (closest hit, any hit, a packet's closest hits) run
+//! through [`RayCursor`], a trait over the cursor whose defaults are the
+//! generic traversals of [`ray`] and [`packet`] and which a codec
+//! implements, overriding them where its layout allows a faster traversal
+//! that gives the same hits. [`RayHit`], what they return, is a geometry
+//! type ([`crate::geom`]), re-exported here.
 
 pub mod best;
 pub mod bvtt;
@@ -21,6 +28,7 @@ pub mod overlap;
 pub mod packet;
 pub mod point;
 pub mod ray;
+mod ray_cursor;
 
 use std::mem::MaybeUninit;
 
@@ -32,6 +40,7 @@ pub use overlap::{overlap, visit, visit_batch};
 pub use packet::{closest_hits, closest_hits_within};
 pub use point::{PointHit, closest_point};
 pub use ray::{RayHit, any_hit, any_hit_with, closest_hit, closest_hit_with};
+pub use ray_cursor::RayCursor;
 
 /// Orders children by entry distance, farthest first, so that pushing them
 /// in this order pops the nearest next (two children, the usual case,

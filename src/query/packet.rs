@@ -17,7 +17,7 @@
 //! distance, so the hits are the single-ray hits.
 
 use super::ray::{RayHit, keep_closer};
-use super::{Stack, far_first};
+use super::{RayCursor, Stack, far_first};
 use crate::cursor::{Children, MAX_CHILDREN, NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Ray, SLAB_EXIT_SCALE, ray_triangle};
 
@@ -171,7 +171,7 @@ impl Lanes {
 ///
 /// # Panics
 /// If `rays` has more than [`MAX_PACKET`] rays or `out` another length.
-pub fn closest_hits<C: NodeCursor>(
+pub fn closest_hits<C: RayCursor>(
     c: &C,
     rays: &[Ray],
     t_max: f32,
@@ -191,14 +191,14 @@ pub fn closest_hits<C: NodeCursor>(
 /// `rays[i]`), as a scene of several meshes needs.
 ///
 /// Runs the cursor's
-/// [`closest_hits_within`](NodeCursor::closest_hits_within): the generic
+/// [`closest_hits_within`](RayCursor::closest_hits_within): the generic
 /// packet traversal ([`closest_hits_generic`]) unless the codec has a
 /// faster way (CLBVH casts the rays one by one through its own traversal).
 ///
 /// # Panics
 /// If `rays` has more than [`MAX_PACKET`] rays or `t_max` or `out` another
 /// length.
-pub fn closest_hits_within<C: NodeCursor>(
+pub fn closest_hits_within<C: RayCursor>(
     c: &C,
     rays: &[Ray],
     t_max: &[f32],
@@ -219,7 +219,7 @@ fn check_packet(rays: &[Ray], t_max: &[f32], out: &[Option<RayHit>]) {
 
 /// [`closest_hits_within`] through the generic packet traversal, one walk
 /// of the tree for the whole packet, whatever the codec: the default of
-/// [`NodeCursor::closest_hits_within`], and the reference a codec's own
+/// [`RayCursor::closest_hits_within`], and the reference a codec's own
 /// packet path is tested against.
 ///
 /// # Panics

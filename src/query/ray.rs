@@ -1,21 +1,10 @@
 //! Ray queries: closest hit and any hit.
 
-use super::{Stack, far_first};
+use super::{RayCursor, Stack, far_first};
 use crate::cursor::{Children, MAX_CHILDREN, NodeCursor, TraversalStats};
 use crate::geom::{Ray, SLAB_EXIT_SCALE, TriHit, Triangle, ray_triangle};
 
-/// The closest intersection of a ray with a mesh.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RayHit {
-    /// Ray parameter of the hit (distance if the direction is a unit vector).
-    pub t: f32,
-    /// Id of the triangle hit.
-    pub triangle: u32,
-    /// Barycentric coordinate of the triangle's second corner.
-    pub u: f32,
-    /// Barycentric coordinate of the triangle's third corner.
-    pub v: f32,
-}
+pub use crate::geom::RayHit;
 
 /// Keeps hit `h` on triangle `id` if it is closer than `best` (nearer, or
 /// as near on a smaller triangle id: the tie rule that makes the result
@@ -43,10 +32,10 @@ pub(crate) fn keep_closer(
 
 /// The closest hit of `ray` within `[0, t_max]`, with the two-sided
 /// watertight triangle test ([`ray_triangle`]): the cursor's own traversal
-/// ([`NodeCursor::closest_hit`]) where it has one, else
+/// ([`RayCursor::closest_hit`]) where it has one, else
 /// [`closest_hit_generic`]. Every codec gives the same hit.
 #[inline]
-pub fn closest_hit<C: NodeCursor>(
+pub fn closest_hit<C: RayCursor>(
     c: &C,
     ray: &Ray,
     t_max: f32,
@@ -57,7 +46,7 @@ pub fn closest_hit<C: NodeCursor>(
 
 /// [`closest_hit`] through the generic traversal over the cursor's
 /// batches, whatever the codec: the default of
-/// [`NodeCursor::closest_hit`], and the reference a codec's own traversal
+/// [`RayCursor::closest_hit`], and the reference a codec's own traversal
 /// is tested against.
 pub fn closest_hit_generic<C: NodeCursor>(
     c: &C,
@@ -122,15 +111,15 @@ pub fn closest_hit_with<C: NodeCursor>(
 }
 
 /// Whether `ray` hits any triangle within `[0, t_max]` (shadow rays): the
-/// cursor's own traversal ([`NodeCursor::any_hit`]) where it has one, else
+/// cursor's own traversal ([`RayCursor::any_hit`]) where it has one, else
 /// [`any_hit_generic`].
 #[inline]
-pub fn any_hit<C: NodeCursor>(c: &C, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> bool {
+pub fn any_hit<C: RayCursor>(c: &C, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> bool {
     c.any_hit(ray, t_max, stats)
 }
 
 /// [`any_hit`] through the generic traversal (the default of
-/// [`NodeCursor::any_hit`]).
+/// [`RayCursor::any_hit`]).
 pub fn any_hit_generic<C: NodeCursor>(
     c: &C,
     ray: &Ray,

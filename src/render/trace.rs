@@ -8,7 +8,7 @@
 //! the traversal counters, not once per ray. (A codec whose own single-ray
 //! traversal is faster casts a packet's rays one by one, and counts them
 //! so: CLBVH, see
-//! [`NodeCursor::closest_hits_within`](crate::cursor::NodeCursor::closest_hits_within).)
+//! [`RayCursor::closest_hits_within`](crate::query::RayCursor::closest_hits_within).)
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};

@@ -12,8 +12,8 @@ use cbvh::build::{BuildOptions, build};
 use cbvh::codec::racbvh::{RacBvh, RacOptions};
 use cbvh::codec::{AnyCodec, AnyOptions, CodecFileError, CodecKind, OpenOptions};
 use cbvh::parry::CbvhShape;
-use cbvh::query;
-use cbvh::{Mesh, NodeCursor, TraversalStats};
+use cbvh::query::{self, RayCursor};
+use cbvh::{Mesh, TraversalStats};
 use common::*;
 use parry3d::mass_properties::MassProperties;
 use parry3d::math::Vector;
@@ -43,7 +43,7 @@ fn codecs(mesh: &Mesh) -> Vec<AnyCodec> {
         .collect()
 }
 
-fn hits<C: NodeCursor>(c: &C, mesh: &Mesh) -> Vec<Option<(u32, u32)>> {
+fn hits<C: RayCursor>(c: &C, mesh: &Mesh) -> Vec<Option<(u32, u32)>> {
     let mut stats = TraversalStats::default();
     test_rays(mesh, 5, 200)
         .iter()

@@ -25,7 +25,7 @@ use cbvh::codec::common::MassProps;
 use cbvh::codec::{AnyCodec, ByteSize, Codec, CodecFileError, OpenOptions};
 use cbvh::contact::EdgeFlags;
 use cbvh::geom::{Aabb, Pose, Ray};
-use cbvh::query::{self, RayHit};
+use cbvh::query::{self, RayCursor, RayHit};
 use cbvh::scene::{Kind, generate};
 use cbvh::{Mesh, NodeCursor, TraversalStats};
 use common::*;
@@ -89,7 +89,7 @@ fn temp(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("cbvh-suite-{}-{name}", std::process::id()))
 }
 
-fn hits<C: NodeCursor>(c: &C, mesh: &Mesh) -> Vec<Option<RayHit>> {
+fn hits<C: RayCursor>(c: &C, mesh: &Mesh) -> Vec<Option<RayHit>> {
     let mut stats = TraversalStats::default();
     test_rays(mesh, 5, 100)
         .iter()

@@ -12,6 +12,7 @@ use crate::codec::common::{FormatError, MassProps};
 use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError};
 use crate::contact::EdgeFlags;
 use crate::cursor::NodeCursor;
+use crate::query::RayCursor;
 use crate::mesh::Mesh;
 
 fn wrong_kind(want: LeafKind) -> ClError {
@@ -221,7 +222,9 @@ impl NodeCursor for ClBvhCompact {
     fn triangle_count(&self) -> usize {
         self.0.triangle_count()
     }
+}
 
+impl RayCursor for ClBvhCompact {
     #[inline]
     fn closest_hit(
         &self,

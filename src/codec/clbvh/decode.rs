@@ -1,4 +1,5 @@
-//! [`NodeCursor`] over a [`ClBvh`].
+//! [`NodeCursor`] over a [`ClBvh`], and its [`RayCursor`] through CLBVH's
+//! own traversal (`trace.rs`).
 
 use glam::Vec3A;
 
@@ -10,7 +11,7 @@ use super::simd::{SoaBoxes, dequantize};
 use super::{ClBvh, LeafKind};
 use crate::cursor::{ChildBoxes, Children, MAX_CHILDREN, NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Ray, Triangle};
-use crate::query::RayHit;
+use crate::query::{RayCursor, RayHit};
 
 /// Lane value of a [`ClNode`] that stands for a whole node.
 const WHOLE: u32 = u32::MAX;
@@ -222,7 +223,9 @@ impl NodeCursor for ClBvh {
             LeafKind::Compact => self.slot_of.len(),
         }
     }
+}
 
+impl RayCursor for ClBvh {
     /// CLBVH's own traversal (`trace.rs`).
     #[inline]
     fn closest_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> Option<RayHit> {
@@ -237,7 +240,7 @@ impl NodeCursor for ClBvh {
 
     /// Ray by ray through CLBVH's own traversal, which is faster than the
     /// generic packet walk over this tree's batches (see
-    /// [`NodeCursor::closest_hits_within`]).
+    /// [`RayCursor::closest_hits_within`]).
     #[inline]
     fn closest_hits_within(
         &self,

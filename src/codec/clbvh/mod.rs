@@ -58,8 +58,8 @@
 //!   statue.
 //! - **Rays** (closest and any hit) have a traversal of their own
 //!   (module `trace`, through the cursor's
-//!   [`closest_hit`](crate::cursor::NodeCursor::closest_hit) and
-//!   [`any_hit`](crate::cursor::NodeCursor::any_hit)): eight stored boxes
+//!   [`closest_hit`](crate::query::RayCursor::closest_hit) and
+//!   [`any_hit`](crate::query::RayCursor::any_hit)): eight stored boxes
 //!   an AVX2 instruction (a multi-leaf node's dequantized in registers),
 //!   nearest child first (one comparison for two), a single hit child
 //!   entered without the stack, a multi-leaf node's lanes tested right

@@ -1,5 +1,7 @@
 //! [`NodeCursor`] over an [`HccBvh`]: boxes from vertex indices, the parent
 //! box and the reuse mask; structure from templates and inter-connections.
+//! Its [`RayCursor`] casts rays through i-HCCMesh's own traversal
+//! (`trace.rs`).
 
 use glam::Vec3A;
 
@@ -13,7 +15,7 @@ use super::template::TEMPLATES;
 use super::vertices::{F32Verts, TreeVerts, Vertices};
 use crate::cursor::{Children, NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Ray, Triangle};
-use crate::query::ray::RayHit;
+use crate::query::{RayCursor, RayHit};
 
 #[inline(always)]
 fn set_extent(b: &mut Aabb, e: usize, v: f32) {
@@ -447,7 +449,9 @@ impl NodeCursor for HccBvh {
     fn triangle_count(&self) -> usize {
         self.triangle_count as usize
     }
+}
 
+impl RayCursor for HccBvh {
     /// i-HCCMesh's own traversal (`trace.rs`).
     #[inline]
     fn closest_hit(&self, ray: &Ray, t_max: f32, stats: &mut TraversalStats) -> Option<RayHit> {

@@ -1,6 +1,7 @@
 //! Building an [`HccBvh`] from the canonical tree.
 
 use super::block;
+use super::canonical::check_tree;
 use super::decompose::decompose;
 use super::error::HccError;
 use super::ids::{IdMap, VertexIds};
@@ -250,6 +251,10 @@ impl HccBvh {
                 tree: bvh.triangle_count(),
                 mesh: mesh.triangles.len(),
             });
+        }
+        if !mesh.triangles.is_empty() {
+            let leaf_limit = if multi { MAX_LEAF_TRIANGLES } else { 1 };
+            check_tree(bvh, mesh.triangles.len(), leaf_limit)?;
         }
         if let Some(bits) = options.vertex_bits
             && !(1..=MAX_VERTEX_BITS).contains(&bits)

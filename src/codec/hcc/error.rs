@@ -24,6 +24,18 @@ pub enum HccError {
         /// Triangles in the mesh.
         mesh: usize,
     },
+    /// The canonical tree is not a tree over the mesh's triangles as the
+    /// builder makes them (checked before the encoder reads it; see
+    /// [`CanonicalBvh`](crate::build::CanonicalBvh)).
+    #[error(
+        "canonical node {node}: {what}; this is not a tree the builder makes over this mesh: build it again"
+    )]
+    BadTree {
+        /// The canonical node where the walk from the root found it.
+        node: u32,
+        /// What is wrong.
+        what: &'static str,
+    },
     /// A single leaf has too many distinct vertices for a low-level tree.
     #[error(
         "leaf node {node} alone has {vertices} distinct vertices, more than a low-level tree indexes (511); build with a smaller leaf size"

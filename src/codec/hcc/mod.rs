@@ -118,6 +118,7 @@
 //! See [`node`] for the bit layouts.
 
 mod block;
+mod canonical;
 mod contract;
 mod decode;
 mod decompose;

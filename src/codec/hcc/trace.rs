@@ -1,5 +1,6 @@
-//! i-HCCMesh's own ray traversal, behind [`NodeCursor::closest_hit`] and
-//! [`NodeCursor::any_hit`].
+//! i-HCCMesh's own ray traversal, behind
+//! [`RayCursor::closest_hit`](crate::query::RayCursor::closest_hit) and
+//! [`RayCursor::any_hit`](crate::query::RayCursor::any_hit).
 //!
 //! The generic traversal ([`closest_hit_generic`](crate::query::ray::closest_hit_generic))
 //! writes every expanded pair into a batch, copies the hit children into a

@@ -1,4 +1,5 @@
-//! [`NodeCursor`] over a [`PlainBvh`].
+//! [`NodeCursor`] over a [`PlainBvh`], and [`RayCursor`] with the generic
+//! ray traversals.
 
 use glam::Vec3A;
 
@@ -6,6 +7,7 @@ use super::PlainBvh;
 use super::node::PlainNode;
 use crate::cursor::{Children, NodeCursor, prefetch};
 use crate::geom::{Aabb, Triangle};
+use crate::query::RayCursor;
 
 impl PlainBvh {
     /// The inner node `node` and its two children, with the grandchildren
@@ -81,3 +83,6 @@ impl NodeCursor for PlainBvh {
         self.triangles.len()
     }
 }
+
+/// The generic ray traversals.
+impl RayCursor for PlainBvh {}

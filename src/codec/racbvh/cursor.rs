@@ -1,4 +1,5 @@
-//! [`NodeCursor`] for [`RacBvh`], with the node handle [`RacNode`].
+//! [`NodeCursor`] for [`RacBvh`], with the node handle [`RacNode`], and
+//! [`RayCursor`] with the generic ray traversals.
 
 use super::RacBvh;
 use super::cache;
@@ -7,6 +8,7 @@ use super::node::INCOMPLETE;
 use crate::build::LEAF_FLAG;
 use crate::cursor::{Children, NodeCursor};
 use crate::geom::{Aabb, Triangle};
+use crate::query::RayCursor;
 
 /// The cursor's node handle: the global node index with the node's words
 /// 6 and 7 (children, or a leaf's triangle id / slot and count), so that
@@ -114,3 +116,6 @@ impl NodeCursor for RacBvh {
         self.header.triangle_count as usize
     }
 }
+
+/// The generic ray traversals.
+impl RayCursor for RacBvh {}

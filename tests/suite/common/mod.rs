@@ -9,7 +9,7 @@ use cbvh::cursor::{Children, MAX_CHILDREN, NodeCursor};
 use cbvh::geom::{
     Aabb, Pose, Ray, Triangle, closest_point_on_triangle, ray_triangle, triangle_from_arrays,
 };
-use cbvh::query;
+use cbvh::query::{self, RayCursor};
 use cbvh::{Mesh, TraversalStats};
 use glam::{Quat, Vec3, Vec3A};
 
@@ -192,7 +192,7 @@ pub fn test_rays(mesh: &Mesh, seed: u64, n: usize) -> Vec<Ray> {
 }
 
 /// Closest hit, any hit, overlap and closest point equal brute force.
-pub fn check_queries<C: NodeCursor>(c: &C, mesh: &Mesh, seed: u64) {
+pub fn check_queries<C: RayCursor>(c: &C, mesh: &Mesh, seed: u64) {
     let mut stats = TraversalStats::default();
     for ray in test_rays(mesh, seed, 64) {
         for t_max in [f32::INFINITY, 1.0] {
@@ -317,7 +317,7 @@ pub fn check_closest_point<C: NodeCursor>(
 /// the test rays (every size up to the largest), and coherent 8×8 camera
 /// tiles looking at the mesh from several sides.
 /// Returns how many packet rays hit.
-pub fn check_packets<C: NodeCursor>(
+pub fn check_packets<C: RayCursor>(
     c: &C,
     mesh: &Mesh,
     seed: u64,

@@ -15,7 +15,7 @@ use crate::contact::EdgeFlags;
 use crate::cursor::{Children, NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Ray, Triangle};
 use crate::mesh::Mesh;
-use crate::query::ray::RayHit;
+use crate::query::{RayCursor, RayHit};
 
 impl NodeCursor for HccOocBvh {
     type Node = HccNode;
@@ -93,7 +93,9 @@ impl NodeCursor for HccOocBvh {
             Mode::Paged(p) => p.triangle_count(),
         }
     }
+}
 
+impl RayCursor for HccOocBvh {
     /// The i-HCCMesh's own traversal (module `hcc::trace`), over the
     /// decoded mesh or the paged trees.
     #[inline]

@@ -48,6 +48,29 @@ pub struct OocSizes {
 }
 
 impl OocSizes {
+    /// The sizes of a file whose sections are `section_lens` bytes long
+    /// (in file order, [`SECTIONS`] of them) and whose trees' streams hold
+    /// `part_bits` bits of templates, corners and vertices (the rest of
+    /// the streams' bytes is padding). What [`encode`] and the
+    /// out-of-core builder both report.
+    pub(super) fn from_sections(section_lens: &[u64; SECTIONS], part_bits: &[u64; 3]) -> Self {
+        let len = |k: usize| section_lens[k] as usize;
+        let coded: u64 = part_bits.iter().sum();
+        Self {
+            header: file::HEADER_LEN,
+            dictionaries: len(file::SEC_DICTS),
+            high_level: len(file::SEC_HIGH) + len(file::SEC_BOXES),
+            tree_starts: len(file::SEC_STARTS) + len(file::SEC_FIRSTS),
+            templates: part_bits[0] as f64 / 8.0,
+            corners: part_bits[1] as f64 / 8.0,
+            vertices: part_bits[2] as f64 / 8.0,
+            padding: (section_lens[file::SEC_TREES] * 8 - coded) as f64 / 8.0,
+            ids: len(file::SEC_IDS),
+            vertex_ids: len(file::SEC_VIDS),
+            edge_flags: len(file::SEC_EDGES),
+        }
+    }
+
     /// The parts as `(name, bytes)`.
     pub fn parts(&self) -> Vec<(&'static str, f64)> {
         vec![
@@ -540,20 +563,7 @@ pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
         &flags,
     ];
     let bytes = file::write(&header, &sections);
-    let coded: u64 = part_bits.iter().sum();
-    let sizes = OocSizes {
-        header: file::HEADER_LEN,
-        dictionaries: dict_bytes.len(),
-        high_level: high.len() + boxes.len(),
-        tree_starts: starts.len() + firsts.len(),
-        templates: part_bits[0] as f64 / 8.0,
-        corners: part_bits[1] as f64 / 8.0,
-        vertices: part_bits[2] as f64 / 8.0,
-        padding: (streams.len() as u64 * 8 - coded) as f64 / 8.0,
-        ids: ids.len(),
-        vertex_ids: vids.len(),
-        edge_flags: flags.len(),
-    };
+    let sizes = OocSizes::from_sections(&sections.map(|s| s.len() as u64), &part_bits);
     debug_assert_eq!(sizes.total() as usize, bytes.len());
     Ok((bytes, sizes))
 }

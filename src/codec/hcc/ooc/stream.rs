@@ -341,20 +341,7 @@ pub fn encode_streamed(
     out_file.commit().map_err(io(out))?;
     std::fs::remove_file(&streams_path).ok();
     progress("writing", written, written);
-    let part_bits = coder.part_bits;
-    let sizes = OocSizes {
-        header: file::HEADER_LEN,
-        dictionaries: dict_bytes.len(),
-        high_level: high_bytes.len() + boxes.len(),
-        tree_starts: starts_bytes.len() + firsts.len(),
-        templates: part_bits[0] as f64 / 8.0,
-        corners: part_bits[1] as f64 / 8.0,
-        vertices: part_bits[2] as f64 / 8.0,
-        padding: (streams_len * 8 - part_bits.iter().sum::<u64>()) as f64 / 8.0,
-        ids: 0,
-        vertex_ids: 0,
-        edge_flags: flag_bytes.len(),
-    };
+    let sizes = OocSizes::from_sections(&table.map(|t| t.0), &coder.part_bits);
     Ok(StreamedBuild {
         sizes,
         chunks: chunks.len(),
