@@ -182,7 +182,13 @@ fn io_error(path: &Path, source: io::Error) -> MeshError {
 /// vertices, its triangles into `tris` ([`load`] and [`stream`]).
 fn read_file(path: &Path, tris: &mut Tris<'_>) -> Parsed {
     let (format, file, len) = open(path)?;
-    read_into(BufReader::with_capacity(1 << 16, file), len, format, path, tris)
+    read_into(
+        BufReader::with_capacity(1 << 16, file),
+        len,
+        format,
+        path,
+        tris,
+    )
 }
 
 /// What a reader gives: the file's vertices and the format found (its

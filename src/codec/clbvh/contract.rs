@@ -12,8 +12,8 @@ use crate::codec::common::{FormatError, MassProps};
 use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError};
 use crate::contact::EdgeFlags;
 use crate::cursor::NodeCursor;
-use crate::query::RayCursor;
 use crate::mesh::Mesh;
+use crate::query::RayCursor;
 
 fn wrong_kind(want: LeafKind) -> ClError {
     FormatError::header("magic", format!("not a CLBVH file with {want:?} leaves")).into()

@@ -52,7 +52,10 @@ pub(super) fn check_tree(
             return bad(i, "a leaf holds no triangle");
         }
         if range.len() > leaf_limit {
-            return bad(i, "a leaf holds more triangles than the tree's leaves store");
+            return bad(
+                i,
+                "a leaf holds more triangles than the tree's leaves store",
+            );
         }
         let Some(ids) = bvh.leaf_triangles.get(range) else {
             return bad(i, "a leaf's triangle slots are out of range");
@@ -90,7 +93,7 @@ mod tests {
     use crate::scene::{Kind, generate};
 
     fn tree(leaf: usize) -> (crate::Mesh, CanonicalBvh) {
-        let mesh = generate(Kind::Statue, 300, 5, &mut |_, _| {}).unwrap();
+        let mesh = generate(Kind::Statue, 1000, 5, &mut |_, _| {}).unwrap();
         let opts = BuildOptions {
             max_leaf_triangles: leaf,
             ..Default::default()
@@ -112,7 +115,8 @@ mod tests {
         let inner = first(&good, false);
         let leaf = first(&good, true);
         let n = good.nodes.len() as u32;
-        let corruptions: [(&str, &dyn Fn(&mut CanonicalBvh)); 8] = [
+        type Corruption<'a> = (&'a str, &'a dyn Fn(&mut CanonicalBvh));
+        let corruptions: [Corruption; 8] = [
             ("child out of range", &|b| b.nodes[inner].a = n + 7),
             ("both children one node", &|b| {
                 b.nodes[inner].b = b.nodes[inner].a
@@ -168,7 +172,10 @@ mod tests {
                     Err(_) => rejected += 1,
                 }
             }
-            assert!(rejected > 100, "leaf {leaf}: only {rejected} of 150 rejected");
+            assert!(
+                rejected > 100,
+                "leaf {leaf}: only {rejected} of 150 rejected"
+            );
         }
     }
 }
