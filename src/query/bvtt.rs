@@ -384,7 +384,7 @@ pub fn bvtt_par_within<A: NodeCursor, B: NodeCursor, S: Send>(
     let task = |start: NodePair<A::Node, B::Node>| {
         let mut s = init();
         let mut st = TraversalStats::default();
-        let p = bound.within(&start.3).min(prediction);
+        let p = bound.within_capped(&start.3, prediction);
         traverse(
             a,
             b,
