@@ -43,7 +43,7 @@ use glam::Vec3A;
 
 use super::features::clip_to_prism;
 pub use super::features::{closest_on_segments, closest_points};
-use super::orient::{OrientedAxis, PairFacing, oriented_axis_from};
+use super::orient::{OrientedAxis, PairFacing, SideCache, oriented_axis_cached};
 use super::sat::{Batch, Corners, sat_dispatch};
 pub use super::sat::{LANES, Simd};
 use crate::geom::Triangle;
@@ -183,6 +183,8 @@ pub struct PairKernel {
     simd: Simd,
     exact: bool,
     facing: Option<PairFacing>,
+    /// Side A of the last oriented pair, for the next (see [`SideCache`]).
+    sides: SideCache,
     /// Work counters since creation.
     pub stats: KernelStats,
 }
@@ -212,6 +214,7 @@ impl PairKernel {
             simd,
             exact: true,
             facing: None,
+            sides: SideCache::new(),
             stats: KernelStats::default(),
         }
     }
@@ -359,9 +362,16 @@ impl PairKernel {
                     sep,
                     axis,
                 };
-                let Some(o) =
-                    oriented_axis_from(&a, fa, &b, fb, facing, self.prediction, Some(hint))
-                else {
+                let Some(o) = oriented_axis_cached(
+                    &a,
+                    fa,
+                    &b,
+                    fb,
+                    facing,
+                    self.prediction,
+                    Some(hint),
+                    &mut self.sides,
+                ) else {
                     continue;
                 };
                 if o.sep > pred {

@@ -65,10 +65,12 @@
 //! turbine most pairs take that path, and the oriented kernel costs about
 //! what the unoriented one did.
 
+use std::cell::OnceCell;
+
 use glam::Vec3A;
 
 use super::edges::side_bits;
-use crate::geom::Triangle;
+use crate::geom::{Aabb, Triangle};
 
 /// Which side of its triangles a shape's contacts come from.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -131,15 +133,29 @@ enum Support {
     Inactive,
 }
 
-/// One side of the pair, ready for the tests.
-struct Side<'a> {
-    t: &'a Triangle,
+/// One side of the pair, ready for the tests. What only some pairs need
+/// (the near box, the in-plane edge normals) is made on first use, so a
+/// side kept for the next pair with the same triangle ([`SideCache`])
+/// makes it once.
+#[derive(Clone, Debug)]
+struct Side {
+    t: Triangle,
     /// Unit normal of the winding.
     raw: Vec3A,
     /// Unit normal of the side it faces.
     out: Vec3A,
     /// Active edges (bits 0–2) from that side.
     active: u8,
+    /// How far apart two corners' projections on a unit direction may lie
+    /// from rounding alone and still be tied: a millionth of the farthest
+    /// coordinate. (Rounding follows the coordinates' size, not the
+    /// projections': a face through the origin projects near 0 along its
+    /// own normal, with the coordinates' rounding.)
+    rounding: f32,
+    /// The slack of [`near`](Self::near).
+    slack: f32,
+    near: OnceCell<Aabb>,
+    in_plane: OnceCell<[Option<Vec3A>; 3]>,
 }
 
 impl Facing {
@@ -160,15 +176,38 @@ impl Facing {
     }
 }
 
-impl<'a> Side<'a> {
-    fn new(t: &'a Triangle, flags: u8, facing: Facing) -> Option<Self> {
+impl Side {
+    fn new(t: &Triangle, flags: u8, facing: Facing, slack: f32) -> Option<Self> {
         let raw = (t[1] - t[0]).cross(t[2] - t[0]).try_normalize()?;
         let sign = facing.sign(t, raw);
         Some(Self {
-            t,
+            t: *t,
             raw,
             out: raw * sign,
             active: side_bits(flags, sign > 0.0),
+            rounding: 1e-6 * t[0].abs().max(t[1].abs()).max(t[2].abs()).max_element(),
+            slack,
+            near: OnceCell::new(),
+            in_plane: OnceCell::new(),
+        })
+    }
+
+    /// The triangle's box grown by its own size and the slack: where the
+    /// corners of the other triangle lie that can be where the two meet.
+    /// Made only when a corner asks, which most pairs never do.
+    fn near(&self) -> &Aabb {
+        self.near.get_or_init(|| {
+            let b = Aabb::of_triangle(&self.t);
+            b.loosened(b.extent().length() + self.slack)
+        })
+    }
+
+    /// The unit in-plane outward normals of the three edges (`None` for an
+    /// edge of no length).
+    fn in_plane_normals(&self) -> &[Option<Vec3A>; 3] {
+        self.in_plane.get_or_init(|| {
+            let t = &self.t;
+            [t[1] - t[0], t[2] - t[1], t[0] - t[2]].map(|e| self.raw.cross(e).try_normalize())
         })
     }
 
@@ -183,6 +222,37 @@ impl<'a> Side<'a> {
         } else {
             facing >= cone_cos.min(OUTWARD_MIN)
         }
+    }
+
+    /// The cosine and sine of the half-angle of the cone of directions
+    /// [`may_accept`](Self::may_accept) lets through, around `out`.
+    #[inline]
+    fn half_angle(&self, cone_cos: f32) -> (f32, f32) {
+        let c = if self.active == 0 {
+            cone_cos
+        } else {
+            cone_cos.min(OUTWARD_MIN)
+        };
+        (c, (1.0 - c * c).max(0.0).sqrt())
+    }
+
+    /// Whether some direction `n` may be accepted by this side (as A) and
+    /// `−n` by `other` (as B): each side lets through only a cone around
+    /// its outward normal ([`may_accept`](Self::may_accept)), and two
+    /// cones share a direction only when their axes (`out` and
+    /// `−other.out`) lie at most the sum of their half-angles apart. A
+    /// side without active edges facing nearly the same way as a sharp
+    /// one (a scan's flat triangle under a CAD part's edge) has none.
+    #[inline]
+    fn cones_meet(&self, other: &Side, cone_cos: f32) -> bool {
+        // Two sides with active edges: about 96° each, over 180° together.
+        if self.active != 0 && other.active != 0 && OUTWARD_MIN <= 0.0 {
+            return true;
+        }
+        let (ca, sa) = self.half_angle(cone_cos);
+        let (cb, sb) = other.half_angle(cone_cos);
+        // Half-angles summing to 180° or more: every axis pair meets.
+        ca + cb <= 0.0 || self.out.dot(-other.out) >= ca * cb - sa * sb - 1e-5
     }
 
     /// For a side without active edges: whether it may accept (either sign
@@ -200,11 +270,11 @@ impl<'a> Side<'a> {
 
     /// Whether the feature farthest along `n` (a unit direction out of this
     /// side) accepts `n`, and how.
-    fn support(&self, n: Vec3A, cone_cos: f32, near: &Near) -> Option<Support> {
+    fn support(&self, n: Vec3A, cone_cos: f32, other: &Side) -> Option<Support> {
         let p = self.t.map(|v| n.dot(v));
         let max = p[0].max(p[1]).max(p[2]);
         let min = p[0].min(p[1]).min(p[2]);
-        let eps = 1e-4 * (max - min) + 1e-6 * max.abs().max(min.abs());
+        let eps = 1e-4 * (max - min) + self.rounding;
         let tied = p.map(|x| x >= max - eps);
         let count = tied.iter().filter(|t| **t).count();
         let facing = n.dot(self.out);
@@ -240,7 +310,7 @@ impl<'a> Side<'a> {
                 let (e1, e2) = (k, (k + 2) % 3);
                 let over = || {
                     let r = self.t[k] - (self.t[0] + self.t[1] + self.t[2]) * (1.0 / 3.0);
-                    near.get().contains_point(self.t[k]) && at_most_a_little_behind(n, r)
+                    other.near().contains_point(self.t[k]) && at_most_a_little_behind(n, r)
                 };
                 if outward && (active(e1) || active(e2)) && over() {
                     Some(Support::Active)
@@ -260,29 +330,33 @@ fn at_most_a_little_behind(n: Vec3A, v: Vec3A) -> bool {
     d >= 0.0 || d * d <= 0.0025 * v.length_squared()
 }
 
-/// A triangle's box grown by its own size and the slack: where the corners
-/// of the other triangle lie that can be where the two meet. Made only
-/// when a corner asks, which most pairs never do.
-struct Near<'t> {
-    t: &'t Triangle,
-    slack: f32,
-    made: std::cell::OnceCell<crate::geom::Aabb>,
+/// Side A of the last pair oriented, kept for the next: a traversal pairs
+/// one triangle of A with many of B in a row (on a scan dropped on a CAD
+/// part, 99 % of pairs have the previous pair's A triangle), and its
+/// normals, near box and in-plane edge normals are then made once.
+#[derive(Clone, Debug, Default)]
+pub struct SideCache {
+    last: Option<(u8, Facing, Option<Side>)>,
 }
 
-impl<'t> Near<'t> {
-    fn new(t: &'t Triangle, slack: f32) -> Self {
-        Self {
-            t,
-            slack,
-            made: std::cell::OnceCell::new(),
-        }
+impl SideCache {
+    /// An empty cache.
+    pub fn new() -> Self {
+        Self::default()
     }
 
-    fn get(&self) -> &crate::geom::Aabb {
-        self.made.get_or_init(|| {
-            let b = crate::geom::Aabb::of_triangle(self.t);
-            b.loosened(b.extent().length() + self.slack)
-        })
+    /// The side of `t` (flags `flags`, facing `facing`, near-box slack
+    /// `slack`), made unless it is the last one asked for.
+    fn side(&mut self, t: &Triangle, flags: u8, facing: Facing, slack: f32) -> Option<&Side> {
+        let same = self.last.as_ref().is_some_and(|(f, fc, s)| {
+            *f == flags
+                && *fc == facing
+                && s.as_ref().is_some_and(|s| s.t == *t && s.slack == slack)
+        });
+        if !same {
+            self.last = Some((flags, facing, Side::new(t, flags, facing, slack)));
+        }
+        self.last.as_ref().and_then(|(_, _, s)| s.as_ref())
     }
 }
 
@@ -325,10 +399,29 @@ pub fn oriented_axis_from(
     slack: f32,
     hint: Option<OrientedAxis>,
 ) -> Option<OrientedAxis> {
-    let sa = Side::new(a, fa, facing.a)?;
-    let sb = Side::new(b, fb, facing.b)?;
+    oriented_axis_cached(a, fa, b, fb, facing, slack, hint, &mut SideCache::new())
+}
+
+/// [`oriented_axis_from`] taking side A from `cache` when it is the last
+/// pair's (and leaving it there for the next). The result is the same.
+#[allow(clippy::too_many_arguments)]
+pub fn oriented_axis_cached(
+    a: &Triangle,
+    fa: u8,
+    b: &Triangle,
+    fb: u8,
+    facing: &PairFacing,
+    slack: f32,
+    hint: Option<OrientedAxis>,
+    cache: &mut SideCache,
+) -> Option<OrientedAxis> {
+    let sa = cache.side(a, fa, facing.a, slack)?;
+    let sb = &Side::new(b, fb, facing.b, slack)?;
     let cone = facing.cone_cos;
-    let (near_a, near_b) = (Near::new(a, slack), Near::new(b, slack));
+    // No direction both sides may accept: nothing to search.
+    if !sa.cones_meet(sb, cone) {
+        return None;
+    }
     let mut best: Option<(OrientedAxis, Support, Support)> = None;
     // The plain separating-axis result, whichever way round and whatever
     // the features: the pair's true separation or penetration depth.
@@ -349,28 +442,54 @@ pub fn oriented_axis_from(
         .filter(|h| sa.may_accept(h.normal, cone) && sb.may_accept(-h.normal, cone))
         .filter(well_posed)
         .and_then(|h| {
-            let ka = sa.support(h.normal, cone, &near_b)?;
-            let kb = sb.support(-h.normal, cone, &near_a)?;
+            let ka = sa.support(h.normal, cone, sb)?;
+            let kb = sb.support(-h.normal, cone, sa)?;
             Some((h, ka, kb))
         });
     if let Some((h, ka, kb)) = accepted_hint {
         plain = h.sep;
         best = Some((h, ka, kb));
     }
-    // Two sides without an active edge accept only normals within the cone
-    // of their outward normals (`n` for A, `−n` for B): none exists when
-    // those two cones do not meet.
-    if best.is_none() && sa.active == 0 && sb.active == 0 && cone > 0.0 {
-        let cos_2 = 2.0 * cone * cone - 1.0;
-        if sa.out.dot(-sb.out) < cos_2 {
-            return None;
-        }
-    }
     // With the hint, the plain result is known and a direction a side
     // rejects needs no separation.
     let known_plain = hint.map(|h| h.sep);
     if let Some(p) = known_plain {
         plain = p;
+    }
+    // One side flat (no active edge) and its face normal accepted by both:
+    // that normal is the answer, without a search, when the faces meet
+    // and the two sides' cones do not. Every direction the flat side
+    // accepts lies within its cone, so the other side accepts none with
+    // its face or an inactive feature (those want its own cone); the
+    // search's winner then has the flat side inactive or its face, and the
+    // rule below turns an inactive flat side into its face normal. (A
+    // winner on the flat side's face tied within rounding of that normal
+    // keeps its own direction in the search: the two differ by that
+    // rounding.)
+    if best.is_none() && known_plain.is_some() && cone > 0.0 {
+        let facing_cos = sa.out.dot(-sb.out);
+        let cos_2 = 2.0 * cone * cone - 1.0;
+        if facing_cos >= OUTWARD_MIN && facing_cos < cos_2 - 1e-4 {
+            let flat_face = if sb.active == 0 {
+                let n = -sb.out;
+                (sa.may_accept(n, cone))
+                    .then(|| sa.support(n, cone, sb))
+                    .flatten()
+                    .map(|ka| (n, 1, ka, Support::Face))
+            } else if sa.active == 0 {
+                let n = sa.out;
+                (sb.may_accept(-n, cone))
+                    .then(|| sb.support(-n, cone, sa))
+                    .flatten()
+                    .map(|kb| (n, 0, Support::Face, kb))
+            } else {
+                None
+            };
+            if let Some((normal, axis, ka, kb)) = flat_face {
+                let sep = separation(a, b, normal);
+                best = Some((OrientedAxis { normal, sep, axis }, ka, kb));
+            }
+        }
     }
     let search = best.is_none();
     let mut consider = |n: Vec3A, axis: u8| {
@@ -382,10 +501,10 @@ pub fn oriented_axis_from(
         if best.is_some_and(|(o, _, _)| sep <= o.sep) || !sep.is_finite() {
             return;
         }
-        let Some(ka) = sa.support(n, cone, &near_b) else {
+        let Some(ka) = sa.support(n, cone, sb) else {
             return;
         };
-        let Some(kb) = sb.support(-n, cone, &near_a) else {
+        let Some(kb) = sb.support(-n, cone, sa) else {
             return;
         };
         best = Some((
@@ -408,9 +527,11 @@ pub fn oriented_axis_from(
         let pruned = known_plain.is_some() && cone > 0.0;
         let flat_a = pruned && sa.active == 0;
         let flat_b = pruned && sb.active == 0;
-        let sin_cone = (1.0 - cone * cone).max(0.0).sqrt();
-        let in_plane = |flat: bool, out: Vec3A, e: Vec3A| {
-            !flat || e.dot(out).abs() <= sin_cone * e.length() * 1.0001
+        // (e · out)² ≤ sin²θ |e|², with a margin for rounding.
+        let sin2_cone = (1.0 - cone * cone).max(0.0) * 1.0002;
+        let in_plane = |flat: bool, out: Vec3A, e: &Vec3A| {
+            let d = e.dot(out);
+            !flat || d * d <= sin2_cone * e.length_squared()
         };
         consider(sa.out, 0);
         consider(-sb.out, 1);
@@ -418,12 +539,13 @@ pub fn oriented_axis_from(
         consider(sb.out, 1);
         let ea = [a[1] - a[0], a[2] - a[1], a[0] - a[2]];
         let eb = [b[1] - b[0], b[2] - b[1], b[0] - b[2]];
+        let eb_in = eb.map(|y| in_plane(flat_a, sa.out, &y));
         for (k, x) in ea.iter().enumerate() {
-            if !in_plane(flat_b, sb.out, *x) {
+            if !in_plane(flat_b, sb.out, x) {
                 continue;
             }
             for (l, y) in eb.iter().enumerate() {
-                if !in_plane(flat_a, sa.out, *y) {
+                if !eb_in[l] {
                     continue;
                 }
                 let len2 = x.length_squared() * y.length_squared();
@@ -436,17 +558,17 @@ pub fn oriented_axis_from(
                 }
             }
         }
-        if !flat_a && (!flat_b || sb.may_accept_in_plane_of(&sa, cone)) {
-            for (k, x) in ea.iter().enumerate() {
-                if let Some(n) = sa.raw.cross(*x).try_normalize() {
+        if !flat_a && (!flat_b || sb.may_accept_in_plane_of(sa, cone)) {
+            for (k, n) in sa.in_plane_normals().iter().enumerate() {
+                if let Some(n) = *n {
                     consider(n, 11 + k as u8);
                     consider(-n, 11 + k as u8);
                 }
             }
         }
-        if !flat_b && (!flat_a || sa.may_accept_in_plane_of(&sb, cone)) {
-            for (k, y) in eb.iter().enumerate() {
-                if let Some(n) = sb.raw.cross(*y).try_normalize() {
+        if !flat_b && (!flat_a || sa.may_accept_in_plane_of(sb, cone)) {
+            for (k, n) in sb.in_plane_normals().iter().enumerate() {
+                if let Some(n) = *n {
                     consider(n, 14 + k as u8);
                     consider(-n, 14 + k as u8);
                 }
@@ -541,15 +663,13 @@ mod tests {
 
     /// The search's shortcuts drop only directions the full test rejects:
     /// `may_accept` is false only where `support` gives nothing, and two
-    /// sides without active edges accept a common direction only when
-    /// their cones meet.
+    /// sides accept a common direction only when their cones meet.
     #[test]
     fn shortcuts_never_drop_an_accepted_direction() {
         let mut rng = crate::scene::rng::Rng::new(0x853c_49e6_748f_ea9b, 0);
         let mut rnd = move || rng.range(-1.0, 1.0);
         let cone = PairFacing::new(Facing::OneSided(1.0), Facing::OneSided(1.0)).cone_cos;
-        let cos_2 = 2.0 * cone * cone - 1.0;
-        let (mut accepted, mut both, mut skipped_in_plane) = (0, 0, 0);
+        let (mut accepted, mut both, mut mixed, mut apart, mut skipped_in_plane) = (0, 0, 0, 0, 0);
         for round in 0..20_000 {
             // Flat triangles some of the time: normals near ±y, so that
             // two cones often meet.
@@ -569,8 +689,8 @@ mod tests {
             let (fa, fb) = (flags(rnd()), flags(rnd()));
             let sign = if round % 2 == 0 { 1.0 } else { -1.0 };
             let (Some(sa), Some(sb)) = (
-                Side::new(&a, fa, Facing::OneSided(sign)),
-                Side::new(&b, fb, Facing::OneSided(-1.0)),
+                Side::new(&a, fa, Facing::OneSided(sign), 10.0),
+                Side::new(&b, fb, Facing::OneSided(-1.0), 10.0),
             ) else {
                 continue;
             };
@@ -582,9 +702,10 @@ mod tests {
                 n = n * 0.1 - sb.out;
             }
             let Some(n) = n.try_normalize() else { continue };
-            let near = Near::new(&a, 10.0);
+            // Every corner counts as near (the box of A, grown by 10).
+            let near = &sa;
             for (side, dir) in [(&sa, n), (&sb, -n)] {
-                if side.support(dir, cone, &near).is_some() {
+                if side.support(dir, cone, near).is_some() {
                     accepted += 1;
                     assert!(side.may_accept(dir, cone), "round {round}: {dir} dropped");
                 }
@@ -598,23 +719,190 @@ mod tests {
                     };
                     for m in [m, -m] {
                         assert!(
-                            sb.support(-m, cone, &near).is_none(),
+                            sb.support(-m, cone, near).is_none(),
                             "round {round}: in-plane {m} dropped"
                         );
                         skipped_in_plane += 1;
                     }
                 }
             }
-            let ka = sa.support(n, cone, &near);
-            let kb = sb.support(-n, cone, &near);
-            if ka.is_some() && kb.is_some() && sa.active == 0 && sb.active == 0 {
-                both += 1;
-                assert!(sa.out.dot(-sb.out) >= cos_2 - 1e-5, "round {round}");
+            let ka = sa.support(n, cone, near);
+            let kb = sb.support(-n, cone, near);
+            if ka.is_some() && kb.is_some() {
+                assert!(sa.cones_meet(&sb, cone), "round {round}: cones said apart");
+                match (sa.active == 0, sb.active == 0) {
+                    (true, true) => both += 1,
+                    (true, false) | (false, true) => mixed += 1,
+                    _ => {}
+                }
+            }
+            if !sa.cones_meet(&sb, cone) {
+                apart += 1;
             }
         }
         assert!(
-            accepted > 5000 && both > 100 && skipped_in_plane > 1000,
-            "{accepted} accepted, {both} both inactive, {skipped_in_plane} in-plane skipped"
+            accepted > 5000
+                && both > 100
+                && mixed > 1000
+                && apart > 1000
+                && skipped_in_plane > 1000,
+            "{accepted} accepted, {both} both inactive, {mixed} one inactive, \
+             {apart} apart, {skipped_in_plane} in-plane skipped"
+        );
+    }
+
+    /// Side A kept from the last pair gives every pair the answer a fresh
+    /// side gives, also when the same triangle comes back with other
+    /// flags, another facing or another slack (which must not reuse it).
+    #[test]
+    fn a_kept_side_gives_the_same_answers() {
+        let mut rng = crate::scene::rng::Rng::new(0x2545_f491_4f6c_dd1d, 7);
+        let mut rnd = move || rng.range(-1.0, 1.0);
+        let mut cache = SideCache::new();
+        let mut a: Triangle = [Vec3A::ZERO; 3];
+        let (mut fa, mut differs, mut contacts) = (0u8, 0, 0);
+        for round in 0..20_000 {
+            // A new A triangle every 16 pairs; in between, its flags change
+            // now and then, keeping the triangle.
+            if round % 16 == 0 {
+                a = [0, 1, 2].map(|_| Vec3A::new(rnd(), rnd() * 0.1, rnd()) * 0.4);
+            }
+            if round % 5 == 0 {
+                fa = (rnd().to_bits() & 0x3f) as u8;
+            }
+            // Some B triangles far enough that the near box's slack
+            // decides whether their corners count as near.
+            let shift = Vec3A::new(if round % 2 == 0 { 2.0 * rnd() } else { 0.0 }, 0.0, 0.0);
+            let b: Triangle =
+                [0, 1, 2].map(|_| Vec3A::new(rnd(), rnd() * 0.3 + 0.05, rnd()) + shift);
+            let fb = (rnd().to_bits() & 0x3f) as u8;
+            let facing = if round % 3 == 0 {
+                PairFacing::new(two_sided_toward([0.0, -1.0, 0.0]), Facing::OneSided(1.0))
+            } else {
+                PairFacing::new(Facing::OneSided(1.0), Facing::OneSided(-1.0))
+            };
+            let slack = if round % 7 == 0 { 0.0 } else { 1.5 };
+            let kept = oriented_axis_cached(&a, fa, &b, fb, &facing, slack, None, &mut cache);
+            let fresh = oriented_axis(&a, fa, &b, fb, &facing, slack);
+            assert_eq!(kept, fresh, "round {round}");
+            contacts += usize::from(fresh.is_some());
+            // The same pair with the other A flags: the cache must not
+            // answer with the side it holds.
+            let other =
+                oriented_axis_cached(&a, fa ^ 0x3f, &b, fb, &facing, slack, None, &mut cache);
+            assert_eq!(other, oriented_axis(&a, fa ^ 0x3f, &b, fb, &facing, slack));
+            differs += usize::from(other != fresh);
+        }
+        assert!(
+            contacts > 2000 && differs > 200,
+            "{contacts} contacts, {differs} differ by flags"
+        );
+        // The near box follows the slack asked for, not the kept side's.
+        let one = Facing::OneSided(1.0);
+        let wide = *cache.side(&a, fa, one, 1.0).expect("a side").near();
+        let tight = *cache.side(&a, fa, one, 0.0).expect("a side").near();
+        assert!(
+            (wide.extent() - tight.extent() - Vec3A::splat(2.0))
+                .abs()
+                .max_element()
+                < 1e-5
+        );
+    }
+
+    /// The plain separating axis of a pair (the kernel's hint): the
+    /// direction of largest separation over the face normals, edge–edge
+    /// cross products and in-plane edge normals, both ways round.
+    fn plain_axis(a: &Triangle, b: &Triangle) -> OrientedAxis {
+        let edges = |t: &Triangle| [t[1] - t[0], t[2] - t[1], t[0] - t[2]];
+        let normal = |t: &Triangle| (t[1] - t[0]).cross(t[2] - t[0]).normalize();
+        let mut dirs = vec![(normal(a), 0), (normal(b), 1)];
+        for (k, x) in edges(a).iter().enumerate() {
+            for (l, y) in edges(b).iter().enumerate() {
+                let c = x.cross(*y);
+                if c.length_squared() > 1e-10 * x.length_squared() * y.length_squared() {
+                    dirs.push((c.normalize(), 2 + (k * 3 + l) as u8));
+                }
+            }
+            dirs.push((normal(a).cross(*x).normalize(), 11 + k as u8));
+        }
+        for (l, y) in edges(b).iter().enumerate() {
+            dirs.push((normal(b).cross(*y).normalize(), 14 + l as u8));
+        }
+        dirs.iter()
+            .flat_map(|&(n, axis)| [(n, axis), (-n, axis)])
+            .map(|(normal, axis)| OrientedAxis {
+                normal,
+                sep: separation(a, b, normal),
+                axis,
+            })
+            .max_by(|x, y| x.sep.total_cmp(&y.sep))
+            .expect("two faces at least")
+    }
+
+    /// Given the plain axis as a hint, the answer is the full search's,
+    /// also where one side is flat (no active edge) and its face normal is
+    /// taken without searching: the same pairs get a contact, at the same
+    /// separation, along the same normal (up to rounding ties).
+    #[test]
+    fn a_flat_sides_face_normal_is_the_searchs_answer() {
+        let mut rng = crate::scene::rng::Rng::new(0x9e37_79b9_7f4a_7c15, 3);
+        let mut rnd = move || rng.range(-1.0, 1.0);
+        let (mut contacts, mut flat_face) = (0, 0);
+        for round in 0..20_000 {
+            // A large sharp triangle under a small flat one, or the other
+            // way round.
+            let big: Triangle = [0, 1, 2].map(|_| Vec3A::new(rnd(), rnd() * 0.6, rnd()));
+            let lift = Vec3A::new(rnd() * 0.3, rnd() * 0.1, rnd() * 0.3);
+            // Any way round a third of the time, so that some faces lean
+            // too far apart to meet.
+            let tilt = if round % 3 == 0 { 1.0 } else { 0.8 };
+            let small: Triangle =
+                [0, 1, 2].map(|_| Vec3A::new(rnd(), rnd() * tilt, rnd()) * 0.2 + lift);
+            let sharp = (rnd().to_bits() & 0x3f) as u8 | 0b001;
+            let (a, fa, b, fb) = if round % 2 == 0 {
+                (big, sharp, small, 0)
+            } else {
+                (small, 0, big, sharp)
+            };
+            // Each side faces the other's centre.
+            let centre = |t: &Triangle| (t[0] + t[1] + t[2]) * (1.0 / 3.0);
+            let facing = PairFacing::new(
+                Facing::TwoSided { toward: centre(&b) },
+                Facing::TwoSided { toward: centre(&a) },
+            );
+            let slack = 0.1;
+            let full = oriented_axis(&a, fa, &b, fb, &facing, slack);
+            let hinted =
+                oriented_axis_from(&a, fa, &b, fb, &facing, slack, Some(plain_axis(&a, &b)));
+            match (full, hinted) {
+                (None, None) => {}
+                (Some(f), Some(h)) => {
+                    contacts += 1;
+                    assert!(
+                        (f.sep - h.sep).abs() < 1e-4,
+                        "round {round}: {f:?} vs {h:?}"
+                    );
+                    assert!(
+                        (f.normal - h.normal).length() < 1e-3,
+                        "round {round}: {f:?} vs {h:?}"
+                    );
+                    // Where the flat side's face normal could be taken
+                    // without a search: faces meeting, cones apart.
+                    let (sa, sb) = (
+                        Side::new(&a, fa, facing.a, slack).unwrap(),
+                        Side::new(&b, fb, facing.b, slack).unwrap(),
+                    );
+                    let flat_out = if fb == 0 { -sb.out } else { sa.out };
+                    let c = sa.out.dot(-sb.out);
+                    let apart = c >= OUTWARD_MIN && c < 2.0 * facing.cone_cos.powi(2) - 1.0;
+                    flat_face += usize::from(apart && h.normal == flat_out);
+                }
+                (f, h) => panic!("round {round}: full search {f:?}, hinted {h:?}"),
+            }
+        }
+        assert!(
+            contacts > 1500 && flat_face > 1000,
+            "{contacts} contacts, {flat_face} on the flat face"
         );
     }
 
