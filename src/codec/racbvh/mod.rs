@@ -186,6 +186,7 @@ mod error;
 pub mod file;
 pub mod mesh;
 pub mod node;
+mod nodecache;
 mod tree;
 mod tricache;
 mod verify;
@@ -195,7 +196,7 @@ pub use cursor::RacNode;
 pub use encode::{MIN_CLUSTER_NODES, RESIDENT_CLUSTERS, RacOptions, RacStats};
 pub use error::RacError;
 pub use node::{CoreNode, INCOMPLETE};
-pub use tree::RacBvh;
+pub use tree::{CLUSTER_CACHE_PERCENT, RacBvh};
 
 use context::*;
 use tree::{ClusterMeta, Header};
