@@ -619,7 +619,17 @@ fn ooc(vertex_bits: u32, vertex_ids: bool, budget: usize) -> cbvh::codec::hcc::o
 
 // One line per codec.
 codec_suite!(plain, cbvh::codec::plain::PlainBvh, lossless: [()], lossy: []);
-codec_suite!(racbvh, cbvh::codec::racbvh::RacBvh, lossless: [rac(16, None)], lossy: [rac(8, Some(8)), rac(16, Some(16))]);
+/// RACBVH options with a 2 KiB cache: smaller than any tree of more than
+/// a few dozen triangles, so that queries go through the node cache, with
+/// clusters evicted all the time.
+fn rac_tiny_cache() -> cbvh::codec::racbvh::RacOptions {
+    cbvh::codec::racbvh::RacOptions {
+        cache_budget_bytes: 2048,
+        ..rac(16, None)
+    }
+}
+
+codec_suite!(racbvh, cbvh::codec::racbvh::RacBvh, lossless: [rac(16, None), rac_tiny_cache()], lossy: [rac(8, Some(8)), rac(16, Some(16))]);
 codec_suite!(clbvh, cbvh::codec::clbvh::ClBvh, lossless: [Default::default()], lossy: []);
 codec_suite!(clbvh_compact, cbvh::codec::clbvh::ClBvhCompact, lossless: [Default::default()], lossy: []);
 codec_suite!(hcc, cbvh::codec::hcc::HccBvh, lossless: [hcc(None, true)], lossy: [hcc(None, false), hcc(Some(16), true), hcc(Some(8), false)]);

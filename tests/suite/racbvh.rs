@@ -212,7 +212,10 @@ fn the_cache_stays_within_its_budget() {
         "the small cache must have evicted: {s:?}"
     );
     rac.clear_cache();
-    assert_eq!(rac.cache_stats().cached_bytes, 0);
+    // The node cache's table stays allocated (and counted), emptied.
+    let s = rac.cache_stats();
+    assert!(s.node_bytes > 0, "{s:?}");
+    assert_eq!(s.cached_bytes, s.node_bytes);
 }
 
 #[test]
@@ -419,4 +422,215 @@ fn triangles_of_two_trees_do_not_mix_in_the_per_thread_cache() {
             }
         }
     }
+}
+
+/// Every node's box, children and triangles as read through `rac`, in
+/// `order`, against `full` (a cache holding the whole tree).
+fn check_nodes_against(rac: &RacBvh, full: &RacBvh, order: impl Iterator<Item = u32>) {
+    for i in order {
+        assert_eq!(rac.bv(i), full.bv(i), "node {i}");
+        assert_eq!(rac.is_leaf(i), full.is_leaf(i), "node {i}");
+        if full.is_leaf(i) {
+            assert_eq!(rac.leaf_triangles(i), full.leaf_triangles(i), "node {i}");
+        } else {
+            assert_eq!([rac.left(i), rac.right(i)], [full.left(i), full.right(i)]);
+        }
+    }
+}
+
+/// The decoded bytes of every cluster of `rac` (touching every node with an
+/// unlimited cache).
+fn decoded_bytes(rac: &RacBvh) -> usize {
+    let whole = RacBvh::from_bytes(&rac.to_bytes(), usize::MAX).unwrap();
+    for i in 0..whole.node_count() as u32 {
+        whole.bv(i);
+    }
+    whole.cache_stats().cached_bytes
+}
+
+/// Issue 32: the node cache exists only when the budget cannot hold every
+/// cluster, takes all of the budget but the cluster cache's share, and is
+/// counted in the cache's bytes.
+#[test]
+fn the_node_cache_takes_its_share_only_of_a_budget_smaller_than_the_tree() {
+    use cbvh::codec::racbvh::CLUSTER_CACHE_PERCENT;
+    let mesh = statue(3000);
+    let bvh = tree(&mesh, Layout::DepthFirst, 1);
+    let full = RacBvh::encode(&bvh, &mesh, &opts(256, Some(16))).unwrap();
+    let whole = decoded_bytes(&full);
+    let bytes = full.to_bytes();
+    for budget in [usize::MAX, 64 << 20, whole] {
+        let rac = RacBvh::from_bytes(&bytes, budget).unwrap();
+        assert_eq!(rac.node_cache_capacity(), 0, "budget {budget}");
+        assert_eq!(rac.cache_stats().node_bytes, 0);
+    }
+    for budget in [whole / 2, whole / 10, 4096, 1000] {
+        let rac = RacBvh::from_bytes(&bytes, budget).unwrap();
+        let s = rac.cache_stats();
+        assert_eq!(s.budget_bytes, budget);
+        assert!(rac.node_cache_capacity() > 0, "budget {budget}");
+        // At least 36 bytes a node (8 words and a key).
+        assert!(s.node_bytes >= 36 * rac.node_cache_capacity(), "{s:?}");
+        assert!(
+            s.node_bytes <= budget - budget * CLUSTER_CACHE_PERCENT / 100,
+            "{s:?}"
+        );
+        // Within one set's bytes of its share.
+        assert!(
+            s.node_bytes + 300 > budget - budget * CLUSTER_CACHE_PERCENT / 100,
+            "{s:?}"
+        );
+        assert_eq!(s.cached_bytes, s.node_bytes, "nothing decoded yet");
+        assert_eq!(s.live_bytes, s.node_bytes);
+    }
+    // A tiny budget: no room for a set.
+    let rac = RacBvh::from_bytes(&bytes, 100).unwrap();
+    assert_eq!(rac.node_cache_capacity(), 0);
+}
+
+/// Issue 32: with budgets of a tenth of the tree and of 4 KiB, in depth-first
+/// and cache-efficient layouts, with one and several triangles a leaf (the
+/// node cache keeps a leaf's ids), every query equals brute force, every
+/// node equals the full cache's, and the caches stay within the budget.
+#[test]
+fn tiny_budgets_with_a_node_cache_answer_as_brute_force() {
+    let mesh = statue(1000);
+    for (layout, leaf) in [(Layout::DepthFirst, 1), (Layout::CacheEfficient, 4)] {
+        let bvh = tree(&mesh, layout, leaf);
+        let full = RacBvh::encode(&bvh, &mesh, &opts(256, Some(16))).unwrap();
+        let dm = full.decoded_mesh();
+        let bytes = full.to_bytes();
+        let whole = decoded_bytes(&full);
+        for budget in [whole / 10, 4096] {
+            let rac = RacBvh::from_bytes(&bytes, budget).unwrap();
+            check_nodes_against(&rac, &full, (0..rac.node_count() as u32).rev());
+            check_structure(&rac, &dm);
+            check_queries(&rac, &dm, 5);
+            // A tree with a node cache against one without.
+            let other = soup(9, 300, 3.0);
+            let ro = RacBvh::encode(
+                &tree(&other, Layout::DepthFirst, 1),
+                &other,
+                &opts(256, None),
+            )
+            .unwrap();
+            check_bvtt(&rac, &dm, &ro, &ro.decoded_mesh(), 5);
+            let s = rac.cache_stats();
+            assert!(s.cached_bytes <= budget, "{s:?}");
+            assert!(rac.node_cache_capacity() > 0, "budget {budget}");
+            assert!(s.node_misses > 0, "{s:?}");
+            assert!(
+                s.decodes > rac.cluster_count() as u64,
+                "a budget of {budget} must have evicted: {s:?}"
+            );
+        }
+    }
+}
+
+/// Issue 32: nodes beyond the node cache's capacity evict each other,
+/// while a working set that fits, read round after round, misses only in
+/// its first round and then decodes nothing.
+#[test]
+fn the_node_cache_evicts_and_keeps_a_working_set_that_fits() {
+    let mesh = statue(3000);
+    let bvh = tree(&mesh, Layout::DepthFirst, 1);
+    let full = RacBvh::encode(&bvh, &mesh, &opts(256, Some(16))).unwrap();
+    let rac = RacBvh::from_bytes(&full.to_bytes(), 8192).unwrap();
+    let cap = rac.node_cache_capacity();
+    let n = rac.node_count();
+    assert!(cap > 64 && cap < n / 4, "capacity {cap} of {n} nodes");
+    // Every node, twice: the second sweep misses at least the nodes the
+    // table cannot hold.
+    let sweep = || {
+        let before = rac.cache_stats().node_misses;
+        check_nodes_against(&rac, &full, 0..n as u32);
+        rac.cache_stats().node_misses - before
+    };
+    let first = sweep();
+    let second = sweep();
+    assert!(first >= n as u64, "{first}");
+    assert!(
+        second >= (n - cap) as u64,
+        "{second} misses of {n} nodes, {cap} held"
+    );
+    // A quarter of the capacity, spread over the tree, read in rounds.
+    let set: Vec<u32> = (0..cap as u32 / 4)
+        .map(|k| k * (n as u32 / (cap as u32 / 4)))
+        .collect();
+    rac.clear_cache();
+    for round in 0..5 {
+        let before = rac.cache_stats();
+        for &i in &set {
+            rac.bv(i);
+            rac.is_leaf(i);
+        }
+        let after = rac.cache_stats();
+        if round > 0 {
+            assert_eq!(after.node_misses, before.node_misses, "round {round}");
+            assert_eq!(after.decodes, before.decodes, "round {round}");
+        }
+    }
+}
+
+/// Four threads running two-tree traversals and rays against one tree with
+/// a node cache and several triangles a leaf agree with one thread and the
+/// full cache, within the budget.
+#[test]
+fn threads_sharing_a_node_cache_agree_with_the_full_cache() {
+    let mesh = statue(1500);
+    let bvh = tree(&mesh, Layout::CacheEfficient, 3);
+    let full = RacBvh::encode(&bvh, &mesh, &opts(256, Some(16))).unwrap();
+    let dm = full.decoded_mesh();
+    let budget = 8 * 1024;
+    let shared = RacBvh::from_bytes(&full.to_bytes(), budget).unwrap();
+    assert!(shared.node_cache_capacity() > 0);
+    let other = soup(3, 200, 4.0);
+    let ro = RacBvh::encode(
+        &tree(&other, Layout::DepthFirst, 1),
+        &other,
+        &opts(256, None),
+    )
+    .unwrap();
+    let rays = test_rays(&dm, 3, 60);
+    let poses = test_poses(&dm, 3);
+    let mut stats = TraversalStats::default();
+    let want_rays: Vec<_> = rays
+        .iter()
+        .map(|r| query::closest_hit(&full, r, f32::INFINITY, &mut stats))
+        .collect();
+    let want_pairs: Vec<_> = poses
+        .iter()
+        .map(|p| query::bvtt_pairs(&full, &ro, p, 0.02, &mut stats))
+        .collect();
+    std::thread::scope(|s| {
+        for t in 0..4 {
+            let (shared, ro, rays, poses) = (&shared, &ro, &rays, &poses);
+            let (want_rays, want_pairs) = (&want_rays, &want_pairs);
+            s.spawn(move || {
+                let mut stats = TraversalStats::default();
+                for round in 0..2 {
+                    for k in (0..rays.len()).map(|k| (k * 7 + t * 13 + round) % rays.len()) {
+                        assert_eq!(
+                            query::closest_hit(shared, &rays[k], f32::INFINITY, &mut stats),
+                            want_rays[k],
+                            "thread {t} ray {k}"
+                        );
+                    }
+                    for (k, p) in poses.iter().enumerate() {
+                        assert_eq!(
+                            query::bvtt_pairs(shared, ro, p, 0.02, &mut stats),
+                            want_pairs[k],
+                            "thread {t} pose {k}"
+                        );
+                    }
+                }
+            });
+        }
+    });
+    let s = shared.cache_stats();
+    assert!(s.cached_bytes <= budget, "{s:?}");
+    assert!(
+        s.node_misses > 0 && s.decodes > shared.cluster_count() as u64,
+        "{s:?}"
+    );
 }

@@ -89,6 +89,12 @@ pub struct CacheStats {
     pub hits: u64,
     /// Number of shards.
     pub shards: usize,
+    /// Bytes of a cache of single decoded nodes kept beside the pages
+    /// (RACBVH's node cache; 0 if none), included in `cached_bytes`,
+    /// `live_bytes` and the budget.
+    pub node_bytes: usize,
+    /// Look-ups the node cache missed.
+    pub node_misses: u64,
 }
 
 impl CacheStats {
@@ -103,8 +109,17 @@ impl CacheStats {
             format!("{:.1} MiB", mib(self.budget_bytes))
         };
         let looks = self.hits + self.decodes;
+        let nodes = if self.node_bytes > 0 {
+            format!(
+                " ({:.1} KiB of it a node cache, {} misses)",
+                self.node_bytes as f64 / 1024.0,
+                self.node_misses
+            )
+        } else {
+            String::new()
+        };
         format!(
-            "{budget} budget, {} decodes, {:.1} % of shared look-ups hit, peak {:.1} MiB decoded",
+            "{budget} budget{nodes}, {} decodes, {:.1} % of shared look-ups hit, peak {:.1} MiB decoded",
             self.decodes,
             100.0 * self.hits as f64 / looks.max(1) as f64,
             mib(self.peak_live_bytes)
@@ -270,6 +285,8 @@ impl<T: Page> PageCache<T> {
             decodes: self.decodes.load(Ordering::Relaxed),
             hits,
             shards: self.shards.len(),
+            node_bytes: 0,
+            node_misses: 0,
         }
     }
 }

@@ -85,6 +85,14 @@ impl RacBvh {
         if count == 1 {
             f(w[6]);
         } else if count > 1 {
+            if let Some(ids) = self
+                .nodes
+                .as_ref()
+                .and_then(|n| n.get_ids(i, count as usize))
+            {
+                ids[..count as usize].iter().for_each(|&id| f(id));
+                return Ok(());
+            }
             let cl = self.cluster(i >> self.header.cluster_bits)?;
             let ids =
                 cl.tris
@@ -93,6 +101,7 @@ impl RacBvh {
                         "a leaf's triangle slots are out of range",
                     ))?;
             ids.iter().for_each(|&id| f(id));
+            self.remember(i, &w, &cl);
         }
         Ok(())
     }

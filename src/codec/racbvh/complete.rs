@@ -31,23 +31,36 @@ impl RacBvh {
             Ok((c, (x - (c << cb)) as usize))
         };
         let (c, l) = split(g)?;
+        if let Some(w) = self.nodes.as_ref().and_then(|n| n.get(g)) {
+            return Ok(w);
+        }
         let fast = cache::with_pinned(self.id, c, |cl: &Cluster| {
             let w = cl.nodes[l].words();
-            (w[0] & INCOMPLETE == 0).then_some(w)
+            (w[0] & INCOMPLETE == 0).then(|| {
+                self.remember(g, &w, cl);
+                w
+            })
         });
         if let Some(w) = fast {
             return Ok(w);
         }
         // Walk up: (cluster, local index of the node, its local root) for
-        // every incomplete node of the chain, until a complete one.
+        // every incomplete node of the chain, until a complete one (in the
+        // node cache, or in its cluster).
         let mut chain: Vec<(u32, usize, LocalRoot)> = Vec::new();
         let mut x = g;
         let mut top = loop {
             let (c, l) = split(x)?;
+            if x != g
+                && let Some(w) = self.nodes.as_ref().and_then(|n| n.get(x))
+            {
+                break w;
+            }
             let cl = self.cluster(c)?;
             let w = cl.nodes[l].words();
             if w[0] & INCOMPLETE == 0 {
                 if chain.is_empty() {
+                    self.remember(g, &w, &cl);
                     cache::pin(self.id, c, cl);
                 }
                 break w;
@@ -83,10 +96,27 @@ impl RacBvh {
                 });
             }
             if chain.is_empty() {
+                self.remember(g, &top, &cl);
                 cache::pin(self.id, c, cl);
             }
         }
         Ok(top)
+    }
+
+    /// Puts the complete words `w` of node `g` of cluster `cl` in the node
+    /// cache, if there is one, with a leaf's triangle ids if it holds
+    /// several and the cache's entries have room for them.
+    #[inline]
+    pub(super) fn remember(&self, g: u32, w: &[u32; 8], cl: &Cluster) {
+        let Some(n) = &self.nodes else {
+            return;
+        };
+        let count = (w[7] & !LEAF_FLAG) as usize;
+        if w[7] & LEAF_FLAG == 0 || count <= 1 || count > n.leaf_ids() {
+            n.insert(g, w, &[]);
+        } else if let Some(ids) = cl.tris.get(w[6] as usize..w[6] as usize + count) {
+            n.insert(g, w, ids);
+        }
     }
 }
 

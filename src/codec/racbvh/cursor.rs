@@ -43,6 +43,15 @@ impl RacBvh {
     // would return the pair through memory.
     #[inline(always)]
     fn children_of(&self, node: &RacNode) -> [(RacNode, Aabb); 2] {
+        // With a node cache (a budget smaller than the tree), each child
+        // from it, else as `words` finds it.
+        if self.nodes.is_some() {
+            let [wa, wb] = [self.words(node.a), self.words(node.b)];
+            return [
+                (RacNode::new(node.a, &wa), self.box_of(&wa)),
+                (RacNode::new(node.b, &wb), self.box_of(&wb)),
+            ];
+        }
         // Fast path: both children complete in the thread's pinned cluster
         // (one thread-local look-up for the two).
         let cb = self.header.cluster_bits;

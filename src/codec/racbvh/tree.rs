@@ -1,7 +1,7 @@
 //! [`RacBvh`]: the compressed tree with its mesh and its cache, and the
 //! figures about it.
 
-use super::{CacheStats, RacError, RacStats, cache, decode, file, mesh};
+use super::{CacheStats, RacError, RacStats, cache, decode, file, mesh, nodecache};
 use crate::codec::common::Store;
 use crate::codec::common::quant::{Grid, QBox};
 use crate::contact::EdgeFlags;
@@ -62,6 +62,11 @@ pub struct RacBvh {
     /// [`assemble`](Self::assemble)), read from the file when opened.
     pub(super) edges: EdgeFlags,
     pub(super) cache: cache::ClusterCache,
+    /// The decoded-node cache, when the budget cannot hold every cluster.
+    pub(super) nodes: Option<nodecache::NodeCache>,
+    /// The budget the caller gave (the cluster cache has what the node
+    /// cache leaves of it).
+    pub(super) budget: usize,
     /// Identifies this tree in the threads' pins.
     pub(super) id: u64,
 }
@@ -87,7 +92,12 @@ impl RacBvh {
         budget: usize,
     ) -> Self {
         let max_cluster = (1usize << header.cluster_bits) * decode::CLUSTER_BYTES_PER_NODE;
-
+        let ids = nodecache::NodeCache::ids_for(header.max_leaf);
+        let sets = node_cache_sets(budget, header.node_count, meta.len(), ids);
+        let node_bytes = sets * nodecache::NodeCache::set_bytes(ids);
+        let cache = cache::ClusterCache::new(budget - node_bytes, max_cluster);
+        let nodes = (sets > 0)
+            .then(|| nodecache::NodeCache::new(sets, ids, cache.live().token(node_bytes)));
         Self {
             header,
             data,
@@ -97,7 +107,9 @@ impl RacBvh {
             mass,
             mesh_ok: std::sync::OnceLock::new(),
             edges: EdgeFlags::default(),
-            cache: cache::ClusterCache::new(budget, max_cluster),
+            cache,
+            nodes,
+            budget,
             id: crate::codec::common::page_cache::next_owner(),
         }
     }
@@ -224,14 +236,54 @@ impl RacBvh {
 
     /// The cache's counters.
     pub fn cache_stats(&self) -> CacheStats {
-        self.cache.stats()
+        let mut s = self.cache.stats();
+        s.budget_bytes = self.budget;
+        if let Some(n) = &self.nodes {
+            s.cached_bytes += n.bytes();
+            s.node_bytes = n.bytes();
+            s.node_misses = n.misses();
+        }
+        s
+    }
+
+    /// How many nodes the node cache holds (0 when the budget holds every
+    /// cluster and there is none).
+    pub fn node_cache_capacity(&self) -> usize {
+        self.nodes.as_ref().map_or(0, |n| n.capacity())
     }
 
     /// Empties the cache (pinned clusters stay alive until their threads
     /// move on).
     pub fn clear_cache(&self) {
         self.cache.clear();
+        if let Some(n) = &self.nodes {
+            n.clear();
+        }
     }
+}
+
+/// The share of the cache budget the cluster cache keeps, in percent, when
+/// the budget cannot hold every cluster; the node cache takes the rest
+/// (see the module docs of [`racbvh`](super), "Node cache", for the
+/// measurements that chose it).
+pub const CLUSTER_CACHE_PERCENT: usize = 10;
+
+/// How many sets (of entries with `ids` triangle ids) the node cache gets
+/// under `budget`, for a tree of `nodes` nodes in `clusters` clusters:
+/// none if the budget holds every cluster decoded (at least 34 bytes a
+/// node and 128 a cluster); else the budget but the cluster cache's
+/// [`CLUSTER_CACHE_PERCENT`], and no more sets than give every node a way.
+pub(super) fn node_cache_sets(budget: usize, nodes: u32, clusters: usize, ids: usize) -> usize {
+    let whole = (nodes as usize)
+        .saturating_mul(decode::CLUSTER_BYTES_PER_NODE)
+        .saturating_add(clusters.saturating_mul(128));
+    if budget >= whole {
+        return 0;
+    }
+    let clusters_share =
+        budget / 100 * CLUSTER_CACHE_PERCENT + budget % 100 * CLUSTER_CACHE_PERCENT / 100;
+    ((budget - clusters_share) / nodecache::NodeCache::set_bytes(ids))
+        .min((nodes as usize).div_ceil(nodecache::WAYS))
 }
 
 impl crate::codec::ByteSize for RacBvh {
