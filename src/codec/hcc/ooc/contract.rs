@@ -9,8 +9,10 @@ use super::super::{HccBvh, HccNode};
 use super::paged::Paged;
 use super::{HccOocBvh, Mode, OocError, OocOptions, file};
 use crate::build::CanonicalBvh;
+#[cfg(feature = "serde")]
+use crate::codec::ByteSize;
 use crate::codec::common::MassProps;
-use crate::codec::{ByteSize, Codec, CodecKind, OpenOptions, Settings, SettingsError};
+use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError};
 use crate::contact::EdgeFlags;
 use crate::cursor::{Children, NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Ray, Triangle};
@@ -227,6 +229,7 @@ impl Codec for HccOocBvh {
         out
     }
 
+    #[cfg(feature = "serde")]
     fn build_fields(&self) -> Vec<(&'static str, serde_json::Value)> {
         let n = self.triangle_count().max(1) as f64;
         let mut out = vec![(
