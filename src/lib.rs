@@ -9,7 +9,8 @@
 //! behind features (see `Cargo.toml`): `render` (the ray tracer),
 //! `image-files` (its PNG and GIF output), `serde` (`Serialize` on the stats
 //! and reports), `sims` (the mesh generators and the rapier harnesses, with
-//! `serde`) and `app` (all of them, and the command-line front end).
+//! rapier3d and `serde`) and `app` (all of them, and the command-line front
+//! end).
 //!
 //! The modules, from the mesh to its uses (each folder's module docs say
 //! what it owns):
@@ -38,9 +39,11 @@
 //! - [`logger`]: a minimal stderr logger for the binaries (the library logs
 //!   warnings through the `log` crate).
 //!
-//! parry3d and rapier3d are imported only in [`parry`] and in the harness
-//! `sim` that drives rapier; the rest of the crate speaks its own small
-//! geometry types (or parry's glam re-exports), and [`codec`] knows neither.
+//! parry3d is imported only in [`parry`] and in the harness `sim`, and
+//! rapier3d only in `sim`, which drives rapier (the integration speaks
+//! parry's traits, which rapier takes, so the library does not depend on
+//! rapier3d); the rest of the crate speaks its own small geometry types (or
+//! parry's glam re-exports), and [`codec`] knows neither.
 #![warn(missing_docs)]
 #![deny(clippy::undocumented_unsafe_blocks)]
 

@@ -1,6 +1,8 @@
 //! The parry3d / rapier3d integration. This folder, and the drop-test
 //! harness `crate::sim` (feature `sims`) that drives rapier with it, are
-//! the only places in the crate that import parry3d or rapier3d.
+//! the only places in the crate that import parry3d. The integration needs
+//! no rapier3d: rapier's narrow phase takes parry's query dispatcher
+//! traits, which [`Dispatcher`] implements, and parry's shapes.
 //!
 //! - [`CbvhShape`]: one parry shape over any cbvh codec (`Shape`, `RayCast`,
 //!   `PointQuery`, `CompositeShape`, `TypedCompositeShape`), with mass
