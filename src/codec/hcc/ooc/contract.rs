@@ -49,7 +49,8 @@ impl NodeCursor for HccOocBvh {
         }
     }
 
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    #[cfg_attr(debug_assertions, inline)]
     fn children(&self, node: &HccNode, out: &mut Children<HccNode>) {
         match &self.mode {
             Mode::Whole { hcc, .. } => out.set(&hcc.children_of(node)),
@@ -119,7 +120,8 @@ impl RayCursor for HccOocBvh {
 }
 
 impl Pairs for Paged {
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    #[cfg_attr(debug_assertions, inline)]
     fn pair(&self, node: &HccNode) -> [(HccNode, Aabb); 2] {
         self.children_of(node)
     }
