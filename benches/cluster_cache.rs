@@ -30,9 +30,9 @@
 //! Throughput is cluster look-ups per second.
 //!
 //! ```text
-//! cargo bench --bench cluster_cache             # about 2 min with setup
-//! cargo bench --bench cluster_cache -- --quick  # a faster, rougher pass
-//! cargo bench --bench cluster_cache -- all/     # only the all-fit budget
+//! cargo bench --features sims --bench cluster_cache             # about 2 min with setup
+//! cargo bench --features sims --bench cluster_cache -- --quick  # a faster, rougher pass
+//! cargo bench --features sims --bench cluster_cache -- all/     # only the all-fit budget
 //! ```
 //! Misses, decodes and hit rates of both caches are printed before the
 //! timings (quick_cache's eviction is not LRU, so its hit rate differs).

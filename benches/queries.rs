@@ -4,7 +4,7 @@
 //!
 //! The statue size is `CBVH_BENCH_TRIS` (default 1 000 000 triangles). Bytes
 //! per triangle of both structures are printed before the timings. Run with
-//! `cargo bench --bench queries`; add `-- --quick` for a fast pass.
+//! `cargo bench --features sims --bench queries`; add `-- --quick` for a fast pass.
 
 use std::hint::black_box;
 use std::ops::ControlFlow;

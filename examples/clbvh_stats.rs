@@ -6,7 +6,7 @@
 //! (timed casts alternate between the structures).
 //!
 //! ```text
-//! cargo run --release --example clbvh_stats -- [--gen statue] [--tris 1000000]
+//! cargo run --release --features app --example clbvh_stats -- [--gen statue] [--tris 1000000]
 //!     [--mesh FILE.off] [--leaf-size 4] [--compact-leaf-size 6] [--width 512]
 //!     [--repeat 5] [--json]
 //! ```

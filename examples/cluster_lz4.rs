@@ -6,9 +6,9 @@
 //! same run.
 //!
 //! ```text
-//! cargo run --release --example cluster_lz4 -- [tris] [--gen statue|turbine|...]
-//! cargo run --release --example cluster_lz4 -- 1000000
-//! cargo run --release --example cluster_lz4 -- 1000000 --gen turbine
+//! cargo run --release --features sims --example cluster_lz4 -- [tris] [--gen statue|turbine|...]
+//! cargo run --release --features sims --example cluster_lz4 -- 1000000
+//! cargo run --release --features sims --example cluster_lz4 -- 1000000 --gen turbine
 //! ```
 //!
 //! Both trees are the canonical BVH of the default build. Bits per node

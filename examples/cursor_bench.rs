@@ -9,7 +9,7 @@
 //! (the same answers, and how fast).
 //!
 //! ```text
-//! cargo run --release --example cursor_bench -- [tris] [passes] [folder]
+//! cargo run --release --features sims --example cursor_bench -- [tris] [passes] [folder]
 //! ```
 //!
 //! `CURSOR_BENCH_ONLY=plain:overlap,bvtt` runs only the matching figures

@@ -1,11 +1,11 @@
 //! Times and sanity-checks the scene generators.
 //!
 //! ```text
-//! cargo run --release --example gen_bench -- bench statue 10000000
-//! cargo run --release --example gen_bench -- dump        # OFF files in /tmp
-//! cargo run --release --example gen_bench -- counts [seeds [iso_max iso_step]]
-//! cargo run --release --example gen_bench -- sweep isosurface 3 500000 2000000
-//! cargo run --release --example gen_bench -- check statue 10000000
+//! cargo run --release --features sims --example gen_bench -- bench statue 10000000
+//! cargo run --release --features sims --example gen_bench -- dump        # OFF files in /tmp
+//! cargo run --release --features sims --example gen_bench -- counts [seeds [iso_max iso_step]]
+//! cargo run --release --features sims --example gen_bench -- sweep isosurface 3 500000 2000000
+//! cargo run --release --features sims --example gen_bench -- check statue 10000000
 //! ```
 //! `bench` prints throughput and peak memory (VmHWM) against the mesh's own
 //! size; set `RAYON_NUM_THREADS=1` for single-core figures.

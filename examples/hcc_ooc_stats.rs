@@ -3,7 +3,7 @@
 //! thread (the paper's Table 1 columns and its 2.3 M triangles/s).
 //!
 //! ```text
-//! cargo run --release --example hcc_ooc_stats -- [--gen statue --tris 1000000 --seed 1 | --mesh FILE]
+//! cargo run --release --features app --example hcc_ooc_stats -- [--gen statue --tris 1000000 --seed 1 | --mesh FILE]
 //!     [--vertex-bits 16] [--ids] [--leaf-size 1] [--rounds 5] [--json]
 //! ```
 //!

@@ -7,7 +7,7 @@
 //! also in tree order (`-T`: no id maps stored, ids in storage order).
 //!
 //! ```text
-//! cargo run --release --example hcc_stats -- [--gen statue|turbine|... --tris N | --mesh FILE]
+//! cargo run --release --features app --example hcc_stats -- [--gen statue|turbine|... --tris N | --mesh FILE]
 //!     [--leaves 2,4,8,16] [--vertex-bits 16] [--width 512] [--rounds 5] [--json]
 //! ```
 //!

@@ -4,7 +4,7 @@
 //! section tables, and structurally corrupt trees written by the codec's
 //! own encoder; prints the table of outcomes (Markdown).
 //!
-//! `cargo run --release --example mutate -- [TRIANGLES] [CASES] [SEED]`
+//! `cargo run --release --features sims --example mutate -- [TRIANGLES] [CASES] [SEED]`
 //! (defaults 20000, 2000, 1). Exits with an error if any case panicked,
 //! was accepted inconsistent with its own triangles, left a forged header
 //! word unnoticed, or a must-catch attack gave another file.

@@ -3,7 +3,7 @@
 //! obvhs and Embree).
 //!
 //! ```text
-//! cargo run --release --example packet_bench -- [tris] [width] [codec, default plain]
+//! cargo run --release --features sims --example packet_bench -- [tris] [width] [codec, default plain]
 //! ```
 
 use std::time::Instant;

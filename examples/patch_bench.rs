@@ -5,7 +5,7 @@
 //! every run, so two builds can be compared on a noisy machine. Both orders
 //! of the pair are timed: the statue as tree A and as tree B.
 //!
-//! `cargo run --release --example patch_bench -- [--statue-tris N]
+//! `cargo run --release --features sims --example patch_bench -- [--statue-tris N]
 //! [--turbine-tris M] [--codec C] [--pose tx,ty,tz,qx,qy,qz,qw] [--prediction P] [--reps R]
 //! [--threads T]`; `--codec` names the codec of both shapes (`plain` by
 //! default, with the registry's default options, e.g. RACBVH's 64 MiB cluster

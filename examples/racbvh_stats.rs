@@ -2,8 +2,8 @@
 //! throughput against the plain codec, measured side by side in one run.
 //!
 //! ```text
-//! cargo run --release --example racbvh_stats -- [tris] [layout] [bits] [cluster_nodes] [--json]
-//! cargo run --release --example racbvh_stats -- 1000000 cache-efficient 16 4096
+//! cargo run --release --features sims --example racbvh_stats -- [tris] [layout] [bits] [cluster_nodes] [--json]
+//! cargo run --release --features sims --example racbvh_stats -- 1000000 cache-efficient 16 4096
 //! ```
 //! Decompression and ray figures are single-threaded unless marked; the
 //! decompression figure is the fastest of repeated sweeps over all clusters.

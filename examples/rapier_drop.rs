@@ -5,9 +5,9 @@
 //! program's core.
 //!
 //! ```sh
-//! cargo run --release --example rapier_drop
-//! cargo run --release --example rapier_drop -- my_mesh.ply --trimesh-floor
-//! cargo run --release --example rapier_drop -- s.rac     # written by `cbvh build ... -o s.rac`
+//! cargo run --release --features sims --example rapier_drop
+//! cargo run --release --features sims --example rapier_drop -- my_mesh.ply --trimesh-floor
+//! cargo run --release --features sims --example rapier_drop -- s.rac     # written by `cbvh build ... -o s.rac`
 //! ```
 
 use cbvh::Mesh;

@@ -9,8 +9,8 @@
 //! every mesh ground too (see [`cbvh::sim::slide::pairings`]).
 //!
 //! ```sh
-//! cargo run --release --example rapier_slide
-//! cargo run --release --example rapier_slide -- --scene slide --rep plain-pairs --json out.json
+//! cargo run --release --features sims --example rapier_slide
+//! cargo run --release --features sims --example rapier_slide -- --scene slide --rep plain-pairs --json out.json
 //! ```
 //!
 //! `--scene NAME` keeps the scenes whose name contains NAME; `--rep NAMES`

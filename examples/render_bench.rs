@@ -4,7 +4,7 @@
 //! on 1 and 2 threads.
 //!
 //! ```text
-//! cargo run --release --example render_bench -- [--tris 100000,1000000]
+//! cargo run --release --features app --example render_bench -- [--tris 100000,1000000]
 //!     [--threads 1,2] [--width 640 --height 480] [--repeat 3] [--json]
 //! ```
 //!

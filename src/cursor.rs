@@ -244,7 +244,8 @@ impl<N: Copy> Children<N> {
 }
 
 /// Traversal counters, for the papers' "travs/isecs" figures.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct TraversalStats {
     /// Nodes whose box was tested or whose children were decoded.
     pub nodes_visited: u64,

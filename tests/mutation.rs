@@ -5,7 +5,7 @@
 //! recomputed, in a consistent different file); never a panic, a hang, an
 //! accepted file inconsistent with its own triangles, or an ignored header
 //! word. The long run is
-//! `cargo run --release --example mutate`.
+//! `cargo run --release --features sims --example mutate`.
 //!
 //! A test binary of its own, outside `tests/suite`: it installs a global
 //! allocator that records the largest allocation in the process, which the

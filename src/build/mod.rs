@@ -32,8 +32,9 @@ use crate::mesh::Mesh;
 pub use layout::CACHE_EFFICIENT_BLOCKS;
 
 /// The node order of a [`CanonicalBvh`]. The root is node 0 in every layout.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "kebab-case"))]
 pub enum Layout {
     /// Pre-order, left child right after its parent.
     #[default]

@@ -581,6 +581,7 @@ impl AnyCodec {
     }
 
     /// The figures `cbvh build` reports (see [`Codec::build_fields`]).
+    #[cfg(feature = "serde")]
     pub fn build_fields(&self) -> Vec<(&'static str, serde_json::Value)> {
         crate::with_codec!(self, |c| c.build_fields())
     }

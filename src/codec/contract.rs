@@ -122,6 +122,7 @@ pub trait Codec: RayCursor + ByteSize + Send + Sync + Sized + 'static {
 
     /// The figures `cbvh build` reports after encoding (node counts,
     /// compression figures), as JSON values.
+    #[cfg(feature = "serde")]
     fn build_fields(&self) -> Vec<(&'static str, serde_json::Value)>;
 
     /// For a codec that decodes into a cache under a byte budget (RACBVH's

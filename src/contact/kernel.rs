@@ -148,7 +148,8 @@ impl<F: FnMut(&PairContact)> ContactSink for FnSink<F> {
 }
 
 /// Counters of a kernel's work.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct KernelStats {
     /// Pairs tested.
     pub pairs: u64,

@@ -35,7 +35,8 @@ use crate::hash::FastMap;
 type NormalKey = (i32, i32, i32);
 
 /// How contacts are grouped into patches.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct PatchOptions {
     /// Largest angle between a pair's normal and its patch's, in degrees.
     pub max_angle_deg: f32,

@@ -4,7 +4,8 @@
 use super::Mesh;
 
 /// The numbers `cbvh info` prints about a mesh.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct MeshStats {
     /// Number of triangles.
     pub triangles: usize,

@@ -1,6 +1,8 @@
 //! The parry3d / rapier3d integration. This folder, and the drop-test
-//! harness [`crate::sim`] that drives rapier with it, are the only places in
-//! the crate that import parry3d or rapier3d.
+//! harness `crate::sim` (feature `sims`) that drives rapier with it, are
+//! the only places in the crate that import parry3d. The integration needs
+//! no rapier3d: rapier's narrow phase takes parry's query dispatcher
+//! traits, which [`Dispatcher`] implements, and parry's shapes.
 //!
 //! - [`CbvhShape`]: one parry shape over any cbvh codec (`Shape`, `RayCast`,
 //!   `PointQuery`, `CompositeShape`, `TypedCompositeShape`), with mass
@@ -28,6 +30,8 @@
 //! - [`trimesh`]: parry's own `TriMesh` built from a [`Mesh`](crate::Mesh),
 //!   the baseline every comparison is made against, with its memory counted
 //!   by part the same way cbvh's codecs count theirs.
+//! - `raycast_target` (feature `render`): parry's `TriMesh` as a target of
+//!   the ray tracer, to render through parry's own ray casting.
 
 pub mod cast;
 pub mod cbvh_any;
@@ -37,6 +41,7 @@ pub mod cbvh_trimesh;
 pub mod cones;
 mod dispatcher;
 pub mod patches;
+#[cfg(feature = "render")]
 pub mod raycast_target;
 pub mod shape;
 pub mod trimesh;

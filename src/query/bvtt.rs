@@ -115,7 +115,7 @@ impl<NA: Copy, NB: Copy> Scratch<NA, NB> {
 /// handles as they were, 48 bytes with their box; 128 bytes now) went
 /// through a `memcpy` at every step;
 /// inlined, HCCMesh's pair enumeration takes 28 % less time
-/// (`CURSOR_BENCH_ONLY=hcc:bvtt cargo run --release --example cursor_bench
+/// (`CURSOR_BENCH_ONLY=hcc:bvtt cargo run --release --features sims --example cursor_bench
 /// -- 200000 15`: 18.5 → 13.3 ms; plain unchanged at 7.3–7.7).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]

@@ -116,7 +116,8 @@ impl Shading {
 }
 
 /// Counters of one render.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct RayCounts {
     /// Camera rays.
     pub primary: u64,

@@ -116,7 +116,8 @@ impl View {
 }
 
 /// What a render measured.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct RenderStats {
     /// Rays by kind, and traversal counters.
     pub rays: RayCounts,

@@ -241,7 +241,8 @@ fn placement(
 }
 
 /// Summary statistics of per-step times, in milliseconds.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct TimeStats {
     /// Median.
     pub median: f64,
@@ -446,7 +447,8 @@ fn replay_once<D: PersistentQueryDispatcher<ContactManifoldData, ContactData>>(
 }
 
 /// What one run measured.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct RunReport {
     /// The run's name (see [`RunSpec::name`]).
     pub shape: String,
@@ -529,7 +531,7 @@ pub struct RunReport {
     /// without one).
     pub replay_narrow_phase_ms_per_step: Vec<f64>,
     /// This run's own trajectory, for other runs to be timed along.
-    #[serde(skip)]
+    #[cfg_attr(feature = "serde", serde(skip))]
     pub trajectory: Trajectory,
     /// Narrow-phase milliseconds of every step.
     pub narrow_phase_ms_per_step: Vec<f64>,

@@ -5,8 +5,10 @@
 //!
 //! This folder drives rapier, so it imports parry3d and rapier3d: with
 //! [`crate::parry`] (the integration itself) it is one of the two places
-//! in the crate that may. It uses the integration only through its public
-//! API (the shape, the dispatcher, parry's `TriMesh` baseline).
+//! in the crate that may import parry3d, and the only one that imports
+//! rapier3d (which only the `sims` feature brings). It uses the
+//! integration only through its public API (the shape, the dispatcher,
+//! parry's `TriMesh` baseline).
 //!
 //! - [`droptest`]: the scene, the placement, one run per [`ShapeKind`]
 //!   and its [`RunReport`].

@@ -695,7 +695,8 @@ enum Ground {
 }
 
 /// What a body did along a slope.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct SlopeMotion {
     /// Displacement of the centre of mass along the downhill direction at
     /// the end (m).
@@ -711,7 +712,8 @@ pub struct SlopeMotion {
 }
 
 /// What one scene measured, against what it should have.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Report {
     /// The scene's name ([`Scene::name`]).
     pub scene: String,

@@ -9,7 +9,7 @@ use crate::common;
 
 use cbvh::build::{BuildOptions, build};
 use cbvh::codec::racbvh::{RacBvh, RacOptions};
-use cbvh::mesh::{MAX_COORDINATE, MeshError};
+use cbvh::mesh::MeshError;
 use cbvh::scene::{Kind, generate};
 use cbvh::{Mesh, NodeCursor};
 use common::*;
@@ -105,6 +105,8 @@ fn coordinates_beyond_the_supported_range_are_rejected_at_load() {
     assert!(err.to_string().contains("1e12"), "{err}");
 }
 
+// The ray tracer needs the `render` feature (`app` has it).
+#[cfg(feature = "render")]
 #[test]
 fn a_mesh_at_the_limit_renders_like_one_near_the_origin() {
     let statue = generate(Kind::Statue, 2000, 4, &mut |_, _| {}).unwrap();
@@ -123,7 +125,10 @@ fn a_mesh_at_the_limit_renders_like_one_near_the_origin() {
     for (size, offset) in [
         (1e8, 0.0),
         (1e4, 1e8),
-        (MAX_COORDINATE * 0.5, MAX_COORDINATE * 0.5),
+        (
+            cbvh::mesh::MAX_COORDINATE * 0.5,
+            cbvh::mesh::MAX_COORDINATE * 0.5,
+        ),
     ] {
         // Far away (or huge), the same picture: it used to be empty, the
         // camera's view direction NaN once `centre + unit vector` rounded

@@ -5,7 +5,7 @@
 //! a cold `cargo test` within a small disk and a short build. The one
 //! other test binary, `tests/mutation.rs`, measures the process's largest
 //! allocation and so runs alone. Run one part
-//! with its module path, e.g. `cargo test --test suite contacts::`.
+//! with its module path, e.g. `cargo test --features sims --test suite contacts::`.
 //!
 //! The modules that run the command-line binaries or write image files need
 //! the `app` feature (`cargo test --features app`); without it the rest

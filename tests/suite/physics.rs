@@ -6,7 +6,7 @@
 //! generated meshes, the fit, the expected values, and parry's primitives
 //! meeting every goal.
 //!
-//! Run in release: `cargo test --release --test physics` (each test
+//! Run in release: `cargo test --release --features sims --test suite physics::` (each test
 //! prints its report; `-- --nocapture` shows them).
 
 use cbvh::codec::CodecKind;

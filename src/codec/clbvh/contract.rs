@@ -28,6 +28,7 @@ fn header_fields(c: &ClBvh) -> Vec<(&'static str, String)> {
     ]
 }
 
+#[cfg(feature = "serde")]
 fn build_fields(c: &ClBvh) -> Vec<(&'static str, serde_json::Value)> {
     vec![
         ("leaf_size", c.options().leaf_size.into()),
@@ -107,6 +108,7 @@ impl Codec for ClBvh {
         header_fields(self)
     }
 
+    #[cfg(feature = "serde")]
     fn build_fields(&self) -> Vec<(&'static str, serde_json::Value)> {
         build_fields(self)
     }
@@ -181,6 +183,7 @@ impl Codec for ClBvhCompact {
         header_fields(&self.0)
     }
 
+    #[cfg(feature = "serde")]
     fn build_fields(&self) -> Vec<(&'static str, serde_json::Value)> {
         build_fields(&self.0)
     }

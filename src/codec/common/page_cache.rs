@@ -72,7 +72,8 @@ impl Drop for LiveToken {
 }
 
 /// The cache's counters.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct CacheStats {
     /// The byte budget.
     pub budget_bytes: usize,

@@ -7,10 +7,12 @@ use std::path::Path;
 use super::{HccBvh, HccError, HccOptions, file};
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
-use crate::codec::{ByteSize, Codec, CodecKind, OpenOptions, Settings, SettingsError};
+use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError};
 use crate::contact::EdgeFlags;
-use crate::cursor::NodeCursor;
 use crate::mesh::Mesh;
+// The build figures' byte and triangle counts.
+#[cfg(feature = "serde")]
+use crate::{codec::ByteSize, cursor::NodeCursor};
 
 impl Codec for HccBvh {
     const KIND: CodecKind = CodecKind::Hcc;
@@ -105,6 +107,7 @@ impl Codec for HccBvh {
         ]
     }
 
+    #[cfg(feature = "serde")]
     fn build_fields(&self) -> Vec<(&'static str, serde_json::Value)> {
         let st = self.stats();
         let n = self.triangle_count().max(1) as f64;

@@ -331,8 +331,14 @@ fn select_in_word(mut w: u64, mut k: u32) -> u32 {
 impl HccBvh {
     /// The two children of the inner node `node` with their boxes.
     // Always inlined, as `for_each_child` was with its closure: a call
-    // would return the pair through memory.
-    #[inline(always)]
+    // would return the pair through memory. Only in optimised builds (no
+    // debug assertions), as are `pair` and `children` below and in
+    // `ooc::contract`: unoptimised, forced inlining copied the whole child
+    // decode into every call site of every traversal, once per codec pair
+    // (single BVTT functions of 88 000 LLVM instructions), and made a
+    // user's cold debug build of cbvh take 80 s of CPU instead of 31.
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    #[cfg_attr(debug_assertions, inline)]
     pub(super) fn children_of(&self, node: &HccNode) -> [(HccNode, Aabb); 2] {
         if node.kind() == KIND_HIGH {
             let h = &self.high[node.pos() as usize];
@@ -377,7 +383,8 @@ impl HccBvh {
 }
 
 impl super::trace::Pairs for HccBvh {
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    #[cfg_attr(debug_assertions, inline)]
     fn pair(&self, node: &HccNode) -> [(HccNode, Aabb); 2] {
         self.children_of(node)
     }
@@ -408,7 +415,8 @@ impl NodeCursor for HccBvh {
 
     /// Both children written at once (a batch of two, known as such where
     /// the traversal is compiled).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    #[cfg_attr(debug_assertions, inline)]
     fn children(&self, node: &HccNode, out: &mut Children<HccNode>) {
         out.set(&self.children_of(node));
     }

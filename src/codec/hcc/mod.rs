@@ -153,7 +153,8 @@ use node::{HighNode, TreeHeader};
 pub const MAX_LEAF_TRIANGLES: usize = node::MULTI_COUNT_LIMIT;
 
 /// Figures of one encode.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct HccStats {
     /// Low-level trees.
     pub trees: usize,

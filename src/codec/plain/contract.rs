@@ -76,6 +76,7 @@ impl Codec for PlainBvh {
         ]
     }
 
+    #[cfg(feature = "serde")]
     fn build_fields(&self) -> Vec<(&'static str, serde_json::Value)> {
         vec![
             ("nodes", self.nodes().len().into()),

@@ -80,6 +80,7 @@ impl Codec for RacBvh {
         RacBvh::header_fields(self)
     }
 
+    #[cfg(feature = "serde")]
     fn build_fields(&self) -> Vec<(&'static str, serde_json::Value)> {
         let st = self.stats();
         vec![

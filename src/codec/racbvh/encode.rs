@@ -150,7 +150,8 @@ impl RacOptions {
 }
 
 /// Figures of a compressed tree.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct RacStats {
     /// Nodes in the tree.
     pub nodes: u64,

@@ -9,8 +9,10 @@ use super::super::{HccBvh, HccNode};
 use super::paged::Paged;
 use super::{HccOocBvh, Mode, OocError, OocOptions, file};
 use crate::build::CanonicalBvh;
+#[cfg(feature = "serde")]
+use crate::codec::ByteSize;
 use crate::codec::common::MassProps;
-use crate::codec::{ByteSize, Codec, CodecKind, OpenOptions, Settings, SettingsError};
+use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError};
 use crate::contact::EdgeFlags;
 use crate::cursor::{Children, NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Ray, Triangle};
@@ -47,7 +49,8 @@ impl NodeCursor for HccOocBvh {
         }
     }
 
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    #[cfg_attr(debug_assertions, inline)]
     fn children(&self, node: &HccNode, out: &mut Children<HccNode>) {
         match &self.mode {
             Mode::Whole { hcc, .. } => out.set(&hcc.children_of(node)),
@@ -117,7 +120,8 @@ impl RayCursor for HccOocBvh {
 }
 
 impl Pairs for Paged {
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    #[cfg_attr(debug_assertions, inline)]
     fn pair(&self, node: &HccNode) -> [(HccNode, Aabb); 2] {
         self.children_of(node)
     }
@@ -227,6 +231,7 @@ impl Codec for HccOocBvh {
         out
     }
 
+    #[cfg(feature = "serde")]
     fn build_fields(&self) -> Vec<(&'static str, serde_json::Value)> {
         let n = self.triangle_count().max(1) as f64;
         let mut out = vec![(

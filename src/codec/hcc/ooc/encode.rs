@@ -19,7 +19,8 @@ use crate::codec::common::static_dict::{StaticDict, StaticEncoder};
 use crate::hash::FastMap;
 
 /// Bytes of an o-HCCMesh file by part.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct OocSizes {
     /// Header and section table.
     pub header: usize,

@@ -77,7 +77,8 @@ struct Chunk {
 }
 
 /// What [`encode_streamed`] made.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct StreamedBuild {
     /// The file's bytes by part.
     pub sizes: OocSizes,
