@@ -36,8 +36,9 @@
 //!   (the `cbvh` command and the drop tests), with their plots.
 //! - [`geom`]: the small geometry types (glam-based) shared by all of them.
 //! - [`atomic`]: atomic file saves, for every file the crate writes.
-//! - [`logger`]: a minimal stderr logger for the binaries (the library logs
-//!   warnings through the `log` crate).
+//! - `logger` (feature `sims`): a minimal stderr logger for the binaries
+//!   and examples (the library logs warnings through the `log` crate; an
+//!   application installs its own logger).
 //!
 //! parry3d is imported only in [`parry`] and in the harness `sim`, and
 //! rapier3d only in `sim`, which drives rapier (the integration speaks
@@ -56,6 +57,7 @@ pub mod contact;
 pub mod cursor;
 pub mod geom;
 mod hash;
+#[cfg(feature = "sims")]
 pub mod logger;
 pub mod mesh;
 pub mod parry;

@@ -64,6 +64,14 @@
 //! feature tests instead of testing all 34: on a statue resting on a
 //! turbine most pairs take that path, and the oriented kernel costs about
 //! what the unoriented one did.
+//!
+//! Pairs end before any search when no direction can be accepted by both:
+//! when the two sides' cones do not meet, and when one side is flat (it
+//! accepts only its cone) and the other can accept nothing in that cone
+//! (its face cone too far, its active edges leaning out of the flat plane,
+//! its corners with active edges away from the flat triangle). A scan's
+//! flat triangles against a CAD part's large sharp ones are mostly such
+//! pairs.
 
 use std::cell::OnceCell;
 
@@ -268,6 +276,42 @@ impl Side {
         1.0 - d * d >= c * c
     }
 
+    /// For a side with active edges and a `flat` side without: whether
+    /// [`support`](Self::support) may accept any unit direction `m` within
+    /// the flat side's cone around `−flat.out` (the only directions the
+    /// flat side accepts, whichever of the pair it is). It accepts `m` with
+    /// its face or an inactive feature only within its own cone, so only
+    /// when the two cones' axes lie within twice the cone angle; with an
+    /// active edge only when `m` ties the edge's two corners, so is nearly
+    /// perpendicular to it, which no `m` in the flat cone is when the edge
+    /// leans far enough out of the flat side's plane; with a corner only
+    /// when the corner lies in the flat side's near box. A scan's flat
+    /// triangle under a CAD part's large triangle usually meets none of
+    /// the three, and the pair has no accepted axis without the search.
+    fn may_accept_within_cone_of(&self, flat: &Side, cone_cos: f32) -> bool {
+        let axis = -flat.out;
+        let cos_2 = 2.0 * cone_cos * cone_cos - 1.0;
+        if self.out.dot(axis) >= cos_2 - 1e-4 {
+            return true;
+        }
+        let sin = (1.0 - cone_cos * cone_cos).max(0.0).sqrt();
+        let t = &self.t;
+        let e = [t[1] - t[0], t[2] - t[1], t[0] - t[2]];
+        let len = e.map(|x| x.length());
+        // Two corners tie along a unit `m` when their projections differ
+        // by at most 1e-4 of the triangle's extent along `m` (at most its
+        // longest edge) plus the coordinates' rounding.
+        let tie = 1e-4 * len[0].max(len[1]).max(len[2]) + self.rounding;
+        let active = |k: usize| self.active & (1 << k) != 0;
+        (0..3).any(|k| {
+            // Over the cone, |m · e| >= cos θ |axis · e| − sin θ |e|.
+            let edge = active(k)
+                && cone_cos * e[k].dot(axis).abs() - sin * len[k] <= 2.0 * tie + 1e-3 * len[k];
+            let corner = (active(k) || active((k + 2) % 3)) && flat.near().contains_point(t[k]);
+            edge || corner
+        })
+    }
+
     /// Whether the feature farthest along `n` (a unit direction out of this
     /// side) accepts `n`, and how.
     fn support(&self, n: Vec3A, cone_cos: f32, other: &Side) -> Option<Support> {
@@ -420,6 +464,14 @@ pub fn oriented_axis_cached(
     let cone = facing.cone_cos;
     // No direction both sides may accept: nothing to search.
     if !sa.cones_meet(sb, cone) {
+        return None;
+    }
+    // One side flat, the other with active edges that cannot accept any
+    // direction in the flat side's cone: nothing to search either.
+    if cone > 0.0
+        && ((sb.active == 0 && sa.active != 0 && !sa.may_accept_within_cone_of(sb, cone))
+            || (sa.active == 0 && sb.active != 0 && !sb.may_accept_within_cone_of(sa, cone)))
+    {
         return None;
     }
     let mut best: Option<(OrientedAxis, Support, Support)> = None;
@@ -748,6 +800,110 @@ mod tests {
                 && skipped_in_plane > 1000,
             "{accepted} accepted, {both} both inactive, {mixed} one inactive, \
              {apart} apart, {skipped_in_plane} in-plane skipped"
+        );
+    }
+
+    /// A sharp side that `may_accept_within_cone_of` says cannot accept any
+    /// direction in a flat side's cone rejects every one: the search's own
+    /// candidates (faces, edge-edge crosses, in-plane edge normals) and
+    /// random directions over the cone up to its rim. The pairs are a small
+    /// flat triangle near a larger sharp one, tilted by a few cone angles
+    /// and with edges nearly in the flat plane, so that all three
+    /// conditions of the test are met often and missed often.
+    #[test]
+    fn a_sharp_side_kept_out_of_a_flat_cone_accepts_nothing_there() {
+        let mut rng = crate::scene::rng::Rng::new(0x9e37_79b9_7f4a_7c15, 3);
+        let mut rnd = move || rng.range(-1.0, 1.0);
+        let cone = PairFacing::new(Facing::OneSided(1.0), Facing::OneSided(1.0)).cone_cos;
+        let theta = cone.acos();
+        let (mut fired, mut kept, mut tested) = (0, 0, 0);
+        for round in 0..20_000 {
+            // The flat triangle: small, in the plane y = 0, facing +y (the
+            // sharp one comes from above), as B or as A.
+            let s = 0.05 + 0.3 * rnd().abs();
+            let flat_t = [0, 1, 2].map(|_| Vec3A::new(rnd() * s, 0.0, rnd() * s));
+            // The sharp one: larger, tilted about a random horizontal axis
+            // by up to four cone angles, its plane near the flat one's.
+            let size = 0.1 + 2.0 * rnd().abs();
+            let tilt = 4.0 * theta * rnd().abs();
+            let axis = Vec3A::new(rnd(), 0.0, rnd()).normalize_or(Vec3A::X);
+            let rot = glam::Quat::from_axis_angle(axis.into(), tilt);
+            let lift = Vec3A::new(rnd() * size, 0.02 * rnd(), rnd() * size);
+            let sharp_t = [0, 1, 2].map(|_| {
+                let p = Vec3A::new(rnd() * size, 0.01 * rnd(), rnd() * size);
+                Vec3A::from(rot * glam::Vec3::from(p)) + lift
+            });
+            let flags = 1 + (rnd().to_bits() % 63) as u8;
+            let flat_first = round % 2 == 0;
+            let (a, fa, b, fb) = if flat_first {
+                (flat_t, 0, sharp_t, flags)
+            } else {
+                (sharp_t, flags, flat_t, 0)
+            };
+            // Each faces the other: the flat one up, the sharp one down.
+            let facing = |t: &Triangle, up: bool| {
+                let raw = (t[1] - t[0]).cross(t[2] - t[0]);
+                let s = if (raw.y > 0.0) == up { 1.0 } else { -1.0 };
+                Facing::OneSided(s)
+            };
+            let slack = 0.02;
+            let (Some(sa), Some(sb)) = (
+                Side::new(&a, fa, facing(&a, flat_first), slack),
+                Side::new(&b, fb, facing(&b, !flat_first), slack),
+            ) else {
+                continue;
+            };
+            let (flat, sharp) = if flat_first { (&sa, &sb) } else { (&sb, &sa) };
+            if sharp.active == 0 {
+                continue;
+            }
+            if sharp.may_accept_within_cone_of(flat, cone) {
+                kept += 1;
+                continue;
+            }
+            fired += 1;
+            // Directions m the sharp side is asked about (n for A, −n for
+            // B), within the flat cone around −flat.out.
+            let mut dirs: Vec<Vec3A> = vec![sa.out, -sa.out, sb.out, -sb.out];
+            let ea = [a[1] - a[0], a[2] - a[1], a[0] - a[2]];
+            let eb = [b[1] - b[0], b[2] - b[1], b[0] - b[2]];
+            for x in ea {
+                for y in eb {
+                    if let Some(c) = x.cross(y).try_normalize() {
+                        dirs.extend([c, -c]);
+                    }
+                }
+            }
+            for s in [&sa, &sb] {
+                for m in s.in_plane_normals().iter().flatten() {
+                    dirs.extend([*m, -*m]);
+                }
+            }
+            let centre = -flat.out;
+            let u = centre.any_orthonormal_vector();
+            let v = centre.cross(u);
+            for k in 0..64 {
+                let phi = k as f32 * 0.1;
+                let alpha = theta * if k % 4 == 0 { 1.0 } else { rnd().abs() };
+                dirs.push(
+                    (centre * alpha.cos() + (u * phi.cos() + v * phi.sin()) * alpha.sin())
+                        .normalize(),
+                );
+            }
+            for m in dirs {
+                if m.dot(centre) < cone {
+                    continue;
+                }
+                tested += 1;
+                assert!(
+                    sharp.support(m, cone, flat).is_none(),
+                    "round {round}: the sharp side accepts {m}"
+                );
+            }
+        }
+        assert!(
+            fired > 2000 && kept > 2000 && tested > 50_000,
+            "{fired} pairs without an axis, {kept} searched, {tested} directions"
         );
     }
 
