@@ -45,6 +45,13 @@
 //! coding: the chunks the current clusters span (about 76 bytes a
 //! triangle of them) and a batch of coded clusters.
 //!
+//! Measured (a 50 M-triangle generated statue, 2 threads, release,
+//! default budget: 16 chunks of at most 6.2 M triangles): out of core
+//! 241 s wall (build and code 170 s, verify 66 s), peak RSS 1.68 GiB
+//! (35 bytes a triangle), file 12.97 bytes a triangle; in memory
+//! (`--memory-mib 22000`) 228 s, 14.5 GiB (310 bytes a triangle), 13.09
+//! bytes a triangle (chunk-order triangle ids code a little shorter).
+//!
 //! # What differs from the in-memory file
 //!
 //! The tree (the top is cut at the chunks), the triangle numbering, the
