@@ -33,16 +33,16 @@ pub struct BuildArgs {
     pub json: bool,
     /// Memory the build may use, in MiB (default: half the machine's).
     /// A model whose in-memory build would need more is built out of core
-    /// by `--codec hcc-ooc` and refused by the other codecs, before any
-    /// work. Out of core, the chunks are as large as this allows; without
+    /// by `--codec hcc-ooc` and `--codec racbvh` and refused by the other
+    /// codecs, before any work. Out of core, the chunks are as large as this allows; without
     /// it, as large as 32 bytes a triangle of the model allow beside the
     /// vertices and flags the build holds (within half the machine's
     /// memory): about 40 bytes a triangle in all for a closed mesh, at any
     /// size.
     #[arg(long, value_name = "MIB")]
     pub memory_mib: Option<u64>,
-    /// Build out of core whatever the model's size (`--codec hcc-ooc`
-    /// from a mesh file, with `-o`).
+    /// Build out of core whatever the model's size (`--codec hcc-ooc` or
+    /// `racbvh`, from a mesh file, with `-o`).
     #[arg(long)]
     pub out_of_core: bool,
     /// Out of core: the most triangles a chunk holds, instead of what the
@@ -78,8 +78,12 @@ fn budget(a: &BuildArgs) -> u64 {
     )
 }
 
-/// How an out-of-core build goes: its input, output, chunk size.
+/// The codecs that build out of core.
+const OUT_OF_CORE: [CodecKind; 2] = [CodecKind::HccOoc, CodecKind::Racbvh];
+
+/// How an out-of-core build goes: its codec, input, output, chunk size.
 struct OutOfCore {
+    codec: CodecKind,
     input: std::path::PathBuf,
     output: std::path::PathBuf,
     budget: u64,
@@ -95,7 +99,10 @@ fn gib(b: u64) -> String {
 /// large for the in-memory path of a codec that has no other.
 fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> {
     let budget = budget(a);
-    let ooc = a.codec == Structure::Codec(CodecKind::HccOoc);
+    let ooc = match a.codec {
+        Structure::Codec(k) if OUT_OF_CORE.contains(&k) => Some(k),
+        _ => None,
+    };
     let file = a
         .source
         .mesh
@@ -117,9 +124,9 @@ fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> 
     if !a.out_of_core && !big {
         return Ok(None);
     }
-    if !ooc {
+    let Some(codec) = ooc else {
         let why = if a.out_of_core {
-            "--out-of-core builds --codec hcc-ooc only".to_string()
+            "--out-of-core builds --codec hcc-ooc or racbvh only".to_string()
         } else {
             format!(
                 "{what} has about {} triangles: building it in memory needs about {}, over the \
@@ -130,10 +137,11 @@ fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> 
             )
         };
         return Err(format!(
-            "{why}; of the codecs only hcc-ooc builds out of core (--codec hcc-ooc -o FILE)"
+            "{why}; of the codecs only hcc-ooc and racbvh build out of core \
+             (--codec hcc-ooc or --codec racbvh, with -o FILE)"
         )
         .into());
-    }
+    };
     let Some(input) = file else {
         return Err(format!(
             "{what} would need about {} to build in memory, over the {} budget: an out-of-core \
@@ -172,6 +180,7 @@ fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> 
         .unwrap_or((budget - resident) / IN_MEMORY_BYTES_A_TRIANGLE)
         .max(1);
     Ok(Some(OutOfCore {
+        codec,
         input: input.clone(),
         output,
         budget,
@@ -180,11 +189,22 @@ fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> 
     }))
 }
 
-/// The out-of-core build (see [`crate::build::chunked`] and
-/// [`crate::codec::hcc::ooc::encode_streamed`]).
+/// What an out-of-core encoder made, for the report.
+struct Made {
+    chunks: usize,
+    largest_chunk: u64,
+    paired_edges: u64,
+    /// The codec's own figures (low-level trees, clusters).
+    extra: Vec<(&'static str, u64)>,
+    parts: Vec<(&'static str, f64)>,
+}
+
+/// The out-of-core build (see [`crate::build::chunked`],
+/// [`crate::codec::hcc::ooc::encode_streamed`] and
+/// [`crate::codec::racbvh::encode_streamed`]).
 fn run_out_of_core(a: &BuildArgs, p: OutOfCore) -> CliResult {
     use crate::build::chunked::{ChunkOptions, ChunkedMesh};
-    let options = a.settings.options(&[CodecKind::HccOoc])?;
+    let options = a.settings.options(&[p.codec])?;
     super::clear_stale(&p.output);
     let temp = {
         let name = p
@@ -212,13 +232,38 @@ fn run_out_of_core(a: &BuildArgs, p: OutOfCore) -> CliResult {
         ..Default::default()
     };
     let t1 = Instant::now();
-    let made = crate::codec::hcc::ooc::encode_streamed(
-        &input,
-        &build_options,
-        &options.hcc_ooc,
-        &p.output,
-        &|phase, done, total| bar.show(phase, done, total),
-    )?;
+    let show = |phase: &str, done: u64, total: u64| bar.show(phase, done, total);
+    let made = if p.codec == CodecKind::Racbvh {
+        let m = crate::codec::racbvh::encode_streamed(
+            &input,
+            &build_options,
+            &options.racbvh,
+            &p.output,
+            &show,
+        )?;
+        Made {
+            chunks: m.chunks,
+            largest_chunk: m.largest_chunk,
+            paired_edges: m.paired_edges,
+            extra: vec![("nodes", m.nodes), ("clusters", m.clusters)],
+            parts: m.parts(),
+        }
+    } else {
+        let m = crate::codec::hcc::ooc::encode_streamed(
+            &input,
+            &build_options,
+            &options.hcc_ooc,
+            &p.output,
+            &show,
+        )?;
+        Made {
+            chunks: m.chunks,
+            largest_chunk: m.largest_chunk,
+            paired_edges: m.paired_edges,
+            extra: vec![("trees", m.trees as u64)],
+            parts: m.sizes.parts(),
+        }
+    };
     let build_s = t1.elapsed().as_secs_f64();
     let tris = input.triangle_count();
     let vertices = input.vertices.len();
@@ -242,24 +287,23 @@ fn run_out_of_core(a: &BuildArgs, p: OutOfCore) -> CliResult {
     let peak = peak_rss_bytes();
     let threads = rayon::current_num_threads();
     let per_tri = file_bytes as f64 / tris.max(1) as f64;
-    let parts: Vec<(&str, f64)> = made.sizes.parts();
+    let parts = &made.parts;
     if a.json {
         let by_part: serde_json::Map<String, serde_json::Value> = parts
             .iter()
             .map(|(k, v)| (k.to_string(), (*v).into()))
             .collect();
-        let v = serde_json::json!({
+        let mut v = serde_json::json!({
             "mesh": p.input.display().to_string(),
             "triangles": tris,
             "vertices": vertices,
-            "codec": "hcc-ooc",
+            "codec": p.codec.name(),
             "out_of_core": true,
             "layout": a.layout.name(),
             "memory_budget_bytes": p.budget,
             "chunk_triangles": p.chunk_triangles,
             "chunks": made.chunks,
             "largest_chunk": made.largest_chunk,
-            "trees": made.trees,
             "paired_edges": made.paired_edges,
             "read_seconds": read_s,
             "build_seconds": build_s,
@@ -273,24 +317,35 @@ fn run_out_of_core(a: &BuildArgs, p: OutOfCore) -> CliResult {
             "peak_rss_bytes": peak,
             "peak_rss_bytes_per_triangle": peak.map(|b| b as f64 / tris.max(1) as f64),
         });
+        if let Some(o) = v.as_object_mut() {
+            for (k, n) in &made.extra {
+                o.insert(k.to_string(), (*n).into());
+            }
+        }
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         println!("mesh              {}", p.input.display());
         println!("triangles         {tris} ({vertices} vertices)");
         println!(
-            "codec             hcc-ooc ({} layout), built out of core",
+            "codec             {} ({} layout), built out of core",
+            p.codec.name(),
             a.layout
         );
+        let extra: String = made
+            .extra
+            .iter()
+            .map(|(k, n)| format!("{n} {k}, "))
+            .collect();
         println!(
-            "chunks            {} of at most {} triangles (largest {}), {} trees, {} edges paired across chunks",
-            made.chunks, p.chunk_triangles, made.largest_chunk, made.trees, made.paired_edges
+            "chunks            {} of at most {} triangles (largest {}), {extra}{} edges paired across chunks",
+            made.chunks, p.chunk_triangles, made.largest_chunk, made.paired_edges
         );
         println!(
             "time              {secs:.1} s: read and grouped {read_s:.1} s, built and coded {build_s:.1} s \
              ({:.2} M triangles/s on {threads} threads), verified {verify_s:.1} s",
             tris as f64 / (read_s + build_s) / 1e6
         );
-        for (k, v) in &parts {
+        for (k, v) in parts {
             println!(
                 "  {k:<15} {v:>14.0} bytes  {:>8.2} B/triangle",
                 v / tris.max(1) as f64

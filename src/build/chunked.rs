@@ -5,9 +5,10 @@
 //! ([`crate::mesh::stream`]), never holding them all, and leaves them on
 //! disk grouped by chunk, each chunk small enough to build in memory with
 //! the ordinary builder. A codec's out-of-core encoder (o-HCCMesh's
-//! [`encode_streamed`](crate::codec::hcc::ooc::encode_streamed)) then
-//! builds each chunk's trees in turn ([`ChunkedMesh::chunk`] gives it as
-//! a small [`Mesh`]) and joins them under the tree of the chunks
+//! [`encode_streamed`](crate::codec::hcc::ooc::encode_streamed),
+//! RACBVH's [`encode_streamed`](crate::codec::racbvh::encode_streamed))
+//! then builds each chunk's trees in turn ([`ChunkedMesh::chunk`] gives
+//! it as a small [`Mesh`]) and joins them under the tree of the chunks
 //! ([`ChunkedMesh::top`]).
 //!
 //! # How

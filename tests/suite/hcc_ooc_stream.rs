@@ -281,7 +281,7 @@ fn the_command_line_builds_out_of_core_and_a_killed_build_leaves_no_file() {
         plain.to_str().unwrap(),
     ]);
     assert!(
-        !ok && stderr.contains("only hcc-ooc builds out of core"),
+        !ok && stderr.contains("only hcc-ooc and racbvh build out of core"),
         "{stderr}"
     );
     assert!(!plain.exists());

@@ -32,6 +32,7 @@ mod parry_integration;
 mod physics;
 mod plain;
 mod racbvh;
+mod racbvh_stream;
 #[cfg(feature = "app")]
 mod render;
 mod scene_gen;

@@ -164,6 +164,111 @@ impl ForArray {
     }
 }
 
+/// A [`ForArray`] written as its values come, for arrays too large to
+/// hold: the offsets go to a writer as each block fills (LSB first, as
+/// [`ForArray::write`] packs them), the block heads (16 bytes per 128
+/// values) stay in memory until [`finish`](Self::finish). The array is
+/// then the 16 bytes of [`ForPieces::prefix`], the heads, and what the
+/// writer got: byte for byte what [`ForArray::write`] writes for the same
+/// values.
+#[derive(Debug)]
+pub struct ForWriter<W: std::io::Write> {
+    block: Vec<u32>,
+    heads: Vec<u8>,
+    out: W,
+    /// Bytes not yet given to `out`.
+    buf: Vec<u8>,
+    /// Bits not yet in `buf` (fewer than 8 between blocks).
+    acc: u64,
+    acc_bits: u32,
+    bit: u64,
+    len: u64,
+}
+
+/// A finished [`ForWriter`]'s array: the prefix and heads in memory, the
+/// offsets in the writer.
+#[derive(Debug)]
+pub struct ForPieces<W> {
+    /// `len` and `data_len`, as the layout starts.
+    pub prefix: [u8; 16],
+    /// The block heads.
+    pub heads: Vec<u8>,
+    /// The writer, holding `data_len` bytes of offsets.
+    pub out: W,
+}
+
+impl<W: std::io::Write> ForWriter<W> {
+    /// An empty array whose offsets go to `out`.
+    pub fn new(out: W) -> Self {
+        Self {
+            block: Vec::with_capacity(BLOCK),
+            heads: Vec::new(),
+            out,
+            buf: Vec::with_capacity(1 << 16),
+            acc: 0,
+            acc_bits: 0,
+            bit: 0,
+            len: 0,
+        }
+    }
+
+    /// Appends `v`.
+    pub fn push(&mut self, v: u32) -> std::io::Result<()> {
+        self.block.push(v);
+        self.len += 1;
+        if self.block.len() == BLOCK {
+            self.flush_block()?;
+        }
+        Ok(())
+    }
+
+    fn flush_block(&mut self) -> std::io::Result<()> {
+        if self.block.is_empty() {
+            return Ok(());
+        }
+        let base = self.block.iter().copied().min().unwrap_or(0);
+        let span = self.block.iter().map(|&v| v - base).max().unwrap_or(0);
+        let width = 32 - span.leading_zeros();
+        self.heads.extend_from_slice(&base.to_le_bytes());
+        self.heads.extend_from_slice(&width.to_le_bytes());
+        self.heads.extend_from_slice(&self.bit.to_le_bytes());
+        for &v in &self.block {
+            self.acc |= u64::from(v - base) << self.acc_bits;
+            self.acc_bits += width;
+            while self.acc_bits >= 8 {
+                self.buf.push(self.acc as u8);
+                self.acc >>= 8;
+                self.acc_bits -= 8;
+            }
+        }
+        self.bit += self.block.len() as u64 * u64::from(width);
+        self.block.clear();
+        if self.buf.len() >= 1 << 16 {
+            self.out.write_all(&self.buf)?;
+            self.buf.clear();
+        }
+        Ok(())
+    }
+
+    /// Writes the last block and the last partial byte (zero-padded).
+    pub fn finish(mut self) -> std::io::Result<ForPieces<W>> {
+        self.flush_block()?;
+        if self.acc_bits > 0 {
+            self.buf.push(self.acc as u8);
+        }
+        self.out.write_all(&self.buf)?;
+        self.out.flush()?;
+        let mut prefix = [0u8; 16];
+        prefix[..8].copy_from_slice(&self.len.to_le_bytes());
+        prefix[8..].copy_from_slice(&self.bit.div_ceil(8).to_le_bytes());
+        Ok(ForPieces {
+            prefix,
+            heads: self.heads,
+            out: self.out,
+        })
+    }
+}
+
 /// One [`ForVec`] block head.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct Head {
@@ -268,6 +373,33 @@ impl ForVec {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_streaming_writer_writes_what_write_writes() {
+        let mut x = 12345u64;
+        for n in [0usize, 1, 127, 128, 129, 1000, 4097] {
+            let values: Vec<u32> = (0..n)
+                .map(|i| {
+                    x = x
+                        .wrapping_mul(6364136223846793005)
+                        .wrapping_add(1442695040888963407);
+                    // Blocks of many widths, up to 32 bits.
+                    ((x >> 32) as u32) >> ((i / 128) % 32) as u32
+                })
+                .collect();
+            let mut want = Vec::new();
+            ForArray::write(&values, &mut want);
+            let mut w = ForWriter::new(Vec::new());
+            for &v in &values {
+                w.push(v).unwrap();
+            }
+            let p = w.finish().unwrap();
+            let mut got = p.prefix.to_vec();
+            got.extend_from_slice(&p.heads);
+            got.extend_from_slice(&p.out);
+            assert_eq!(got, want, "{n} values");
+        }
+    }
 
     #[test]
     fn frame_of_reference_arrays_round_trip_and_reject_bad_heads() {

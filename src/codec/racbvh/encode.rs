@@ -186,6 +186,48 @@ enum Item {
     },
 }
 
+/// What [`encode_cluster`] reads of the tree, by global node index in
+/// layout order: the in-memory encoder's whole tree, or the out-of-core
+/// encoder's window of it ([`super::stream`]). It asks only for the
+/// cluster's nodes, their parents and, for a node whose sibling comes
+/// earlier in the cluster, the sibling.
+pub(super) trait TreeSource: Sync {
+    /// The parent of node `g` (not the root).
+    fn parent(&self, g: usize) -> usize;
+    /// The children of inner node `g`, `None` for a leaf.
+    fn children(&self, g: usize) -> Option<[u32; 2]>;
+    /// The triangle ids of leaf `g`.
+    fn leaf_ids(&self, g: usize) -> &[u32];
+    /// The quantized box of node `g` (inside its parent's).
+    fn qbox(&self, g: usize) -> &QBox;
+}
+
+/// The in-memory tree with its quantized boxes.
+struct Whole<'a> {
+    bvh: &'a CanonicalBvh,
+    q: &'a [QBox],
+}
+
+impl TreeSource for Whole<'_> {
+    #[inline]
+    fn parent(&self, g: usize) -> usize {
+        self.bvh.parents[g] as usize
+    }
+    #[inline]
+    fn children(&self, g: usize) -> Option<[u32; 2]> {
+        let n = &self.bvh.nodes[g];
+        (!n.is_leaf()).then(|| n.children())
+    }
+    #[inline]
+    fn leaf_ids(&self, g: usize) -> &[u32] {
+        &self.bvh.leaf_triangles[self.bvh.nodes[g].leaf_range()]
+    }
+    #[inline]
+    fn qbox(&self, g: usize) -> &QBox {
+        &self.q[g]
+    }
+}
+
 /// Node boxes recomputed from the stored mesh, bottom-up, so that the boxes
 /// contain the triangles the cursor reports (quantized vertices move).
 fn node_boxes(bvh: &CanonicalBvh, mesh: &PackedMesh) -> Vec<Aabb> {
@@ -205,9 +247,20 @@ fn node_boxes(bvh: &CanonicalBvh, mesh: &PackedMesh) -> Vec<Aabb> {
     boxes
 }
 
+/// Clamps `c` into its parent's quantized box `pq` (see the encoder for
+/// why: far from the origin neighbouring grid points can coincide).
+pub(super) fn clamp_into(c: &mut QBox, pq: &QBox) {
+    for a in 0..3 {
+        let lo = c.min[a].clamp(pq.min[a], pq.max[a]);
+        let hi = c.max[a].clamp(pq.min[a], pq.max[a]);
+        c.min[a] = lo.min(hi);
+        c.max[a] = lo.max(hi);
+    }
+}
+
 /// Checks what the codec relies on: parents before children, consistent
 /// parent links, leaf ranges in bounds.
-fn check_tree(bvh: &CanonicalBvh, tri_count: usize) -> Result<(), RacError> {
+pub(super) fn check_tree(bvh: &CanonicalBvh, tri_count: usize) -> Result<(), RacError> {
     let n = bvh.nodes.len();
     if n == 0 || bvh.parents.len() != n {
         return Err(RacError::InvalidTree(
@@ -307,13 +360,7 @@ impl RacBvh {
         // Parents come before children (checked above).
         for g in 1..q.len() {
             let pq = q[bvh.parents[g] as usize];
-            let c = &mut q[g];
-            for a in 0..3 {
-                let lo = c.min[a].clamp(pq.min[a], pq.max[a]);
-                let hi = c.max[a].clamp(pq.min[a], pq.max[a]);
-                c.min[a] = lo.min(hi);
-                c.max[a] = lo.max(hi);
-            }
+            clamp_into(&mut q[g], &pq);
         }
         let cluster_nodes = options.cluster_nodes;
         let cluster_bits = cluster_nodes.trailing_zeros();
@@ -337,22 +384,15 @@ impl RacBvh {
         let clusters = bvh.nodes.len().div_ceil(csize);
         let done = AtomicU64::new(0);
         progress(0, clusters as u64);
+        let whole = Whole { bvh, q: &q };
         let coded: Vec<(Vec<u8>, u64, u64)> = (0..clusters)
             .into_par_iter()
             .map(|c| {
                 let s = c * csize;
                 let e = (s + csize).min(bvh.nodes.len());
-                // Front positions counted from the newest node suit
-                // depth-first orders, from the oldest breadth-first ones:
-                // try both.
-                let newest = encode_cluster(bvh, &q, &header, c as u32, s, e, false)?;
-                let oldest = encode_cluster(bvh, &q, &header, c as u32, s, e, true)?;
+                let r = code_cluster(&whole, &header, c as u32, s, e)?;
                 progress(done.fetch_add(1, Ordering::Relaxed) + 1, clusters as u64);
-                Ok(if oldest.0.len() < newest.0.len() {
-                    oldest
-                } else {
-                    newest
-                })
+                Ok(r)
             })
             .collect::<Result<_, RacError>>()?;
         for (c, (bytes, tb, bb)) in coded.into_iter().enumerate() {
@@ -391,11 +431,30 @@ impl RacBvh {
     }
 }
 
+/// Codes nodes `s..e` (cluster `c`) both ways (front positions counted
+/// from the newest node suit depth-first orders, from the oldest
+/// breadth-first ones) and keeps the shorter. Returns the bytes and the
+/// bits spent on the tree and on the boxes.
+pub(super) fn code_cluster<T: TreeSource>(
+    t: &T,
+    h: &Header,
+    c: u32,
+    s: usize,
+    e: usize,
+) -> Result<(Vec<u8>, u64, u64), RacError> {
+    let newest = encode_cluster(t, h, c, s, e, false)?;
+    let oldest = encode_cluster(t, h, c, s, e, true)?;
+    Ok(if oldest.0.len() < newest.0.len() {
+        oldest
+    } else {
+        newest
+    })
+}
+
 /// Codes nodes `s..e` (cluster `c`). Returns the bytes and the bits spent
 /// on the tree and on the boxes.
-fn encode_cluster(
-    bvh: &CanonicalBvh,
-    q: &[QBox],
+fn encode_cluster<T: TreeSource>(
+    t: &T,
     h: &Header,
     c: u32,
     s: usize,
@@ -417,7 +476,7 @@ fn encode_cluster(
     let mut pclusters: Vec<u32> = Vec::new();
     let mut pindex: HashMap<u32, u32> = HashMap::new();
     for g in s.max(1)..e {
-        let p = bvh.parents[g] as usize;
+        let p = t.parent(g);
         if p < s {
             let pc = (p >> h.cluster_bits) as u32;
             pindex.entry(pc).or_insert_with(|| {
@@ -432,14 +491,17 @@ fn encode_cluster(
     let mut last_tri: i64 = 0;
     let threshold = i64::from(h.tri_threshold);
     for g in s..e {
-        let n = &bvh.nodes[g];
-        let leaf = u32::from(n.is_leaf());
+        let kids = t.children(g);
+        let leaf = u32::from(kids.is_none());
         let mut sib_tri: Option<i64> = None;
         if g == 0 {
             sym(&mut items, CTX_STRUCT, leaf, 0);
         } else {
-            let p = bvh.parents[g] as usize;
-            let right = bvh.nodes[p].b as usize == g;
+            let p = t.parent(g);
+            let pk = t.children(p).ok_or_else(|| {
+                RacError::InvalidTree(format!("the parent {p} of node {g} is a leaf"))
+            })?;
+            let right = pk[1] as usize == g;
             let side = u32::from(right);
             if p >= s {
                 let at = front
@@ -475,7 +537,7 @@ fn encode_cluster(
                     stream: 0,
                 });
             }
-            let (pq, cq) = (&q[p], &q[g]);
+            let (pq, cq) = (t.qbox(p), t.qbox(g));
             let inside = (0..3).all(|a| pq.min[a] <= cq.min[a] && cq.max[a] <= pq.max[a]);
             if !inside {
                 return Err(RacError::InvalidTree(format!(
@@ -483,11 +545,13 @@ fn encode_cluster(
                 )));
             }
             let r = residuals(pq, right, cq).map(|v| v as u32);
-            let sibg = bvh.nodes[p].children()[usize::from(!right)] as usize;
+            let sibg = pk[usize::from(!right)] as usize;
             let known = p >= s && (s..g).contains(&sibg);
-            let sn = &bvh.nodes[sibg];
-            if known && sn.is_leaf() && sn.leaf_range().len() == 1 {
-                sib_tri = Some(i64::from(bvh.leaf_triangles[sn.a as usize]));
+            if known
+                && t.children(sibg).is_none()
+                && let &[id] = t.leaf_ids(sibg)
+            {
+                sib_tri = Some(i64::from(id));
             }
             let sib = known.then(|| &res[sibg - s]);
             let has_sib = sib.is_some();
@@ -518,8 +582,8 @@ fn encode_cluster(
             }
             res[g - s] = r;
         }
-        if n.is_leaf() {
-            let ids = &bvh.leaf_triangles[n.leaf_range()];
+        if kids.is_none() {
+            let ids = t.leaf_ids(g);
             // A sibling leaf's triangle is a better reference than the
             // previous leaf's when the layout is not depth-first.
             last_tri = sib_tri.unwrap_or(last_tri);
@@ -552,8 +616,8 @@ fn encode_cluster(
     // Local leaves: the children outside this cluster, delta coded.
     let mut last_child = e as i64;
     for &f in &front {
-        let n = &bvh.nodes[f as usize];
-        for (side, child) in n.children().into_iter().enumerate() {
+        let fk = t.children(f as usize).unwrap_or_default();
+        for (side, child) in fk.into_iter().enumerate() {
             if got[f as usize - s] & (1 << side) == 0 {
                 let d = i64::from(child) - last_child;
                 sym(&mut items, CTX_CHILD, zigzag(d) as u32, 0);

@@ -48,6 +48,10 @@ pub enum RacError {
         /// What was found.
         what: &'static str,
     },
+    /// The out-of-core build could not read or build a chunk, or the
+    /// model is beyond what it numbers.
+    #[error("out-of-core build: {0}")]
+    OutOfCore(String),
     /// Reading or writing a file failed.
     #[error("I/O error: {0}")]
     Io(String),

@@ -59,7 +59,7 @@ pub const VERSION: u32 = 4;
 pub const MAGIC: [u8; 8] = *b"CBVHRAC\0";
 /// Where the section table starts.
 const TABLE: usize = 184;
-const SECTIONS: usize = 5;
+pub(super) const SECTIONS: usize = 5;
 const HEADER_LEN: usize = TABLE + 24 * SECTIONS + 8;
 const _: () = assert!(HEADER_LEN == 312);
 const NAMES: [&str; SECTIONS] = ["meta", "clusters", "vertices", "triangles", edges::SECTION];
@@ -70,6 +70,13 @@ pub(super) const FRAME: Frame = Frame {
 };
 /// Bytes of one meta-table entry.
 pub(super) const META_ENTRY: usize = 20;
+
+/// A meta-table entry's bytes.
+pub(super) fn meta_entry(e: &ClusterMeta, out: &mut Vec<u8>) {
+    out.extend_from_slice(&e.offset.to_le_bytes());
+    out.extend_from_slice(&e.nodes.to_le_bytes());
+    out.extend_from_slice(&e.hash.to_le_bytes());
+}
 
 /// The checksum of the two mesh sections.
 pub(super) fn mesh_hash(m: &PackedMesh) -> u64 {
@@ -87,57 +94,66 @@ fn header_err(field: &'static str, why: impl Into<String>) -> RacError {
     FormatError::header(field, why).into()
 }
 
+/// The header's fields, up to the section table (bytes 0–183).
+pub(super) fn fields(h: &Header, m: &MeshParams, mass: &MassProps) -> Vec<u8> {
+    let mut out = Vec::with_capacity(HEADER_LEN);
+    out.extend_from_slice(&MAGIC);
+    let flags = u32::from(h.empty) | (u32::from(m.lossless) << 1);
+    for v in [
+        VERSION,
+        flags,
+        h.cluster_bits,
+        h.bits,
+        h.node_count,
+        h.triangle_count,
+        h.max_leaf,
+        h.tri_threshold,
+    ] {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in h
+        .grid
+        .origin
+        .to_array()
+        .into_iter()
+        .chain(h.grid.step.to_array())
+    {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    out.extend_from_slice(&h.tree_bits.to_le_bytes());
+    out.extend_from_slice(&h.bv_bits.to_le_bytes());
+    out.extend_from_slice(&h.compression_seconds.to_le_bytes());
+    for v in [m.vertex_bits, m.vertex_count, m.index_bits] {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in m.origin.into_iter().chain(m.step) {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    out.extend_from_slice(&0u32.to_le_bytes());
+    debug_assert_eq!(out.len(), 128);
+    out.extend_from_slice(&mass.to_bytes());
+    out.extend_from_slice(&0u32.to_le_bytes());
+    debug_assert_eq!(out.len(), TABLE);
+    out
+}
+
 impl RacBvh {
     /// The container bytes (see [`file`](super::file) for the layout).
     pub fn to_bytes(&self) -> Vec<u8> {
-        let h = &self.header;
-        let m = &self.mesh;
-        let mut out = Vec::with_capacity(HEADER_LEN + self.data.len() + m.bytes());
-        out.extend_from_slice(&MAGIC);
-        let flags = u32::from(h.empty) | (u32::from(m.lossless) << 1);
-        for v in [
-            VERSION,
-            flags,
-            h.cluster_bits,
-            h.bits,
-            h.node_count,
-            h.triangle_count,
-            h.max_leaf,
-            h.tri_threshold,
-        ] {
-            out.extend_from_slice(&v.to_le_bytes());
-        }
-        for v in h
-            .grid
-            .origin
-            .to_array()
-            .into_iter()
-            .chain(h.grid.step.to_array())
-        {
-            out.extend_from_slice(&v.to_le_bytes());
-        }
-        out.extend_from_slice(&h.tree_bits.to_le_bytes());
-        out.extend_from_slice(&h.bv_bits.to_le_bytes());
-        out.extend_from_slice(&h.compression_seconds.to_le_bytes());
-        for v in [m.vertex_bits, m.vertex_count, m.index_bits] {
-            out.extend_from_slice(&v.to_le_bytes());
-        }
-        for v in m.origin.into_iter().chain(m.step) {
-            out.extend_from_slice(&v.to_le_bytes());
-        }
-        out.extend_from_slice(&0u32.to_le_bytes());
-        debug_assert_eq!(out.len(), 128);
-        out.extend_from_slice(&self.mass.to_bytes());
-        out.extend_from_slice(&0u32.to_le_bytes());
-        debug_assert_eq!(out.len(), TABLE);
+        let mut out = fields(&self.header, &self.mesh.params(), &self.mass);
+        out.reserve(self.data.len() + self.mesh.bytes() + 24 * SECTIONS + 8);
         let mut meta = Vec::with_capacity(self.meta.len() * META_ENTRY);
         for e in &self.meta {
-            meta.extend_from_slice(&e.offset.to_le_bytes());
-            meta.extend_from_slice(&e.nodes.to_le_bytes());
-            meta.extend_from_slice(&e.hash.to_le_bytes());
+            meta_entry(e, &mut meta);
         }
         let flags = edges::encode(&self.edges);
-        let sections: [&[u8]; SECTIONS] = [&meta, &self.data, &m.vertices, &m.triangles, &flags];
+        let sections: [&[u8]; SECTIONS] = [
+            &meta,
+            &self.data,
+            &self.mesh.vertices,
+            &self.mesh.triangles,
+            &flags,
+        ];
         FRAME.write(&mut out, &sections);
         out
     }

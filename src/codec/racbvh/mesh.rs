@@ -48,6 +48,116 @@ pub struct PackedMesh {
     indices: ForArray,
 }
 
+/// A vertex as stored, `q`, decoded: the one formula the reader and the
+/// encoders (which box the triangles as the reader will see them) share.
+#[inline]
+fn decode_vertex(lossless: bool, origin: [f32; 3], step: [f32; 3], q: [u32; 3]) -> Vec3A {
+    if lossless {
+        Vec3A::from(q.map(f32::from_bits))
+    } else {
+        Vec3A::from(origin) + Vec3A::new(q[0] as f32, q[1] as f32, q[2] as f32) * Vec3A::from(step)
+    }
+}
+
+/// How a mesh's vertices are stored: quantized over the box of all of
+/// them (round to nearest), or as raw `f32` bits. [`PackedMesh::encode`]
+/// stores a mesh through it, and the out-of-core encoder its model's
+/// vertices, whose chunks it boxes with [`stored`](Self::stored).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct VertexCoder {
+    lossless: bool,
+    bits: u32,
+    origin: [f32; 3],
+    step: [f32; 3],
+    maxq: f32,
+}
+
+impl VertexCoder {
+    /// The coder for `vertices` with `vertex_bits` bits (`None`: lossless).
+    ///
+    /// # Errors
+    /// A coordinate not finite or beyond [`crate::mesh::MAX_COORDINATE`],
+    /// an extent that overflows `f32`.
+    pub(super) fn of(vertices: &[[f32; 3]], vertex_bits: Option<u32>) -> Result<Self, RacError> {
+        let (lossless, bits) = match vertex_bits {
+            None => (true, 32),
+            Some(b) => (false, b),
+        };
+        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        for v in vertices {
+            for a in 0..3 {
+                if !v[a].is_finite() || v[a].abs() > crate::mesh::MAX_COORDINATE {
+                    return Err(RacError::InvalidMesh(format!(
+                        "vertex coordinate {} is not finite or beyond ±{:e}, the supported range",
+                        v[a],
+                        crate::mesh::MAX_COORDINATE
+                    )));
+                }
+                lo[a] = lo[a].min(v[a]);
+                hi[a] = hi[a].max(v[a]);
+            }
+        }
+        let maxq = ((1u64 << bits.min(31)) - 1) as f32;
+        let mut step = [0f32; 3];
+        let mut origin = [0f32; 3];
+        if !vertices.is_empty() {
+            origin = lo;
+            for a in 0..3 {
+                let e = hi[a] - lo[a];
+                if !e.is_finite() {
+                    return Err(RacError::InvalidMesh(
+                        "the mesh's extent overflows f32".into(),
+                    ));
+                }
+                step[a] = if e > 0.0 { e / maxq } else { 0.0 };
+            }
+        }
+        Ok(Self {
+            lossless,
+            bits,
+            origin,
+            step,
+            maxq,
+        })
+    }
+
+    /// Vertex `v` as stored.
+    #[inline]
+    pub(super) fn quantize(&self, v: [f32; 3]) -> [u32; 3] {
+        std::array::from_fn(|a| {
+            if self.lossless {
+                v[a].to_bits()
+            } else if self.step[a] == 0.0 {
+                0
+            } else {
+                ((v[a] - self.origin[a]) / self.step[a])
+                    .round()
+                    .clamp(0.0, self.maxq) as u32
+            }
+        })
+    }
+
+    /// Vertex `v` as the reader decodes it.
+    #[inline]
+    pub(super) fn stored(&self, v: [f32; 3]) -> Vec3A {
+        decode_vertex(self.lossless, self.origin, self.step, self.quantize(v))
+    }
+
+    /// The header's fields for `vertices` vertices and `triangles`
+    /// triangles stored through this coder.
+    pub(super) fn params(&self, vertices: u32, triangles: u32) -> MeshParams {
+        MeshParams {
+            vertex_bits: self.bits,
+            lossless: self.lossless,
+            origin: self.origin,
+            step: self.step,
+            vertex_count: vertices,
+            triangle_count: triangles,
+            index_bits: bits_for(u64::from(vertices)),
+        }
+    }
+}
+
 /// The scalar fields of a [`PackedMesh`], as the container header holds them.
 pub struct MeshParams {
     /// Bits per vertex coordinate (32 = raw `f32`).
@@ -73,49 +183,12 @@ impl PackedMesh {
             .map_err(|_| RacError::InvalidMesh("more than 2^32 vertices".into()))?;
         let tc = u32::try_from(mesh.triangles.len())
             .map_err(|_| RacError::InvalidMesh("more than 2^32 triangles".into()))?;
-        let (lossless, vbits) = match vertex_bits {
-            None => (true, 32),
-            Some(b) => (false, b),
-        };
-        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-        for v in &mesh.vertices {
-            for a in 0..3 {
-                if !v[a].is_finite() || v[a].abs() > crate::mesh::MAX_COORDINATE {
-                    return Err(RacError::InvalidMesh(format!(
-                        "vertex coordinate {} is not finite or beyond ±{:e}, the supported range",
-                        v[a],
-                        crate::mesh::MAX_COORDINATE
-                    )));
-                }
-                lo[a] = lo[a].min(v[a]);
-                hi[a] = hi[a].max(v[a]);
-            }
-        }
-        let maxq = ((1u64 << vbits.min(31)) - 1) as f32;
-        let mut step = [0f32; 3];
-        let mut origin = [0f32; 3];
-        if !mesh.vertices.is_empty() {
-            origin = lo;
-            for a in 0..3 {
-                let e = hi[a] - lo[a];
-                if !e.is_finite() {
-                    return Err(RacError::InvalidMesh(
-                        "the mesh's extent overflows f32".into(),
-                    ));
-                }
-                step[a] = if e > 0.0 { e / maxq } else { 0.0 };
-            }
-        }
+        let coder = VertexCoder::of(&mesh.vertices, vertex_bits)?;
         let mut axes = [Vec::new(), Vec::new(), Vec::new()];
         for v in &mesh.vertices {
+            let q = coder.quantize(*v);
             for a in 0..3 {
-                axes[a].push(if lossless {
-                    v[a].to_bits()
-                } else if step[a] == 0.0 {
-                    0
-                } else {
-                    ((v[a] - origin[a]) / step[a]).round().clamp(0.0, maxq) as u32
-                });
+                axes[a].push(q[a]);
             }
         }
         let mut vdata = Vec::new();
@@ -135,15 +208,7 @@ impl PackedMesh {
         }
         let mut tdata = Vec::new();
         ForArray::write(&flat, &mut tdata);
-        let params = MeshParams {
-            vertex_bits: vbits,
-            lossless,
-            origin,
-            step,
-            vertex_count: vc,
-            triangle_count: tc,
-            index_bits: bits_for(u64::from(vc)),
-        };
+        let params = coder.params(vc, tc);
         Self::from_parts(params, Store::Owned(vdata), Store::Owned(tdata))
     }
 
@@ -185,12 +250,7 @@ impl PackedMesh {
     #[inline]
     pub fn vertex(&self, i: u32) -> Vec3A {
         let q = self.axes.map(|a| a.get(&self.vertices, u64::from(i)));
-        if self.lossless {
-            Vec3A::from(q.map(f32::from_bits))
-        } else {
-            Vec3A::from(self.origin)
-                + Vec3A::new(q[0] as f32, q[1] as f32, q[2] as f32) * Vec3A::from(self.step)
-        }
+        decode_vertex(self.lossless, self.origin, self.step, q)
     }
 
     /// The vertex indices of triangle `t`.
@@ -235,6 +295,19 @@ impl PackedMesh {
                 .collect(),
             (0..self.triangle_count).map(|t| self.indices(t)).collect(),
         )
+    }
+
+    /// The header's fields.
+    pub(super) fn params(&self) -> MeshParams {
+        MeshParams {
+            vertex_bits: self.vertex_bits,
+            lossless: self.lossless,
+            origin: self.origin,
+            step: self.step,
+            vertex_count: self.vertex_count,
+            triangle_count: self.triangle_count,
+            index_bits: self.index_bits,
+        }
     }
 
     /// Stored bytes (the two sections and the header fields).

@@ -19,6 +19,13 @@
 //! compressed bytes in memory) and out-of-core ([`RacBvh::open`]: the
 //! container file memory-mapped, clusters read on demand).
 //!
+//! A model larger than memory is also *built* out of core
+//! ([`encode_streamed`], module [`stream`]): read in spatial chunks
+//! ([`ChunkedMesh`](crate::build::chunked::ChunkedMesh)), each chunk's
+//! tree built and boxed alone, then the clusters cut and coded from the
+//! tree over the chunks with each chunk's tree under its leaf, a few
+//! chunks in memory at a time. The file is an ordinary RACBVH file.
+//!
 //! ```no_run
 //! use cbvh::codec::racbvh::{RacBvh, RacOptions};
 //! # fn demo(bvh: &cbvh::CanonicalBvh, mesh: &cbvh::Mesh) -> Result<(), cbvh::codec::racbvh::RacError> {
@@ -234,6 +241,7 @@ pub mod file;
 pub mod mesh;
 pub mod node;
 mod nodecache;
+pub mod stream;
 mod tree;
 mod tricache;
 mod verify;
@@ -243,6 +251,7 @@ pub use cursor::RacNode;
 pub use encode::{MIN_CLUSTER_NODES, RESIDENT_CLUSTERS, RacOptions, RacStats};
 pub use error::RacError;
 pub use node::{CoreNode, INCOMPLETE};
+pub use stream::{StreamedBuild, encode_streamed};
 pub use tree::{CLUSTER_CACHE_PERCENT, RacBvh};
 
 use context::*;

@@ -1,0 +1,308 @@
+//! The out-of-core RACBVH build (`build::chunked` + `racbvh::encode_streamed`):
+//! small models forced through it with tiny chunks (a triangle a chunk,
+//! chunk boundaries through the mesh, flat and collinear chunks, clusters
+//! spanning many chunks) give files that pass `verify`, whose every query
+//! equals brute force over their decoded mesh, whose triangles are the
+//! in-memory build's (same grid), whose edge flags are the ones the whole
+//! mesh gives, and whose bytes do not depend on the thread count.
+
+use std::path::{Path, PathBuf};
+
+use crate::common;
+
+use cbvh::Mesh;
+use cbvh::build::chunked::{ChunkOptions, ChunkedMesh};
+use cbvh::build::{BuildOptions, build};
+use cbvh::codec::common::edges;
+use cbvh::codec::racbvh::{RacBvh, RacError, RacOptions, StreamedBuild, encode_streamed};
+use cbvh::codec::{AnyCodec, OpenOptions};
+use cbvh::scene::{Kind, generate};
+use common::*;
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("cbvh-racstream-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Builds `mesh` out of core in chunks of `chunk` triangles into `out`.
+fn streamed(
+    mesh: &Mesh,
+    chunk: u64,
+    leaf: usize,
+    o: &RacOptions,
+    out: &Path,
+) -> Result<StreamedBuild, RacError> {
+    let temp = out.with_extension("tmp-dir");
+    let input = ChunkedMesh::from_mesh(
+        mesh,
+        &ChunkOptions {
+            chunk_triangles: chunk,
+            temp_dir: temp.clone(),
+        },
+        &|_, _, _| {},
+    )
+    .expect("chunks");
+    let b = BuildOptions {
+        max_leaf_triangles: leaf,
+        ..Default::default()
+    };
+    let r = encode_streamed(&input, &b, o, out, &|_, _, _| {});
+    drop(input);
+    assert!(!temp.exists(), "the temporary directory is removed");
+    r
+}
+
+/// Each triangle as its corners' position bits, sorted: a mesh's
+/// triangles whatever their order.
+fn triangle_set(m: &Mesh) -> Vec<[[u32; 3]; 3]> {
+    let mut v: Vec<_> = m
+        .triangles
+        .iter()
+        .map(|t| t.map(|i| m.vertices[i as usize].map(f32::to_bits)))
+        .collect();
+    v.sort_unstable();
+    v
+}
+
+fn meshes() -> Vec<(&'static str, Mesh)> {
+    let g = |k, n| generate(k, n, 1, &mut |_, _| {}).unwrap();
+    // Every chunk flat (z = 0), and chunks along a line (below).
+    let (mut plane, mut line) = (Vec::new(), Vec::new());
+    for i in 0..30 {
+        for j in 0..20 {
+            plane.push([i as f32, j as f32, 0.0]);
+        }
+    }
+    let mut pt = Vec::new();
+    for i in 0..29u32 {
+        for j in 0..19u32 {
+            let v = i * 20 + j;
+            pt.push([v, v + 20, v + 1]);
+            pt.push([v + 1, v + 20, v + 21]);
+        }
+    }
+    // Parallel triangles whose centroids lie on the x axis: every split
+    // is on x, every one-triangle chunk is flat.
+    for i in 0..300 {
+        let x = i as f32 * 0.1;
+        line.extend([[x, -1.0, -1.0], [x, 2.0, -1.0], [x, -1.0, 2.0]]);
+    }
+    let lt = (0..300u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+    let mut v = vec![
+        ("statue", g(Kind::Statue, 3000)),
+        ("robot", g(Kind::Robot, 4000)),
+        ("turbine", g(Kind::Turbine, 3000)),
+        ("soup", soup(7, 500, 2.0)),
+        ("plane", Mesh::new(plane, pt)),
+        ("line", Mesh::new(line, lt)),
+    ];
+    for (k, m) in edge_case_meshes().into_iter().enumerate() {
+        v.push((["one", "same", "flat", "huge"][k], m));
+    }
+    v
+}
+
+#[test]
+fn streamed_racbvh_files_verify_answer_like_brute_force_and_hold_the_in_memory_triangles() {
+    let d = dir("answers");
+    for (name, mesh) in meshes() {
+        let n = mesh.triangles.len() as u64;
+        // One triangle a chunk (256-node clusters spanning many chunks),
+        // chunk boundaries through the middle, several triangles a leaf,
+        // one chunk.
+        for (chunk, leaf, cluster_nodes) in
+            [(1, 1, 256), (97, 1, 256), (n / 2 + 1, 4, 4096), (n, 1, 256)]
+        {
+            let o = RacOptions {
+                cluster_nodes,
+                ..Default::default()
+            };
+            let what = format!("{name} chunk {chunk} leaf {leaf}");
+            let out = d.join(format!("{name}-{chunk}-{leaf}.rac"));
+            let r =
+                streamed(&mesh, chunk, leaf, &o, &out).unwrap_or_else(|e| panic!("{what}: {e}"));
+            let bytes = std::fs::read(&out).unwrap();
+            assert_eq!(r.bytes as usize, bytes.len(), "{what}");
+            let parts: f64 = r.parts().iter().map(|p| p.1).sum();
+            assert!(parts <= bytes.len() as f64, "{what}");
+            let rac =
+                RacBvh::from_bytes(&bytes, 64 << 20).unwrap_or_else(|e| panic!("{what}: {e}"));
+            rac.verify().unwrap_or_else(|e| panic!("{what}: {e}"));
+            assert_eq!(rac.node_count() as u64, r.nodes, "{what}");
+            assert_eq!(rac.cluster_count() as u64, r.clusters, "{what}");
+            let dm = rac.decoded_mesh();
+            check_structure(&rac, &dm);
+            check_queries(&rac, &dm, chunk);
+            // The same triangles as the in-memory build's (one grid).
+            let bvh = build(&mesh, &BuildOptions::default(), &|_, _| {}).unwrap();
+            let direct = RacBvh::encode(&bvh, &mesh, &o).unwrap();
+            assert_eq!(
+                triangle_set(&dm),
+                triangle_set(&direct.decoded_mesh()),
+                "{what}"
+            );
+            // The edge flags the whole mesh gives, counters included.
+            let want = edges::of_cursor(&rac);
+            let got = rac.edge_flags();
+            assert_eq!(got.as_slice(), want.as_slice(), "{what}");
+            assert_eq!(
+                (got.boundary_edges, got.flat_edges, got.misoriented_edges),
+                (want.boundary_edges, want.flat_edges, want.misoriented_edges),
+                "{what}"
+            );
+            // Mass within rounding of the in-memory file's.
+            let (a, b) = (rac.mass(), direct.mass());
+            assert!(
+                (a.mass - b.mass).abs() <= 1e-4 * b.mass.abs().max(1e-9),
+                "{what}: {a:?} vs {b:?}"
+            );
+            // (Identical centroids cannot be split.)
+            if chunk == 1 && n > 1 && !matches!(name, "same" | "flat") {
+                assert!(r.chunks > 1, "{what}: {} chunks", r.chunks);
+            }
+            // Out of core, through the registry, with a small cache (the
+            // node cache's path).
+            let paged = AnyCodec::open(
+                &out,
+                &OpenOptions {
+                    cache_budget_bytes: 4096,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            assert_eq!(paged.triangle_count(), mesh.triangles.len());
+            let small = RacBvh::open(&out, 4096).unwrap();
+            check_queries(&small, &dm, chunk + 1);
+        }
+    }
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn streamed_racbvh_bytes_do_not_depend_on_threads() {
+    let d = dir("threads");
+    let mesh = generate(Kind::Statue, 6000, 4, &mut |_, _| {}).unwrap();
+    let o = RacOptions {
+        cluster_nodes: 256,
+        ..Default::default()
+    };
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let out = d.join(format!("t{threads}.rac"));
+        pool.install(|| streamed(&mesh, 700, 1, &o, &out)).unwrap();
+        std::fs::read(&out).unwrap()
+    };
+    let one = run(1);
+    assert_eq!(one, run(2));
+    assert_eq!(one, run(3));
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn a_model_without_triangles_and_bad_options_are_handled_and_leave_nothing() {
+    let d = dir("edge");
+    // No triangles: a valid empty file.
+    let empty = Mesh::new(vec![[0.0; 3], [1.0; 3]], Vec::new());
+    let out = d.join("empty.rac");
+    let r = streamed(&empty, 10, 1, &RacOptions::default(), &out).unwrap();
+    assert_eq!(r.chunks, 0);
+    let rac = RacBvh::open(&out, 1 << 20).unwrap();
+    rac.verify().unwrap();
+    assert_eq!(rac.decoded_mesh().triangles.len(), 0);
+    std::fs::remove_file(&out).unwrap();
+    // Options the codec refuses: an error, no output, no temporary file.
+    let mesh = generate(Kind::Robot, 1000, 1, &mut |_, _| {}).unwrap();
+    let bad = RacOptions {
+        cluster_nodes: 100,
+        ..Default::default()
+    };
+    let e = streamed(&mesh, 100, 1, &bad, &out).unwrap_err();
+    assert!(e.to_string().contains("cluster_nodes"), "{e}");
+    // A leaf size the builder refuses fails in the first chunk.
+    let e = streamed(&mesh, 100, 0, &RacOptions::default(), &out).unwrap_err();
+    assert!(e.to_string().contains("chunk 0"), "{e}");
+    assert!(!out.exists());
+    assert_eq!(
+        std::fs::read_dir(&d).unwrap().count(),
+        0,
+        "no temporary file"
+    );
+    std::fs::remove_dir_all(&d).ok();
+}
+
+/// The command line: `cbvh build FILE --codec racbvh` goes out of core
+/// when asked or when the model is over the budget; a truncated input
+/// file is a clear error and leaves nothing.
+#[cfg(feature = "app")]
+#[test]
+fn the_command_line_builds_racbvh_out_of_core() {
+    let d = dir("cli");
+    let mesh = generate(Kind::Statue, 100_000, 1, &mut |_, _| {}).unwrap();
+    let ply = d.join("m.ply");
+    cbvh::mesh::save(&mesh, &ply).unwrap();
+    let (p, o) = (ply.to_str().unwrap(), d.join("o.rac"));
+    let out = o.to_str().unwrap();
+    let (ok, stdout, stderr) = cbvh(&[
+        "build",
+        p,
+        "--codec",
+        "racbvh",
+        "--out-of-core",
+        "--chunk-triangles",
+        "12000",
+        "-o",
+        out,
+        "--json",
+    ]);
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["out_of_core"], true);
+    assert_eq!(v["codec"], "racbvh");
+    assert!(v["chunks"].as_u64().unwrap() >= 7, "{stdout}");
+    assert_eq!(v["triangles"], mesh.triangles.len() as u64);
+    let (ok, info, stderr) = cbvh(&["info", out]);
+    assert!(ok && info.contains("racbvh"), "{info}{stderr}");
+    // Over the budget: out of core by itself.
+    let (ok, stdout, stderr) = cbvh(&[
+        "build",
+        p,
+        "--codec",
+        "racbvh",
+        "--memory-mib",
+        "24",
+        "-o",
+        out,
+    ]);
+    assert!(
+        ok && stdout.contains("built out of core"),
+        "{stdout}{stderr}"
+    );
+    // A truncated input: the error names the face; no output, no
+    // temporary directory.
+    let full = std::fs::read(&ply).unwrap();
+    std::fs::write(&ply, &full[..full.len() - 1000]).unwrap();
+    let t = d.join("t.rac");
+    let (ok, _, stderr) = cbvh(&[
+        "build",
+        p,
+        "--codec",
+        "racbvh",
+        "--out-of-core",
+        "-o",
+        t.to_str().unwrap(),
+    ]);
+    assert!(!ok && stderr.contains("face"), "{stderr}");
+    assert!(!t.exists());
+    let left: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(".t.rac"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+    std::fs::remove_dir_all(&d).ok();
+}
