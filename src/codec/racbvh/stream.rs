@@ -30,7 +30,7 @@
 //!    in-memory encoder clamps), then the clusters in order: the chunks a
 //!    cluster spans are read back (each once) and quantized, and every
 //!    cluster they complete is coded by the in-memory encoder's code
-//!    ([`code_cluster`], the clusters of a batch in parallel) and appended
+//!    (`encode::code_cluster`, the clusters of a batch in parallel) and appended
 //!    to a temporary file, hashed as it goes.
 //!
 //! Then the vertex arrays, the edge flags with the open edges paired across
