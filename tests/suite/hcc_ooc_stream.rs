@@ -19,9 +19,7 @@ use cbvh::scene::{Kind, generate};
 use common::*;
 
 fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("cbvh-stream-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    temp_dir_for("stream", name)
 }
 
 /// Builds `mesh` out of core in chunks of `chunk` triangles into `out`.
@@ -32,36 +30,9 @@ fn streamed(
     o: &OocOptions,
     out: &Path,
 ) -> Result<StreamedBuild, OocError> {
-    let temp = out.with_extension("tmp-dir");
-    let input = ChunkedMesh::from_mesh(
-        mesh,
-        &ChunkOptions {
-            chunk_triangles: chunk,
-            temp_dir: temp.clone(),
-        },
-        &|_, _, _| {},
-    )
-    .expect("chunks");
-    let b = BuildOptions {
-        max_leaf_triangles: leaf,
-        ..Default::default()
-    };
-    let r = encode_streamed(&input, &b, o, out, &|_, _, _| {});
-    drop(input);
-    assert!(!temp.exists(), "the temporary directory is removed");
-    r
-}
-
-/// Each triangle as its corners' position bits, sorted: a mesh's
-/// triangles whatever their order.
-fn triangle_set(m: &Mesh) -> Vec<[[u32; 3]; 3]> {
-    let mut v: Vec<_> = m
-        .triangles
-        .iter()
-        .map(|t| t.map(|i| m.vertices[i as usize].map(f32::to_bits)))
-        .collect();
-    v.sort_unstable();
-    v
+    through_chunks(mesh, chunk, leaf, out, |input, b| {
+        encode_streamed(input, b, o, out, &|_, _, _| {})
+    })
 }
 
 fn meshes() -> Vec<(&'static str, Mesh)> {

@@ -155,20 +155,9 @@ impl NodeCache {
     /// last cleared.
     pub(super) fn insert(&self, g: u32, words: &[u32; 8], ids: &[u32]) {
         let s = self.set(g);
-        let seq = s[SEQ].load(Ordering::Relaxed);
-        if seq & 1 != 0
-            || s[SEQ]
-                .compare_exchange(
-                    seq,
-                    seq.wrapping_add(1),
-                    Ordering::Relaxed,
-                    Ordering::Relaxed,
-                )
-                .is_err()
-        {
+        let Some(seq) = begin_write(s) else {
             return;
-        }
-        fence(Ordering::Release);
+        };
         let key = g.wrapping_add(1);
         let keys: [u32; WAYS] = std::array::from_fn(|w| s[KEYS + w].load(Ordering::Relaxed));
         let used = s[USED].load(Ordering::Relaxed);
@@ -194,26 +183,37 @@ impl NodeCache {
     /// time may keep their entry).
     pub(super) fn clear(&self) {
         for s in self.words.chunks(Self::set_bytes(self.ids) / 4) {
-            let seq = s[SEQ].load(Ordering::Relaxed);
-            if seq & 1 != 0
-                || s[SEQ]
-                    .compare_exchange(
-                        seq,
-                        seq.wrapping_add(1),
-                        Ordering::Relaxed,
-                        Ordering::Relaxed,
-                    )
-                    .is_err()
-            {
+            let Some(seq) = begin_write(s) else {
                 continue;
-            }
-            fence(Ordering::Release);
+            };
             s[USED..ENTRIES]
                 .iter()
                 .for_each(|k| k.store(0, Ordering::Relaxed));
             s[SEQ].store(seq.wrapping_add(2), Ordering::Release);
         }
     }
+}
+
+/// Takes set `s` for writing: its sequence word made odd (the value it had
+/// is returned, to be stored plus two when the write is done), with a
+/// release fence so that no write to the set is seen before it; `None`
+/// when another thread is writing the set (the caller skips its write).
+fn begin_write(s: &[AtomicU32]) -> Option<u32> {
+    let seq = s[SEQ].load(Ordering::Relaxed);
+    if seq & 1 != 0
+        || s[SEQ]
+            .compare_exchange(
+                seq,
+                seq.wrapping_add(1),
+                Ordering::Relaxed,
+                Ordering::Relaxed,
+            )
+            .is_err()
+    {
+        return None;
+    }
+    fence(Ordering::Release);
+    Some(seq)
 }
 
 #[cfg(test)]

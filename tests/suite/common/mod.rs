@@ -592,3 +592,55 @@ pub fn cbvh(args: &[&str]) -> (bool, String, String) {
         String::from_utf8_lossy(&out.stderr).into(),
     )
 }
+
+/// A fresh temporary directory for test `name` of the suite part `part`
+/// (one per process, so parallel runs do not meet).
+pub fn temp_dir_for(part: &str, name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("cbvh-{part}-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Runs an out-of-core encoder on `mesh` split into chunks of `chunk`
+/// triangles (`encode` gets the chunks and build options with leaves of up
+/// to `leaf` triangles), the chunks' temporary directory beside `out`, and
+/// checks that directory is gone once the chunks are dropped.
+pub fn through_chunks<R>(
+    mesh: &Mesh,
+    chunk: u64,
+    leaf: usize,
+    out: &std::path::Path,
+    encode: impl FnOnce(&cbvh::build::chunked::ChunkedMesh, &cbvh::build::BuildOptions) -> R,
+) -> R {
+    use cbvh::build::chunked::{ChunkOptions, ChunkedMesh};
+    let temp = out.with_extension("tmp-dir");
+    let input = ChunkedMesh::from_mesh(
+        mesh,
+        &ChunkOptions {
+            chunk_triangles: chunk,
+            temp_dir: temp.clone(),
+        },
+        &|_, _, _| {},
+    )
+    .expect("chunks");
+    let b = cbvh::build::BuildOptions {
+        max_leaf_triangles: leaf,
+        ..Default::default()
+    };
+    let r = encode(&input, &b);
+    drop(input);
+    assert!(!temp.exists(), "the temporary directory is removed");
+    r
+}
+
+/// Each triangle as its corners' position bits, sorted: a mesh's
+/// triangles whatever their order.
+pub fn triangle_set(m: &Mesh) -> Vec<[[u32; 3]; 3]> {
+    let mut v: Vec<_> = m
+        .triangles
+        .iter()
+        .map(|t| t.map(|i| m.vertices[i as usize].map(f32::to_bits)))
+        .collect();
+    v.sort_unstable();
+    v
+}
