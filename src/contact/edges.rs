@@ -266,6 +266,24 @@ impl EdgeFlags {
         })
     }
 
+    /// The flags of a model built in chunks (an out-of-core build): the
+    /// chunks' bytes `flags` (a triangle each, as each chunk saw it), the
+    /// counters summed over the chunks in `sum`, and the chunks' open edges
+    /// paired across them ([`resolve_open`](Self::resolve_open)); with the
+    /// number of edges that pairing joined. `None` if a byte has bits 6–7
+    /// set.
+    pub fn joined(flags: Vec<u8>, sum: &EdgeFlags, open: &mut [OpenEdge]) -> Option<(Self, u64)> {
+        let mut e = Self::from_flags(flags)?;
+        e.boundary_edges = sum.boundary_edges;
+        e.non_manifold_edges = sum.non_manifold_edges;
+        e.misoriented_edges = sum.misoriented_edges;
+        e.flat_edges = sum.flat_edges;
+        e.signed_volume = sum.signed_volume;
+        e.resolve_open(open);
+        let paired = (sum.boundary_edges - e.boundary_edges) / 2;
+        Some((e, paired))
+    }
+
     /// Every triangle's flags, by id.
     pub fn as_slice(&self) -> &[u8] {
         &self.flags

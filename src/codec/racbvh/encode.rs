@@ -228,18 +228,20 @@ impl TreeSource for Whole<'_> {
     }
 }
 
-/// Node boxes recomputed from the stored mesh, bottom-up, so that the boxes
-/// contain the triangles the cursor reports (quantized vertices move).
-fn node_boxes(bvh: &CanonicalBvh, mesh: &PackedMesh) -> Vec<Aabb> {
+/// Node boxes of `bvh` from its triangles as `tri` gives them (the stored
+/// mesh's, so that the boxes contain the triangles the cursor reports:
+/// quantized vertices move), bottom-up.
+pub(super) fn node_boxes(
+    bvh: &CanonicalBvh,
+    tri: &dyn Fn(u32) -> crate::geom::Triangle,
+) -> Vec<Aabb> {
     let mut boxes = vec![Aabb::EMPTY; bvh.nodes.len()];
     for i in (0..bvh.nodes.len()).rev() {
         let n = &bvh.nodes[i];
         boxes[i] = if n.is_leaf() {
             bvh.leaf_triangles[n.leaf_range()]
                 .iter()
-                .fold(Aabb::EMPTY, |b, &t| {
-                    b.union(&Aabb::of_triangle(&mesh.triangle(t)))
-                })
+                .fold(Aabb::EMPTY, |b, &t| b.union(&Aabb::of_triangle(&tri(t))))
         } else {
             boxes[n.a as usize].union(&boxes[n.b as usize])
         };
@@ -325,7 +327,7 @@ impl RacBvh {
         options.validate()?;
         check_tree(bvh, mesh.triangles.len())?;
         let pmesh = PackedMesh::encode(mesh, options.vertex_bits)?;
-        let boxes = node_boxes(bvh, &pmesh);
+        let boxes = node_boxes(bvh, &|t| pmesh.triangle(t));
         let empty = bvh.leaf_triangles.is_empty();
         let root_box = boxes[0];
         let finite =

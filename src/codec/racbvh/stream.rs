@@ -70,7 +70,7 @@ use glam::Vec3A;
 use rayon::prelude::*;
 use xxhash_rust::xxh3::{Xxh3, xxh3_64};
 
-use super::encode::{TreeSource, check_tree, clamp_into, code_cluster};
+use super::encode::{TreeSource, check_tree, clamp_into, code_cluster, node_boxes};
 use super::file::{self, FRAME, SECTIONS};
 use super::mesh::VertexCoder;
 use super::{ClusterMeta, Header, RacBvh, RacError, RacOptions};
@@ -359,17 +359,9 @@ pub fn encode_streamed(
     }
 
     // The edge flags, paired across chunks.
-    let paired_before = sum.boundary_edges;
-    let mut edge_flags =
-        EdgeFlags::from_flags(flags).ok_or(RacError::Corrupt("edge flags out of range (a bug)"))?;
-    edge_flags.boundary_edges = sum.boundary_edges;
-    edge_flags.non_manifold_edges = sum.non_manifold_edges;
-    edge_flags.misoriented_edges = sum.misoriented_edges;
-    edge_flags.flat_edges = sum.flat_edges;
-    edge_flags.signed_volume = sum.signed_volume;
-    edge_flags.resolve_open(&mut open);
+    let (edge_flags, paired_edges) = EdgeFlags::joined(flags, &sum, &mut open)
+        .ok_or(RacError::Corrupt("edge flags out of range (a bug)"))?;
     drop(open);
-    let paired_edges = (paired_before - edge_flags.boundary_edges) / 2;
     let flag_bytes = edges::encode(&edge_flags);
     drop(edge_flags);
 
@@ -472,23 +464,6 @@ fn without_triangles(
         largest_chunk: 0,
         paired_edges: 0,
     })
-}
-
-/// Node boxes of `bvh` from its triangles `tri`, bottom-up (the in-memory
-/// encoder's, over one chunk).
-fn node_boxes(bvh: &CanonicalBvh, tri: &dyn Fn(u32) -> crate::geom::Triangle) -> Vec<Aabb> {
-    let mut boxes = vec![Aabb::EMPTY; bvh.nodes.len()];
-    for i in (0..bvh.nodes.len()).rev() {
-        let n = &bvh.nodes[i];
-        boxes[i] = if n.is_leaf() {
-            bvh.leaf_triangles[n.leaf_range()]
-                .iter()
-                .fold(Aabb::EMPTY, |b, &t| b.union(&Aabb::of_triangle(&tri(t))))
-        } else {
-            boxes[n.a as usize].union(&boxes[n.b as usize])
-        };
-    }
-    boxes
 }
 
 /// Bytes of a stored chunk node: `a`, `b`, the box.

@@ -264,19 +264,12 @@ pub fn encode_streamed(
         );
     }
     let firsts = tree_columns(&[&first_tri, &first_vert]);
-    let paired_before = sum.boundary_edges;
-    let mut edge_flags = EdgeFlags::from_flags(flags).ok_or(OocError::Corrupt {
-        tree: u32::MAX,
-        what: "edge flags out of range",
-    })?;
-    edge_flags.boundary_edges = sum.boundary_edges;
-    edge_flags.non_manifold_edges = sum.non_manifold_edges;
-    edge_flags.misoriented_edges = sum.misoriented_edges;
-    edge_flags.flat_edges = sum.flat_edges;
-    edge_flags.signed_volume = sum.signed_volume;
-    edge_flags.resolve_open(&mut open);
+    let (edge_flags, paired_edges) =
+        EdgeFlags::joined(flags, &sum, &mut open).ok_or(OocError::Corrupt {
+            tree: u32::MAX,
+            what: "edge flags out of range",
+        })?;
     drop(open);
-    let paired_edges = (paired_before - edge_flags.boundary_edges) / 2;
     let flag_bytes = edges::encode(&edge_flags);
     drop(edge_flags);
     let node_words: u64 = chunks.iter().map(|c| c.node_words).sum();
