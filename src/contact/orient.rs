@@ -284,10 +284,14 @@ impl Side {
     /// when the two cones' axes lie within twice the cone angle; with an
     /// active edge only when `m` ties the edge's two corners, so is nearly
     /// perpendicular to it, which no `m` in the flat cone is when the edge
-    /// leans far enough out of the flat side's plane; with a corner only
-    /// when the corner lies in the flat side's near box. A scan's flat
-    /// triangle under a CAD part's large triangle usually meets none of
-    /// the three, and the pair has no accepted axis without the search.
+    /// leans far enough out of the flat side's plane, and when the third
+    /// corner does not lie above the edge along `m`; with a corner only
+    /// when the corner lies above the other two along some `m` in the cone
+    /// and in the flat side's near box. A scan's flat triangle under a CAD
+    /// part's large triangle usually meets none of these (a corner of the
+    /// CAD triangle under the scan's is most often its low corner, not the
+    /// one on top along the flat side's normal), and the pair has no
+    /// accepted axis without the search.
     fn may_accept_within_cone_of(&self, flat: &Side, cone_cos: f32) -> bool {
         let axis = -flat.out;
         let cos_2 = 2.0 * cone_cos * cone_cos - 1.0;
@@ -303,11 +307,30 @@ impl Side {
         // longest edge) plus the coordinates' rounding.
         let tie = 1e-4 * len[0].max(len[1]).max(len[2]) + self.rounding;
         let active = |k: usize| self.active & (1 << k) != 0;
+        // Whether some `m` in the cone has `m · d >= −slop`: over the cone,
+        // `m · d <= |d| cos(φ − θ)` with `φ` the angle of `d` from the
+        // axis, which is at least `−slop` only when
+        // `axis · d >= −sin θ |d| − slop` (and a margin for rounding).
+        let may_lead = |d: Vec3A, len: f32, slop: f32| axis.dot(d) >= -(sin + 1e-3) * len - slop;
         (0..3).any(|k| {
-            // Over the cone, |m · e| >= cos θ |axis · e| − sin θ |e|.
+            let prev = (k + 2) % 3;
+            // Edge k (corners k and next) is the support only when `m`
+            // ties its corners, so is nearly perpendicular to it (over the
+            // cone, |m · e| >= cos θ |axis · e| − sin θ |e|), and the third
+            // corner does not lie above it (it would be the support):
+            // `m · (t[k] − t[prev]) > −2 tie` (the edge's corners tie
+            // within `tie` of the largest).
             let edge = active(k)
-                && cone_cos * e[k].dot(axis).abs() - sin * len[k] <= 2.0 * tie + 1e-3 * len[k];
-            let corner = (active(k) || active((k + 2) % 3)) && flat.near().contains_point(t[k]);
+                && cone_cos * e[k].dot(axis).abs() - sin * len[k] <= 2.0 * tie + 1e-3 * len[k]
+                && may_lead(e[prev], len[prev], 2.0 * tie);
+            // Corner k is the support only when it lies above both others
+            // along `m` (`e[k]` runs from it to the next corner, `e[prev]`
+            // from the previous corner to it), and it accepts only when it
+            // lies in the flat side's near box.
+            let corner = (active(k) || active(prev))
+                && may_lead(-e[k], len[k], tie)
+                && may_lead(e[prev], len[prev], tie)
+                && flat.near().contains_point(t[k]);
             edge || corner
         })
     }
@@ -816,7 +839,7 @@ mod tests {
         let mut rnd = move || rng.range(-1.0, 1.0);
         let cone = PairFacing::new(Facing::OneSided(1.0), Facing::OneSided(1.0)).cone_cos;
         let theta = cone.acos();
-        let (mut fired, mut kept, mut tested) = (0, 0, 0);
+        let (mut fired, mut kept, mut tested, mut below) = (0, 0, 0, 0);
         for round in 0..20_000 {
             // The flat triangle: small, in the plane y = 0, facing +y (the
             // sharp one comes from above), as B or as A.
@@ -862,6 +885,15 @@ mod tests {
                 continue;
             }
             fired += 1;
+            // Fired although a corner with an active edge lies in the near
+            // box: no direction in the cone puts that corner on top.
+            let sharp_active = |k: usize| sharp.active & (1 << k) != 0;
+            if (0..3).any(|k| {
+                (sharp_active(k) || sharp_active((k + 2) % 3))
+                    && flat.near().contains_point(sharp.t[k])
+            }) {
+                below += 1;
+            }
             // Directions m the sharp side is asked about (n for A, −n for
             // B), within the flat cone around −flat.out.
             let mut dirs: Vec<Vec3A> = vec![sa.out, -sa.out, sb.out, -sb.out];
@@ -902,8 +934,9 @@ mod tests {
             }
         }
         assert!(
-            fired > 2000 && kept > 2000 && tested > 50_000,
-            "{fired} pairs without an axis, {kept} searched, {tested} directions"
+            fired > 2000 && kept > 2000 && tested > 50_000 && below > 500,
+            "{fired} pairs without an axis ({below} with a near corner below), \
+             {kept} searched, {tested} directions"
         );
     }
 
