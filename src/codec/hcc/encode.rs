@@ -13,48 +13,12 @@ use super::node::{
 use super::pair::{Extents, code_pair, outer, to_lanes};
 use super::template::{MAX_HEIGHT, MAX_TEMPLATE_NODES, TEMPLATES, id_of_mask};
 use super::vertices::{MAX_VERTEX_BITS, Quantized, Vertices};
-use super::{HccOptions, HccStats, MAX_LEAF_TRIANGLES};
+use super::{HccBvh, HccOptions, HccStats, MAX_LEAF_TRIANGLES};
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
 use crate::codec::common::bits::BitWriter;
 use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
-
-/// An i-HCCMesh: the high-level tree and every low-level tree's header,
-/// node words, inter-connections, vertices and (multi-triangle leaves)
-/// triangle blocks, with the maps to the input's numbering (see the module
-/// docs).
-#[derive(Clone, Debug)]
-pub struct HccBvh {
-    pub(super) high: Vec<HighNode>,
-    pub(super) headers: Vec<TreeHeader>,
-    pub(super) nodes: Vec<u32>,
-    pub(super) ics: Vec<u32>,
-    pub(super) vertices: Vertices,
-    /// Multi-triangle leaves: every tree's block stream (see `block`).
-    pub(super) blocks: Vec<u8>,
-    /// Multi-triangle leaves: each tree's first byte in `blocks`.
-    pub(super) block_start: Vec<u32>,
-    /// Bit `p` set when node word `p` is a leaf.
-    pub(super) leaf_bits: Vec<u64>,
-    /// Leaves before each word of `leaf_bits`.
-    pub(super) leaf_rank: Vec<u32>,
-    /// Storage rank ↔ input triangle id (`None`: the triangles are
-    /// numbered in storage order, [`HccOptions::triangle_ids`] off).
-    pub(super) ids: Option<IdMap>,
-    /// Each stored vertex's input index (when kept).
-    pub(super) vertex_ids: Option<VertexIds>,
-    pub(super) multi: bool,
-    pub(super) triangle_count: u32,
-    /// Vertices of the input mesh.
-    pub(super) mesh_vertices: u32,
-    pub(super) mass: MassProps,
-    /// Active edges by triangle id (the ids the cursor reports): computed
-    /// when encoded, read from the file (or the o-HCCMesh's) when opened;
-    /// empty in a one-tree page of the out-of-core o-HCCMesh.
-    pub(super) edges: EdgeFlags,
-    pub(super) stats: HccStats,
-}
 
 /// Tight boxes of every canonical node and, per extent, a vertex (mesh id)
 /// that attains it.

@@ -120,7 +120,7 @@
 mod block;
 mod canonical;
 mod contract;
-mod decode;
+mod cursor;
 mod decompose;
 mod encode;
 mod error;
@@ -136,7 +136,6 @@ mod trace;
 mod verify;
 mod vertices;
 
-pub use encode::HccBvh;
 pub use error::HccError;
 pub use node::HccNode;
 
@@ -145,12 +144,50 @@ use crate::codec::common::MassProps;
 use crate::codec::settings::{Settings, SettingsError};
 use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
+use ids::{IdMap, VertexIds};
 use node::{HighNode, TreeHeader};
+use vertices::Vertices;
 
 /// The most triangles a multi-triangle leaf may hold (a 6-bit count in the
 /// leaf word; a leaf's corners must also fit one low-level tree's 511
 /// vertices).
 pub const MAX_LEAF_TRIANGLES: usize = node::MULTI_COUNT_LIMIT;
+
+/// An i-HCCMesh: the high-level tree and every low-level tree's header,
+/// node words, inter-connections, vertices and (multi-triangle leaves)
+/// triangle blocks, with the maps to the input's numbering (see the module
+/// docs).
+#[derive(Clone, Debug)]
+pub struct HccBvh {
+    high: Vec<HighNode>,
+    headers: Vec<TreeHeader>,
+    nodes: Vec<u32>,
+    ics: Vec<u32>,
+    vertices: Vertices,
+    /// Multi-triangle leaves: every tree's block stream (see `block`).
+    blocks: Vec<u8>,
+    /// Multi-triangle leaves: each tree's first byte in `blocks`.
+    block_start: Vec<u32>,
+    /// Bit `p` set when node word `p` is a leaf.
+    leaf_bits: Vec<u64>,
+    /// Leaves before each word of `leaf_bits`.
+    leaf_rank: Vec<u32>,
+    /// Storage rank ↔ input triangle id (`None`: the triangles are
+    /// numbered in storage order, [`HccOptions::triangle_ids`] off).
+    ids: Option<IdMap>,
+    /// Each stored vertex's input index (when kept).
+    vertex_ids: Option<VertexIds>,
+    multi: bool,
+    triangle_count: u32,
+    /// Vertices of the input mesh.
+    mesh_vertices: u32,
+    mass: MassProps,
+    /// Active edges by triangle id (the ids the cursor reports): computed
+    /// when encoded, read from the file (or the o-HCCMesh's) when opened;
+    /// empty in a one-tree page of the out-of-core o-HCCMesh.
+    edges: EdgeFlags,
+    stats: HccStats,
+}
 
 /// Figures of one encode.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

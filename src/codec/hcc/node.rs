@@ -213,7 +213,7 @@ impl HighNode {
 
 // ---------------------------------------------------------------------------
 // The cursor's node handle. It lives with the words it decodes, not in
-// `decode.rs`, so that `decode.rs` and `trace.rs` both depend on it and not
+// `cursor.rs`, so that `cursor.rs` and `trace.rs` both depend on it and not
 // on each other.
 
 use super::template::{MAX_TEMPLATE_NODES, TEMPLATE_COUNT};
