@@ -1,5 +1,6 @@
 //! o-HCCMesh decoding: the file's bytes into the i-HCCMesh the i-HCCMesh
-//! encoder builds from the same tree and options, byte for byte.
+//! encoder builds from the same tree and options, byte for byte
+//! ([`HccBvh::from_ooc`]).
 
 use super::super::MAX_LEAF_TRIANGLES;
 #[cfg(target_arch = "x86_64")]
@@ -458,6 +459,15 @@ pub fn decode(b: &[u8]) -> Result<HccBvh, OocError> {
     let mut hcc = out.into_hcc(high, maps, &h, (h.mesh_vertices, h.used_vertices));
     hcc.edges = edges;
     Ok(hcc)
+}
+
+impl HccBvh {
+    /// The i-HCCMesh an o-HCCMesh file codes (checked as
+    /// [`HccOocBvh::from_bytes`](super::HccOocBvh::from_bytes) does; run
+    /// [`HccBvh::verify`] before querying bytes you did not write).
+    pub fn from_ooc(bytes: &[u8]) -> Result<HccBvh, OocError> {
+        decode(bytes)
+    }
 }
 
 /// The next symbol of context `ctx` in tree `k`'s stream.

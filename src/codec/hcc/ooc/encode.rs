@@ -1,22 +1,29 @@
 //! o-HCCMesh encoding: an i-HCCMesh (quantized vertices, one triangle a
 //! leaf) into the coded file, in two passes over the model (the first
-//! counts each context's symbols for its dictionary, the second writes).
+//! counts each context's symbols for its dictionary, the second writes);
+//! [`HccBvh::to_ooc`], and [`HccOocBvh::encode_with`] from the canonical
+//! tree.
 
 use super::super::HccBvh;
 use super::super::ids::{IdMap, VertexIds};
 use super::super::node::{HighNode, Interconnection, TYPE_LEAF, node_type};
 use super::super::template::TEMPLATES;
 use super::super::vertices::Quantized;
-use super::OocError;
 use super::file::{self, Header, SECTIONS};
 use super::model::{
     Adjacency, CONTEXTS, CTX_CORNER, CTX_LEAF, CTX_TEMPLATE, CornerCache, Layout, PART_VERTICES,
     centre, part_of, plan, predicted, template_symbol,
 };
+use super::paged::Paged;
+use super::{HccOocBvh, Mode, OocError, OocOptions};
+use crate::build::CanonicalBvh;
+use crate::codec::ByteSize;
+use crate::codec::common::Store;
 use crate::codec::common::bits::{BitWriter, zigzag};
 use crate::codec::common::edges;
 use crate::codec::common::static_dict::{StaticDict, StaticEncoder};
 use crate::hash::FastMap;
+use crate::mesh::Mesh;
 
 /// Bytes of an o-HCCMesh file by part.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -567,4 +574,45 @@ pub fn encode(hcc: &HccBvh) -> Result<(Vec<u8>, OocSizes), OocError> {
     let sizes = OocSizes::from_sections(&sections.map(|s| s.len() as u64), &part_bits);
     debug_assert_eq!(sizes.total() as usize, bytes.len());
     Ok((bytes, sizes))
+}
+
+impl HccBvh {
+    /// This i-HCCMesh as an o-HCCMesh file, and its bytes by part.
+    /// Quantized vertices only.
+    pub fn to_ooc(&self) -> Result<(Vec<u8>, OocSizes), OocError> {
+        encode(self)
+    }
+}
+
+impl HccOocBvh {
+    /// Encodes `bvh` (built over `mesh`) as an i-HCCMesh with `options`
+    /// and codes it; out of core when the i-HCCMesh does not fit
+    /// `options.cache_budget_bytes`.
+    pub fn encode_with(
+        bvh: &CanonicalBvh,
+        mesh: &Mesh,
+        options: &OocOptions,
+    ) -> Result<Self, OocError> {
+        let hcc = HccBvh::encode_with(bvh, mesh, &options.hcc())?;
+        let (file, sizes) = encode(&hcc)?;
+        let mode = if hcc.bytes_total() <= options.cache_budget_bytes {
+            Mode::Whole { hcc, file }
+        } else {
+            drop(hcc);
+            Mode::Paged(Paged::new(Store::Owned(file), options.cache_budget_bytes)?)
+        };
+        Ok(Self {
+            mode,
+            sizes: Some(sizes),
+        })
+    }
+
+    /// Codes an i-HCCMesh (quantized vertices); pre-loaded.
+    pub fn from_hcc(hcc: HccBvh) -> Result<Self, OocError> {
+        let (file, sizes) = encode(&hcc)?;
+        Ok(Self {
+            mode: Mode::Whole { hcc, file },
+            sizes: Some(sizes),
+        })
+    }
 }

@@ -1,11 +1,17 @@
 //! The o-HCCMesh file's frame: header fields and sections, written and
-//! parsed (layout in the module docs of [`ooc`](super)).
+//! parsed (layout in the module docs of [`ooc`](super)); and
+//! [`HccOocBvh::from_bytes`], [`HccOocBvh::open`] (either mode, by the
+//! cache budget) and [`HccOocBvh::save`].
+
+use std::path::Path;
+use std::sync::Arc;
 
 use super::super::node::MAX_TREES;
-use super::OocError;
+use super::paged::{self, Paged};
+use super::{HccOocBvh, Mode, OocError, decode};
 use crate::codec::common::container::{self, Frame};
 use crate::codec::common::le::{f32x3_at, u32_at};
-use crate::codec::common::{FormatError, MASS_BYTES, MassProps, edges};
+use crate::codec::common::{FormatError, MASS_BYTES, MassProps, Store, atomic_write, edges};
 
 /// The file version this build writes and reads.
 pub const VERSION: u32 = 7;
@@ -202,4 +208,67 @@ pub fn parse_with(b: &[u8], streams: bool) -> Result<(Header, [&[u8]; SECTIONS])
         ));
     }
     Ok((h, out))
+}
+
+impl HccOocBvh {
+    /// Decodes an o-HCCMesh file whole (pre-loaded; see the module docs'
+    /// validation).
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, OocError> {
+        Self::from_bytes_with_budget(bytes, usize::MAX)
+    }
+
+    /// Opens an o-HCCMesh file held in memory: pre-loaded if its
+    /// i-HCCMesh fits `budget` bytes, else out of core with a cache of
+    /// `budget` bytes.
+    pub fn from_bytes_with_budget(bytes: &[u8], budget: usize) -> Result<Self, OocError> {
+        Self::with_budget(Store::Owned(bytes.to_vec()), budget)
+    }
+
+    /// Reads the file at `path` and decodes it whole.
+    pub fn open(path: &Path) -> Result<Self, OocError> {
+        Self::open_with_budget(path, usize::MAX)
+    }
+
+    /// Opens the file at `path`: decoded whole if its i-HCCMesh fits
+    /// `budget` bytes; else memory-mapped, its trees decoded on demand
+    /// into a cache of `budget` bytes. The file must not be modified in
+    /// place or truncated while it is open; cbvh's own saves replace a
+    /// file atomically, which is safe.
+    pub fn open_with_budget(path: &Path, budget: usize) -> Result<Self, OocError> {
+        let io = |e: std::io::Error| OocError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        };
+        let file = std::fs::File::open(path).map_err(io)?;
+        // SAFETY: memmap2 requires the mapped file not to change while
+        // mapped; `open_with_budget` documents that requirement. Every read
+        // of the map goes through bounds-checked slices and checked
+        // decoding, so bad contents give errors, not undefined behaviour.
+        let map = Arc::new(unsafe { memmap2::Mmap::map(&file) }.map_err(io)?);
+        let len = map.len();
+        Self::with_budget(Store::Mapped(map, 0..len), budget)
+    }
+
+    /// Pre-loaded or paged, by the header's estimate of the i-HCCMesh's
+    /// size against `budget`.
+    fn with_budget(file: Store, budget: usize) -> Result<Self, OocError> {
+        let (h, _) = parse_with(&file, false)?;
+        let mode = if paged::decoded_estimate(&h) <= budget {
+            Mode::Whole {
+                hcc: decode::decode(&file)?,
+                file: file.to_vec(),
+            }
+        } else {
+            Mode::Paged(Paged::new(file, budget)?)
+        };
+        Ok(Self { mode, sizes: None })
+    }
+
+    /// Writes the o-HCCMesh file to `path` atomically.
+    pub fn save(&self, path: &Path) -> Result<(), OocError> {
+        atomic_write(path, self.file_bytes()).map_err(|e| OocError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })
+    }
 }

@@ -199,6 +199,7 @@
 //! every tree once and proves the file.
 
 mod contract;
+mod cursor;
 mod decode;
 mod encode;
 mod error;
@@ -213,17 +214,11 @@ pub use error::OocError;
 pub use file::MAGIC;
 pub use stream::{Progress, StreamedBuild, encode_streamed};
 
-use std::path::Path;
-use std::sync::Arc;
-
 use super::{HccBvh, HccOptions};
-use crate::build::CanonicalBvh;
 use crate::codec::ByteSize;
 use crate::codec::common::page_cache::CacheStats;
-use crate::codec::common::{Store, atomic_write};
 use crate::codec::settings::{Settings, SettingsError};
 use crate::contact::EdgeFlags;
-use crate::mesh::Mesh;
 use paged::Paged;
 
 /// Encoding options of the o-HCCMesh: the i-HCCMesh options it codes
@@ -289,21 +284,6 @@ impl OocOptions {
     }
 }
 
-impl HccBvh {
-    /// This i-HCCMesh as an o-HCCMesh file, and its bytes by part.
-    /// Quantized vertices only.
-    pub fn to_ooc(&self) -> Result<(Vec<u8>, OocSizes), OocError> {
-        encode::encode(self)
-    }
-
-    /// The i-HCCMesh an o-HCCMesh file codes (checked as
-    /// [`HccOocBvh::from_bytes`] does; run [`HccBvh::verify`] before
-    /// querying bytes you did not write).
-    pub fn from_ooc(bytes: &[u8]) -> Result<HccBvh, OocError> {
-        decode::decode(bytes)
-    }
-}
-
 /// How an [`HccOocBvh`] holds its model.
 #[derive(Debug)]
 enum Mode {
@@ -336,98 +316,6 @@ pub struct HccOocBvh {
 }
 
 impl HccOocBvh {
-    /// Encodes `bvh` (built over `mesh`) as an i-HCCMesh with `options`
-    /// and codes it; out of core when the i-HCCMesh does not fit
-    /// `options.cache_budget_bytes`.
-    pub fn encode_with(
-        bvh: &CanonicalBvh,
-        mesh: &Mesh,
-        options: &OocOptions,
-    ) -> Result<Self, OocError> {
-        let hcc = HccBvh::encode_with(bvh, mesh, &options.hcc())?;
-        let (file, sizes) = encode::encode(&hcc)?;
-        let mode = if hcc.bytes_total() <= options.cache_budget_bytes {
-            Mode::Whole { hcc, file }
-        } else {
-            drop(hcc);
-            Mode::Paged(Paged::new(Store::Owned(file), options.cache_budget_bytes)?)
-        };
-        Ok(Self {
-            mode,
-            sizes: Some(sizes),
-        })
-    }
-
-    /// Codes an i-HCCMesh (quantized vertices); pre-loaded.
-    pub fn from_hcc(hcc: HccBvh) -> Result<Self, OocError> {
-        let (file, sizes) = encode::encode(&hcc)?;
-        Ok(Self {
-            mode: Mode::Whole { hcc, file },
-            sizes: Some(sizes),
-        })
-    }
-
-    /// Decodes an o-HCCMesh file whole (pre-loaded; see the module docs'
-    /// validation).
-    pub fn from_bytes(bytes: &[u8]) -> Result<Self, OocError> {
-        Self::from_bytes_with_budget(bytes, usize::MAX)
-    }
-
-    /// Opens an o-HCCMesh file held in memory: pre-loaded if its
-    /// i-HCCMesh fits `budget` bytes, else out of core with a cache of
-    /// `budget` bytes.
-    pub fn from_bytes_with_budget(bytes: &[u8], budget: usize) -> Result<Self, OocError> {
-        Self::with_budget(Store::Owned(bytes.to_vec()), budget)
-    }
-
-    /// Reads the file at `path` and decodes it whole.
-    pub fn open(path: &Path) -> Result<Self, OocError> {
-        Self::open_with_budget(path, usize::MAX)
-    }
-
-    /// Opens the file at `path`: decoded whole if its i-HCCMesh fits
-    /// `budget` bytes; else memory-mapped, its trees decoded on demand
-    /// into a cache of `budget` bytes. The file must not be modified in
-    /// place or truncated while it is open; cbvh's own saves replace a
-    /// file atomically, which is safe.
-    pub fn open_with_budget(path: &Path, budget: usize) -> Result<Self, OocError> {
-        let io = |e: std::io::Error| OocError::Io {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        };
-        let file = std::fs::File::open(path).map_err(io)?;
-        // SAFETY: memmap2 requires the mapped file not to change while
-        // mapped; `open_with_budget` documents that requirement. Every read
-        // of the map goes through bounds-checked slices and checked
-        // decoding, so bad contents give errors, not undefined behaviour.
-        let map = Arc::new(unsafe { memmap2::Mmap::map(&file) }.map_err(io)?);
-        let len = map.len();
-        Self::with_budget(Store::Mapped(map, 0..len), budget)
-    }
-
-    /// Pre-loaded or paged, by the header's estimate of the i-HCCMesh's
-    /// size against `budget`.
-    fn with_budget(file: Store, budget: usize) -> Result<Self, OocError> {
-        let (h, _) = file::parse_with(&file, false)?;
-        let mode = if paged::decoded_estimate(&h) <= budget {
-            Mode::Whole {
-                hcc: decode::decode(&file)?,
-                file: file.to_vec(),
-            }
-        } else {
-            Mode::Paged(Paged::new(file, budget)?)
-        };
-        Ok(Self { mode, sizes: None })
-    }
-
-    /// Writes the o-HCCMesh file to `path` atomically.
-    pub fn save(&self, path: &Path) -> Result<(), OocError> {
-        atomic_write(path, self.file_bytes()).map_err(|e| OocError::Io {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })
-    }
-
     /// The decoded i-HCCMesh (`None` out of core, where it is never whole).
     pub fn hcc(&self) -> Option<&HccBvh> {
         match &self.mode {
