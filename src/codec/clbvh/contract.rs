@@ -11,9 +11,7 @@ use crate::build::CanonicalBvh;
 use crate::codec::common::{FormatError, MassProps};
 use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError};
 use crate::contact::EdgeFlags;
-use crate::cursor::NodeCursor;
 use crate::mesh::Mesh;
-use crate::query::RayCursor;
 
 fn wrong_kind(want: LeafKind) -> ClError {
     FormatError::header("magic", format!("not a CLBVH file with {want:?} leaves")).into()
@@ -186,82 +184,5 @@ impl Codec for ClBvhCompact {
     #[cfg(feature = "serde")]
     fn build_fields(&self) -> Vec<(&'static str, serde_json::Value)> {
         build_fields(&self.0)
-    }
-}
-
-impl NodeCursor for ClBvhCompact {
-    type Node = super::ClNode;
-
-    #[inline]
-    fn root(&self) -> (Self::Node, crate::geom::Aabb) {
-        self.0.root()
-    }
-
-    #[inline]
-    fn is_leaf(&self, node: &Self::Node) -> bool {
-        self.0.is_leaf(node)
-    }
-
-    #[inline]
-    fn for_each_child(&self, node: &Self::Node, f: impl FnMut(Self::Node, crate::geom::Aabb)) {
-        self.0.for_each_child(node, f)
-    }
-
-    #[inline]
-    fn children(&self, node: &Self::Node, out: &mut crate::cursor::Children<Self::Node>) {
-        self.0.children(node, out)
-    }
-
-    #[inline]
-    fn for_each_triangle(&self, node: &Self::Node, f: impl FnMut(u32, &crate::geom::Triangle)) {
-        self.0.for_each_triangle(node, f)
-    }
-
-    #[inline]
-    fn triangle(&self, id: u32) -> crate::geom::Triangle {
-        self.0.triangle(id)
-    }
-
-    fn triangle_count(&self) -> usize {
-        self.0.triangle_count()
-    }
-}
-
-impl RayCursor for ClBvhCompact {
-    #[inline]
-    fn closest_hit(
-        &self,
-        ray: &crate::geom::Ray,
-        t_max: f32,
-        stats: &mut crate::cursor::TraversalStats,
-    ) -> Option<crate::query::RayHit> {
-        self.0.closest_hit(ray, t_max, stats)
-    }
-
-    #[inline]
-    fn any_hit(
-        &self,
-        ray: &crate::geom::Ray,
-        t_max: f32,
-        stats: &mut crate::cursor::TraversalStats,
-    ) -> bool {
-        self.0.any_hit(ray, t_max, stats)
-    }
-
-    #[inline]
-    fn closest_hits_within(
-        &self,
-        rays: &[crate::geom::Ray],
-        t_max: &[f32],
-        out: &mut [Option<crate::query::RayHit>],
-        stats: &mut crate::cursor::TraversalStats,
-    ) {
-        self.0.closest_hits_within(rays, t_max, out, stats)
-    }
-}
-
-impl crate::codec::ByteSize for ClBvhCompact {
-    fn bytes_by_part(&self) -> Vec<(&'static str, usize)> {
-        self.0.bytes_by_part()
     }
 }

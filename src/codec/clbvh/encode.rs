@@ -11,21 +11,16 @@
 //! | next | `9n` corners (f32, `[a, b, c]` each `[x, y, z]`) | `n` triangle ids (u32) |
 //! | next | — | `⌈3n / 4⌉` words of local corner indices (u8 into the `U` list) |
 
-use glam::Vec3A;
-
 use super::collapse::{Plan, triangles_below};
 use super::node::{
-    ChildRef, InnerNode, MAX_REF_INDEX, MULTI_WORDS, MultiLeafNode, TAG_INNER, TAG_LEAF, TAG_MULTI,
-    child_ref,
+    ChildRef, InnerNode, MAX_REF_INDEX, MultiLeafNode, TAG_INNER, TAG_LEAF, TAG_MULTI, child_ref,
 };
 use super::{ClBvh, ClError, ClOptions, LeafKind};
 use crate::build::CanonicalBvh;
-use crate::codec::ByteSize;
 use crate::codec::common::MassProps;
 use crate::codec::common::huge::huge;
 use crate::codec::common::quant::Grid;
 use crate::contact::EdgeFlags;
-use crate::geom::Aabb;
 use crate::mesh::Mesh;
 
 /// The largest leaf size `M` (the N×M threshold is `8 · M`): a multi-leaf
@@ -247,95 +242,5 @@ impl ClBvh {
         };
         out.edges = crate::codec::common::edges::of_cursor(&out);
         Ok(out)
-    }
-
-    /// The options the tree was encoded with.
-    pub fn options(&self) -> &ClOptions {
-        &self.options
-    }
-
-    /// Mass properties at density 1 (computed from the mesh when built).
-    pub fn mass(&self) -> MassProps {
-        self.mass
-    }
-
-    /// Active edges by triangle id (stored in the file).
-    pub fn edge_flags(&self) -> &EdgeFlags {
-        &self.edges
-    }
-
-    /// The regular inner multi-nodes.
-    pub fn inner_nodes(&self) -> &[InnerNode] {
-        &self.inner
-    }
-
-    /// Number of compressed multi-leaf nodes.
-    pub fn multi_leaf_count(&self) -> usize {
-        self.multi_nodes
-    }
-
-    /// The mesh's vertices.
-    pub fn vertices(&self) -> &[[f32; 3]] {
-        &self.vertices
-    }
-
-    /// The root's box.
-    pub fn root_box(&self) -> Aabb {
-        self.root_box
-    }
-
-    /// The three vertex indices of triangle `id` (for smooth shading).
-    pub fn vertex_indices(&self, id: u32) -> [u32; 3] {
-        match self.options.leaves {
-            LeafKind::Fast => self.triangles[id as usize],
-            LeafKind::Compact => {
-                let slot = self.slot_of[id as usize];
-                let b = self.blocks.partition_point(|bl| bl[0] <= slot) - 1;
-                let [first, at] = self.blocks[b];
-                let at = at as usize;
-                let hdr = self.arena[at];
-                let (n, u) = ((hdr & 0xFFFF) as usize, (hdr >> 16) as usize);
-                let local: &[u8] = bytemuck::cast_slice(&self.arena[at + 1 + u + n..]);
-                let j = (slot - first) as usize;
-                [0, 1, 2].map(|k| self.arena[at + 1 + local[3 * j + k] as usize])
-            }
-        }
-    }
-
-    /// The mesh back (vertices and triangles in original order).
-    pub fn decoded_mesh(&self) -> Mesh {
-        let n = match self.options.leaves {
-            LeafKind::Fast => self.triangles.len(),
-            LeafKind::Compact => self.slot_of.len(),
-        };
-        Mesh::new(
-            self.vertices.clone(),
-            (0..n as u32).map(|id| self.vertex_indices(id)).collect(),
-        )
-    }
-
-    /// The corners of a triangle from its vertex indices.
-    #[inline]
-    pub(super) fn corners(&self, v: [u32; 3]) -> crate::geom::Triangle {
-        v.map(|i| Vec3A::from(self.vertices[i as usize]))
-    }
-}
-
-impl ByteSize for ClBvh {
-    fn bytes_by_part(&self) -> Vec<(&'static str, usize)> {
-        let multi = self.multi_nodes * MULTI_WORDS * 4;
-        vec![
-            ("inner nodes", self.inner.len() * size_of::<InnerNode>()),
-            ("multi-leaf nodes", multi),
-            // Leaf ends and leaf blocks.
-            ("leaf data", self.arena.len() * 4 - multi),
-            ("vertices", self.vertices.len() * 12),
-            ("triangles", self.triangles.len() * 12),
-            (
-                "triangle slots",
-                self.slot_of.len() * 4 + self.blocks.len() * 8,
-            ),
-            ("edge-flags", self.edges.bytes()),
-        ]
     }
 }

@@ -1,5 +1,6 @@
 //! [`NodeCursor`] over a [`ClBvh`], and its [`RayCursor`] through CLBVH's
-//! own traversal (`trace.rs`).
+//! own traversal (`trace.rs`); [`ClBvhCompact`]'s both delegate to its
+//! [`ClBvh`].
 
 use glam::Vec3A;
 
@@ -8,7 +9,7 @@ use super::node::{
     ref_tag,
 };
 use super::simd::{SoaBoxes, dequantize};
-use super::{ClBvh, LeafKind};
+use super::{ClBvh, ClBvhCompact, LeafKind};
 use crate::cursor::{ChildBoxes, Children, MAX_CHILDREN, NodeCursor, TraversalStats};
 use crate::geom::{Aabb, Ray, Triangle};
 use crate::query::{RayCursor, RayHit};
@@ -261,4 +262,75 @@ impl RayCursor for ClBvh {
 fn scattered_lanes(c: &ClBvh, node: &ClNode, out: &mut Children<ClNode>) {
     out.clear();
     c.for_each_child(node, |n, b| out.push(n, b));
+}
+
+impl NodeCursor for ClBvhCompact {
+    type Node = super::ClNode;
+
+    #[inline]
+    fn root(&self) -> (Self::Node, crate::geom::Aabb) {
+        self.0.root()
+    }
+
+    #[inline]
+    fn is_leaf(&self, node: &Self::Node) -> bool {
+        self.0.is_leaf(node)
+    }
+
+    #[inline]
+    fn for_each_child(&self, node: &Self::Node, f: impl FnMut(Self::Node, crate::geom::Aabb)) {
+        self.0.for_each_child(node, f)
+    }
+
+    #[inline]
+    fn children(&self, node: &Self::Node, out: &mut crate::cursor::Children<Self::Node>) {
+        self.0.children(node, out)
+    }
+
+    #[inline]
+    fn for_each_triangle(&self, node: &Self::Node, f: impl FnMut(u32, &crate::geom::Triangle)) {
+        self.0.for_each_triangle(node, f)
+    }
+
+    #[inline]
+    fn triangle(&self, id: u32) -> crate::geom::Triangle {
+        self.0.triangle(id)
+    }
+
+    fn triangle_count(&self) -> usize {
+        self.0.triangle_count()
+    }
+}
+
+impl RayCursor for ClBvhCompact {
+    #[inline]
+    fn closest_hit(
+        &self,
+        ray: &crate::geom::Ray,
+        t_max: f32,
+        stats: &mut crate::cursor::TraversalStats,
+    ) -> Option<crate::query::RayHit> {
+        self.0.closest_hit(ray, t_max, stats)
+    }
+
+    #[inline]
+    fn any_hit(
+        &self,
+        ray: &crate::geom::Ray,
+        t_max: f32,
+        stats: &mut crate::cursor::TraversalStats,
+    ) -> bool {
+        self.0.any_hit(ray, t_max, stats)
+    }
+
+    #[inline]
+    fn closest_hits_within(
+        &self,
+        rays: &[crate::geom::Ray],
+        t_max: &[f32],
+        out: &mut [Option<crate::query::RayHit>],
+        stats: &mut crate::cursor::TraversalStats,
+    ) {
+        self.0.closest_hits_within(rays, t_max, out, stats)
+    }
 }
