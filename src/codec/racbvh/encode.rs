@@ -11,165 +11,16 @@ use super::mesh::PackedMesh;
 use super::node::residuals;
 use super::{
     CTX_CHILD, CTX_COUNT, CTX_PCLUSTER, CTX_STRUCT, CTX_TRI, CTX_TRI_FAR, ClusterMeta, Header,
-    NCTX, RacBvh, RacError, STREAM_MASK, STREAM_RES, STREAMS, bucket, mask_context, raw_bits,
-    value_context, zero_mask,
+    NCTX, RacBvh, RacError, RacOptions, STREAM_MASK, STREAM_RES, STREAMS, bucket, mask_context,
+    raw_bits, value_context, zero_mask,
 };
 use crate::build::CanonicalBvh;
 use crate::codec::common::Store;
 use crate::codec::common::bits::{BitWriter, golomb_len, zigzag};
 use crate::codec::common::dict::{DictEncoder, MAX_K, SymbolEncoder};
 use crate::codec::common::quant::{Grid, QBox};
-use crate::codec::settings::{Settings, SettingsError};
 use crate::geom::Aabb;
 use crate::mesh::Mesh;
-
-/// Compression settings.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RacOptions {
-    /// Nodes per cluster: a power of two in 256..=16384 (4096 by default).
-    /// A front end that sets the cache budget through
-    /// [`AnyOptions::with_cache_budget`](crate::codec::AnyOptions::with_cache_budget)
-    /// gets the size that budget suits
-    /// ([`cluster_nodes_for_budget`](Self::cluster_nodes_for_budget));
-    /// the encoder itself takes this value as it is.
-    pub cluster_nodes: u32,
-    /// Bits per quantized box coordinate, 8..=24 (16 by default).
-    pub bits: u32,
-    /// Bits per vertex coordinate, 8..=24, or `None` to keep `f32` vertices
-    /// (16 by default).
-    pub vertex_bits: Option<u32>,
-    /// Byte budget of the decompressed-cluster cache (64 MiB by default).
-    pub cache_budget_bytes: usize,
-    /// Triangle-index deltas with `|delta| < threshold` are dictionary
-    /// coded, others stored raw (§4.3.2; 10 by default, 1..=4096).
-    pub tri_delta_threshold: u32,
-}
-
-impl Default for RacOptions {
-    fn default() -> Self {
-        Self {
-            cluster_nodes: 4096,
-            bits: 16,
-            vertex_bits: Some(16),
-            cache_budget_bytes: 64 << 20,
-            tri_delta_threshold: 10,
-        }
-    }
-}
-
-/// How many clusters the cache budget should hold at least:
-/// [`RacOptions::cluster_nodes_for_budget`] shrinks clusters (down to 256
-/// nodes) until it does. A drop test's step
-/// touches 6 to 72 distinct clusters of each tree (robot in plant, Lucy on
-/// turbine, 256- to 4096-node clusters) and LRU needs head room above the
-/// working set; a cache of a handful of 4096-node clusters re-decoded
-/// clusters (0.2 ms each) dozens of times a step.
-pub const RESIDENT_CLUSTERS: usize = 256;
-
-/// The smallest cluster the format allows.
-pub const MIN_CLUSTER_NODES: u32 = 256;
-
-impl RacOptions {
-    /// The cluster size that suits the cache budget:
-    /// [`cluster_nodes`](Self::cluster_nodes), halved while the cache budget holds fewer than [`RESIDENT_CLUSTERS`]
-    /// decoded clusters of that size (34 bytes a node), down to 256 nodes.
-    /// Compression loses little (a 200 k-triangle statue: 8.0:1 at 4096
-    /// nodes, 7.8:1 at 1024, 7.1:1 at 256) and a small cache then holds
-    /// the tree's working set instead of a few clusters mostly not touched.
-    pub fn cluster_nodes_for_budget(&self) -> u32 {
-        let mut c = self.cluster_nodes;
-        while c > MIN_CLUSTER_NODES
-            && self.cache_budget_bytes / (c as usize * super::decode::CLUSTER_BYTES_PER_NODE)
-                < RESIDENT_CLUSTERS
-        {
-            c /= 2;
-        }
-        c
-    }
-
-    /// The keys of [`RacOptions::from_settings`].
-    pub const SETTINGS: &'static [&'static str] = &["cluster-nodes", "bits", "tri-delta-threshold"];
-
-    /// The options from a front end's settings ([`crate::codec::settings`]):
-    /// `racbvh.cluster-nodes`, `racbvh.bits`, `racbvh.tri-delta-threshold`,
-    /// and the common `vertex_bits` (16 by default, 0 for `f32`). Checked
-    /// as [`RacOptions::validate`] checks them.
-    pub fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
-        const KEYS: &[&str] = RacOptions::SETTINGS;
-        s.only("racbvh", KEYS)?;
-        let d = Self::default();
-        let o = Self {
-            cluster_nodes: s.get("racbvh", KEYS[0])?.unwrap_or(d.cluster_nodes),
-            bits: s.get("racbvh", KEYS[1])?.unwrap_or(d.bits),
-            tri_delta_threshold: s.get("racbvh", KEYS[2])?.unwrap_or(d.tri_delta_threshold),
-            vertex_bits: s.vertex_bits_or(d.vertex_bits),
-            ..d
-        };
-        o.validate().map_err(|e| SettingsError::Invalid {
-            codec: "racbvh".into(),
-            reason: e.to_string(),
-        })?;
-        Ok(o)
-    }
-
-    /// Checks every field.
-    pub fn validate(&self) -> Result<(), RacError> {
-        let c = self.cluster_nodes;
-        if !(256..=16384).contains(&c) || !c.is_power_of_two() {
-            return Err(RacError::Option {
-                what: "cluster_nodes",
-                value: u64::from(c),
-                expected: "a power of two in 256..=16384",
-            });
-        }
-        if !(8..=24).contains(&self.bits) {
-            return Err(RacError::Option {
-                what: "bits",
-                value: u64::from(self.bits),
-                expected: "8..=24",
-            });
-        }
-        if let Some(b) = self.vertex_bits
-            && !(8..=24).contains(&b)
-        {
-            return Err(RacError::Option {
-                what: "vertex_bits",
-                value: u64::from(b),
-                expected: "8..=24, or None for lossless f32 vertices",
-            });
-        }
-        if !(1..=4096).contains(&self.tri_delta_threshold) {
-            return Err(RacError::Option {
-                what: "tri_delta_threshold",
-                value: u64::from(self.tri_delta_threshold),
-                expected: "1..=4096",
-            });
-        }
-        Ok(())
-    }
-}
-
-/// Figures of a compressed tree.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
-pub struct RacStats {
-    /// Nodes in the tree.
-    pub nodes: u64,
-    /// Clusters.
-    pub cluster_count: u64,
-    /// Bits per node spent on the tree structure (parents, sides, leaf
-    /// flags, local-root pair indices, local-leaf children, triangle ids,
-    /// cluster headers).
-    pub bits_per_node_tree: f64,
-    /// Bits per node spent on the boxes.
-    pub bits_per_node_bv: f64,
-    /// 32 bytes × nodes over the compressed tree (clusters + meta table).
-    pub compression_ratio_vs_plain: f64,
-    /// Stored mesh bytes per triangle.
-    pub mesh_bytes_per_triangle: f64,
-    /// Wall time of [`RacBvh::encode`] (0 for a tree read from bytes).
-    pub compression_seconds: f64,
-}
 
 /// One coded item of a cluster, before the rank codes' parameters are known.
 enum Item {

@@ -85,7 +85,7 @@
 //!
 //! # Choices where the paper leaves them open
 //!
-//! - **Quantization** (one [`Grid`](crate::codec::common::quant::Grid)):
+//! - **Quantization** (one [`Grid`]):
 //!   `2^bits − 1` steps over the root box per axis (the step grown by ulps
 //!   until the last grid point reaches the root's max); `min` is the largest
 //!   grid point ≤ the true min, `max` the smallest ≥ the true max, both
@@ -242,17 +242,458 @@ pub mod mesh;
 pub mod node;
 mod nodecache;
 pub mod stream;
-mod tree;
 mod tricache;
 mod verify;
 
 pub use cache::CacheStats;
 pub use cursor::RacNode;
-pub use encode::{MIN_CLUSTER_NODES, RESIDENT_CLUSTERS, RacOptions, RacStats};
 pub use error::RacError;
 pub use node::{CoreNode, INCOMPLETE};
 pub use stream::{StreamedBuild, encode_streamed};
-pub use tree::{CLUSTER_CACHE_PERCENT, RacBvh};
 
+use crate::codec::common::Store;
+use crate::codec::common::quant::{Grid, QBox};
+use crate::codec::settings::{Settings, SettingsError};
+use crate::contact::EdgeFlags;
 use context::*;
-use tree::{ClusterMeta, Header};
+
+/// Everything global a cluster's decoder needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Header {
+    cluster_bits: u32,
+    bits: u32,
+    node_count: u32,
+    triangle_count: u32,
+    max_leaf: u32,
+    tri_threshold: u32,
+    grid: Grid,
+    empty: bool,
+    tree_bits: u64,
+    bv_bits: u64,
+    compression_seconds: f64,
+}
+
+impl Header {
+    /// The root's quantized box: the whole grid (0 on flat axes).
+    fn root_qbox(grid: &Grid) -> QBox {
+        let mut q = QBox::default();
+        for a in 0..3 {
+            q.max[a] = if grid.step[a] > 0.0 { grid.max_q } else { 0 };
+        }
+        q
+    }
+}
+
+/// One meta-table entry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct ClusterMeta {
+    offset: u64,
+    nodes: u32,
+    /// xxh3-64 of the cluster's bytes, checked on every decode.
+    hash: u64,
+}
+
+/// A compressed BVH with its mesh and its decompressed-cluster cache.
+pub struct RacBvh {
+    header: Header,
+    /// The clusters' bytes, concatenated.
+    data: Store,
+    meta: Vec<ClusterMeta>,
+    mesh: mesh::PackedMesh,
+    /// Checksum of the mesh sections, as stored (checked by `verify`).
+    mesh_hash: u64,
+    /// Mass properties at density 1, computed from the original mesh.
+    mass: crate::codec::common::MassProps,
+    /// Whether the mesh sections' checksum and vertex indices were checked
+    /// and found good: done once, on the first triangle any query reads (or
+    /// by `verify`), so a caller who skips `verify` still never gets
+    /// triangles from damaged mesh bytes.
+    mesh_ok: std::sync::OnceLock<Result<(), RacError>>,
+    /// Active edges by triangle id: computed when encoded (set after
+    /// [`assemble`](Self::assemble)), read from the file when opened.
+    edges: EdgeFlags,
+    cache: cache::ClusterCache,
+    /// The decoded-node cache, when the budget cannot hold every cluster.
+    nodes: Option<nodecache::NodeCache>,
+    /// The budget the caller gave (the cluster cache has what the node
+    /// cache leaves of it).
+    budget: usize,
+    /// Identifies this tree in the threads' pins.
+    id: u64,
+}
+
+impl std::fmt::Debug for RacBvh {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RacBvh")
+            .field("nodes", &self.header.node_count)
+            .field("clusters", &self.meta.len())
+            .field("triangles", &self.header.triangle_count)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Figures of a compressed tree.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct RacStats {
+    /// Nodes in the tree.
+    pub nodes: u64,
+    /// Clusters.
+    pub cluster_count: u64,
+    /// Bits per node spent on the tree structure (parents, sides, leaf
+    /// flags, local-root pair indices, local-leaf children, triangle ids,
+    /// cluster headers).
+    pub bits_per_node_tree: f64,
+    /// Bits per node spent on the boxes.
+    pub bits_per_node_bv: f64,
+    /// 32 bytes × nodes over the compressed tree (clusters + meta table).
+    pub compression_ratio_vs_plain: f64,
+    /// Stored mesh bytes per triangle.
+    pub mesh_bytes_per_triangle: f64,
+    /// Wall time of [`RacBvh::encode`] (0 for a tree read from bytes).
+    pub compression_seconds: f64,
+}
+
+/// Compression settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RacOptions {
+    /// Nodes per cluster: a power of two in 256..=16384 (4096 by default).
+    /// A front end that sets the cache budget through
+    /// [`AnyOptions::with_cache_budget`](crate::codec::AnyOptions::with_cache_budget)
+    /// gets the size that budget suits
+    /// ([`cluster_nodes_for_budget`](Self::cluster_nodes_for_budget));
+    /// the encoder itself takes this value as it is.
+    pub cluster_nodes: u32,
+    /// Bits per quantized box coordinate, 8..=24 (16 by default).
+    pub bits: u32,
+    /// Bits per vertex coordinate, 8..=24, or `None` to keep `f32` vertices
+    /// (16 by default).
+    pub vertex_bits: Option<u32>,
+    /// Byte budget of the decompressed-cluster cache (64 MiB by default).
+    pub cache_budget_bytes: usize,
+    /// Triangle-index deltas with `|delta| < threshold` are dictionary
+    /// coded, others stored raw (§4.3.2; 10 by default, 1..=4096).
+    pub tri_delta_threshold: u32,
+}
+
+impl Default for RacOptions {
+    fn default() -> Self {
+        Self {
+            cluster_nodes: 4096,
+            bits: 16,
+            vertex_bits: Some(16),
+            cache_budget_bytes: 64 << 20,
+            tri_delta_threshold: 10,
+        }
+    }
+}
+
+/// How many clusters the cache budget should hold at least:
+/// [`RacOptions::cluster_nodes_for_budget`] shrinks clusters (down to 256
+/// nodes) until it does. A drop test's step
+/// touches 6 to 72 distinct clusters of each tree (robot in plant, Lucy on
+/// turbine, 256- to 4096-node clusters) and LRU needs head room above the
+/// working set; a cache of a handful of 4096-node clusters re-decoded
+/// clusters (0.2 ms each) dozens of times a step.
+pub const RESIDENT_CLUSTERS: usize = 256;
+
+/// The smallest cluster the format allows.
+pub const MIN_CLUSTER_NODES: u32 = 256;
+
+impl RacOptions {
+    /// The cluster size that suits the cache budget:
+    /// [`cluster_nodes`](Self::cluster_nodes), halved while the cache budget holds fewer than [`RESIDENT_CLUSTERS`]
+    /// decoded clusters of that size (34 bytes a node), down to 256 nodes.
+    /// Compression loses little (a 200 k-triangle statue: 8.0:1 at 4096
+    /// nodes, 7.8:1 at 1024, 7.1:1 at 256) and a small cache then holds
+    /// the tree's working set instead of a few clusters mostly not touched.
+    pub fn cluster_nodes_for_budget(&self) -> u32 {
+        let mut c = self.cluster_nodes;
+        while c > MIN_CLUSTER_NODES
+            && self.cache_budget_bytes / (c as usize * decode::CLUSTER_BYTES_PER_NODE)
+                < RESIDENT_CLUSTERS
+        {
+            c /= 2;
+        }
+        c
+    }
+
+    /// The keys of [`RacOptions::from_settings`].
+    pub const SETTINGS: &'static [&'static str] = &["cluster-nodes", "bits", "tri-delta-threshold"];
+
+    /// The options from a front end's settings ([`crate::codec::settings`]):
+    /// `racbvh.cluster-nodes`, `racbvh.bits`, `racbvh.tri-delta-threshold`,
+    /// and the common `vertex_bits` (16 by default, 0 for `f32`). Checked
+    /// as [`RacOptions::validate`] checks them.
+    pub fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
+        const KEYS: &[&str] = RacOptions::SETTINGS;
+        s.only("racbvh", KEYS)?;
+        let d = Self::default();
+        let o = Self {
+            cluster_nodes: s.get("racbvh", KEYS[0])?.unwrap_or(d.cluster_nodes),
+            bits: s.get("racbvh", KEYS[1])?.unwrap_or(d.bits),
+            tri_delta_threshold: s.get("racbvh", KEYS[2])?.unwrap_or(d.tri_delta_threshold),
+            vertex_bits: s.vertex_bits_or(d.vertex_bits),
+            ..d
+        };
+        o.validate().map_err(|e| SettingsError::Invalid {
+            codec: "racbvh".into(),
+            reason: e.to_string(),
+        })?;
+        Ok(o)
+    }
+
+    /// Checks every field.
+    pub fn validate(&self) -> Result<(), RacError> {
+        let c = self.cluster_nodes;
+        if !(256..=16384).contains(&c) || !c.is_power_of_two() {
+            return Err(RacError::Option {
+                what: "cluster_nodes",
+                value: u64::from(c),
+                expected: "a power of two in 256..=16384",
+            });
+        }
+        if !(8..=24).contains(&self.bits) {
+            return Err(RacError::Option {
+                what: "bits",
+                value: u64::from(self.bits),
+                expected: "8..=24",
+            });
+        }
+        if let Some(b) = self.vertex_bits
+            && !(8..=24).contains(&b)
+        {
+            return Err(RacError::Option {
+                what: "vertex_bits",
+                value: u64::from(b),
+                expected: "8..=24, or None for lossless f32 vertices",
+            });
+        }
+        if !(1..=4096).contains(&self.tri_delta_threshold) {
+            return Err(RacError::Option {
+                what: "tri_delta_threshold",
+                value: u64::from(self.tri_delta_threshold),
+                expected: "1..=4096",
+            });
+        }
+        Ok(())
+    }
+}
+
+impl RacBvh {
+    fn assemble(
+        header: Header,
+        data: Store,
+        meta: Vec<ClusterMeta>,
+        mesh: mesh::PackedMesh,
+        mesh_hash: u64,
+        mass: crate::codec::common::MassProps,
+        budget: usize,
+    ) -> Self {
+        let max_cluster = (1usize << header.cluster_bits) * decode::CLUSTER_BYTES_PER_NODE;
+        let ids = nodecache::NodeCache::ids_for(header.max_leaf);
+        let sets = node_cache_sets(budget, header.node_count, meta.len(), ids);
+        let node_bytes = sets * nodecache::NodeCache::set_bytes(ids);
+        let cache = cache::ClusterCache::new(budget - node_bytes, max_cluster);
+        let nodes = (sets > 0)
+            .then(|| nodecache::NodeCache::new(sets, ids, cache.live().token(node_bytes)));
+        Self {
+            header,
+            data,
+            meta,
+            mesh_hash,
+            mesh,
+            mass,
+            mesh_ok: std::sync::OnceLock::new(),
+            edges: EdgeFlags::default(),
+            cache,
+            nodes,
+            budget,
+            id: crate::codec::common::page_cache::next_owner(),
+        }
+    }
+
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.header.node_count as usize
+    }
+
+    /// Number of clusters.
+    pub fn cluster_count(&self) -> usize {
+        self.meta.len()
+    }
+
+    /// Nodes per cluster.
+    pub fn cluster_nodes(&self) -> u32 {
+        1 << self.header.cluster_bits
+    }
+
+    /// The mesh as stored (with quantized vertices decoded): the triangles
+    /// the cursor reports.
+    ///
+    /// # Panics
+    /// If the mesh sections are damaged (see [`check_mesh`](Self::check_mesh)).
+    pub fn decoded_mesh(&self) -> crate::mesh::Mesh {
+        self.expect_mesh();
+        self.mesh.decoded()
+    }
+
+    /// Checks the mesh sections once (their checksum, then every vertex
+    /// index) and remembers the answer: O(mesh) the first time, O(1) after.
+    /// Queries call it before their first triangle.
+    pub fn check_mesh(&self) -> Result<(), RacError> {
+        self.mesh_ok
+            .get_or_init(|| {
+                if self.mesh_hash != file::mesh_hash(&self.mesh) {
+                    return Err(RacError::Corrupt(
+                        "the mesh sections' checksum does not match",
+                    ));
+                }
+                self.mesh.check()
+            })
+            .clone()
+    }
+
+    /// [`check_mesh`](Self::check_mesh), panicking with its error.
+    #[inline]
+    fn expect_mesh(&self) {
+        if let Err(e) = self.check_mesh() {
+            panic!("racbvh: {e} (the file is damaged; verify() reports this as an error)");
+        }
+    }
+
+    /// Mass properties at density 1 (computed from the original mesh when
+    /// encoded, stored in the file).
+    pub fn mass(&self) -> crate::codec::common::MassProps {
+        self.mass
+    }
+
+    /// Active edges by triangle id (stored in the file).
+    pub fn edge_flags(&self) -> &EdgeFlags {
+        &self.edges
+    }
+
+    /// The vertex indices of stored triangle `t` (for smooth shading).
+    ///
+    /// # Panics
+    /// If `t` is not a triangle of the tree.
+    pub fn triangle_indices(&self, t: u32) -> [u32; 3] {
+        assert!(
+            (t as usize) < self.header.triangle_count as usize,
+            "racbvh: no triangle {t}"
+        );
+        self.expect_mesh();
+        self.mesh.indices(t)
+    }
+
+    /// The header's fields, for reports (`cbvh info`).
+    pub fn header_fields(&self) -> Vec<(&'static str, String)> {
+        let h = &self.header;
+        let m = &self.mesh;
+        vec![
+            ("version", file::VERSION.to_string()),
+            ("nodes", h.node_count.to_string()),
+            (
+                "clusters",
+                format!("{} of {} nodes", self.meta.len(), 1u32 << h.cluster_bits),
+            ),
+            ("box bits", h.bits.to_string()),
+            (
+                "vertex bits",
+                if m.lossless {
+                    "32 (lossless f32)".to_string()
+                } else {
+                    m.vertex_bits.to_string()
+                },
+            ),
+            ("vertices", m.vertex_count.to_string()),
+            ("max leaf tris", h.max_leaf.to_string()),
+            ("triangle-delta threshold", h.tri_threshold.to_string()),
+            (
+                "coded bits",
+                format!("{} of structure, {} of boxes", h.tree_bits, h.bv_bits),
+            ),
+            ("compression time", format!("{} s", h.compression_seconds)),
+        ]
+    }
+
+    /// Compression figures.
+    pub fn stats(&self) -> RacStats {
+        let n = f64::from(self.header.node_count.max(1));
+        let tree = (self.data.len() + self.meta.len() * file::META_ENTRY) as f64;
+        RacStats {
+            nodes: u64::from(self.header.node_count),
+            cluster_count: self.meta.len() as u64,
+            bits_per_node_tree: self.header.tree_bits as f64 / n,
+            bits_per_node_bv: self.header.bv_bits as f64 / n,
+            compression_ratio_vs_plain: 32.0 * n / tree.max(1.0),
+            mesh_bytes_per_triangle: self.mesh.bytes() as f64
+                / f64::from(self.header.triangle_count.max(1)),
+            compression_seconds: self.header.compression_seconds,
+        }
+    }
+
+    /// The cache's counters.
+    pub fn cache_stats(&self) -> CacheStats {
+        let mut s = self.cache.stats();
+        s.budget_bytes = self.budget;
+        if let Some(n) = &self.nodes {
+            s.cached_bytes += n.bytes();
+            s.node_bytes = n.bytes();
+            s.node_misses = n.misses();
+        }
+        s
+    }
+
+    /// How many nodes the node cache holds (0 when the budget holds every
+    /// cluster and there is none).
+    pub fn node_cache_capacity(&self) -> usize {
+        self.nodes.as_ref().map_or(0, |n| n.capacity())
+    }
+
+    /// Empties the cache (pinned clusters stay alive until their threads
+    /// move on).
+    pub fn clear_cache(&self) {
+        self.cache.clear();
+        if let Some(n) = &self.nodes {
+            n.clear();
+        }
+    }
+}
+
+/// The share of the cache budget the cluster cache keeps, in percent, when
+/// the budget cannot hold every cluster; the node cache takes the rest
+/// (see the module docs of [`racbvh`](crate::codec::racbvh), "Node
+/// cache", for the measurements that chose it).
+pub const CLUSTER_CACHE_PERCENT: usize = 10;
+
+/// How many sets (of entries with `ids` triangle ids) the node cache gets
+/// under `budget`, for a tree of `nodes` nodes in `clusters` clusters:
+/// none if the budget holds every cluster decoded (at least 34 bytes a
+/// node and 128 a cluster); else the budget but the cluster cache's
+/// [`CLUSTER_CACHE_PERCENT`], and no more sets than give every node a way.
+fn node_cache_sets(budget: usize, nodes: u32, clusters: usize, ids: usize) -> usize {
+    let whole = (nodes as usize)
+        .saturating_mul(decode::CLUSTER_BYTES_PER_NODE)
+        .saturating_add(clusters.saturating_mul(128));
+    if budget >= whole {
+        return 0;
+    }
+    let clusters_share =
+        budget / 100 * CLUSTER_CACHE_PERCENT + budget % 100 * CLUSTER_CACHE_PERCENT / 100;
+    ((budget - clusters_share) / nodecache::NodeCache::set_bytes(ids))
+        .min((nodes as usize).div_ceil(nodecache::WAYS))
+}
+
+impl crate::codec::ByteSize for RacBvh {
+    fn bytes_by_part(&self) -> Vec<(&'static str, usize)> {
+        let bv = (self.header.bv_bits / 8) as usize;
+        vec![
+            ("bvh_tree", self.data.len() - bv.min(self.data.len())),
+            ("bvh_bv", bv.min(self.data.len())),
+            ("meta", self.meta.len() * file::META_ENTRY),
+            ("mesh", self.mesh.bytes()),
+            ("edge-flags", self.edges.bytes()),
+        ]
+    }
+}
