@@ -1,4 +1,4 @@
-//! Building a [`ClBvh`] from the canonical tree.
+//! Building a [`ClBvh`] (or a [`ClBvhCompact`]) from the canonical tree.
 //!
 //! # Leaf blocks
 //! A leaf block holds the triangles of an isolated leaf, or of all lanes of
@@ -15,7 +15,7 @@ use super::collapse::{Plan, triangles_below};
 use super::node::{
     ChildRef, InnerNode, MAX_REF_INDEX, MultiLeafNode, TAG_INNER, TAG_LEAF, TAG_MULTI, child_ref,
 };
-use super::{ClBvh, ClError, ClOptions, LeafKind};
+use super::{ClBvh, ClBvhCompact, ClError, ClOptions, CompactOptions, LeafKind};
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
 use crate::codec::common::huge::huge;
@@ -242,5 +242,17 @@ impl ClBvh {
         };
         out.edges = crate::codec::common::edges::of_cursor(&out);
         Ok(out)
+    }
+}
+
+impl ClBvhCompact {
+    /// Encodes `bvh` (built over `mesh`) with compact leaves.
+    pub fn encode(bvh: &CanonicalBvh, mesh: &Mesh, o: &CompactOptions) -> Result<Self, ClError> {
+        let opts = ClOptions {
+            leaf_size: o.leaf_size,
+            leaves: LeafKind::Compact,
+            multi_leaf: o.multi_leaf,
+        };
+        ClBvh::encode(bvh, mesh, &opts).map(ClBvhCompact)
     }
 }

@@ -92,7 +92,6 @@ mod verify;
 
 use glam::Vec3A;
 
-use crate::build::CanonicalBvh;
 use crate::codec::ByteSize;
 use crate::codec::common::MassProps;
 use crate::codec::settings::{Settings, SettingsError};
@@ -346,18 +345,6 @@ impl Default for CompactOptions {
 /// `clbvh-compact`): a [`ClBvh`] with [`LeafKind::Compact`] leaves.
 #[derive(Clone, Debug)]
 pub struct ClBvhCompact(pub ClBvh);
-
-impl ClBvhCompact {
-    /// Encodes `bvh` (built over `mesh`) with compact leaves.
-    pub fn encode(bvh: &CanonicalBvh, mesh: &Mesh, o: &CompactOptions) -> Result<Self, ClError> {
-        let opts = ClOptions {
-            leaf_size: o.leaf_size,
-            leaves: LeafKind::Compact,
-            multi_leaf: o.multi_leaf,
-        };
-        ClBvh::encode(bvh, mesh, &opts).map(ClBvhCompact)
-    }
-}
 
 impl crate::codec::ByteSize for ClBvhCompact {
     fn bytes_by_part(&self) -> Vec<(&'static str, usize)> {
