@@ -29,32 +29,63 @@
 //!   packed arrays, little-endian readers, [`FormatError`](common::FormatError),
 //!   atomic saves, stored mass properties, file magic).
 //!
-//! A codec's folder holds what is its own: its layouts and constants
-//! (`node.rs`, `file.rs`), `encode.rs`, `decode.rs`, its error type, and
-//! whatever else only it needs. In RACBVH: `context.rs` (coder contexts),
-//! `mesh.rs` (the stored mesh), `tree.rs` (the tree and its figures),
+//! # A codec's folder
+//!
+//! Every codec folder (`plain`, `hcc`, `hcc/ooc`, `clbvh`, `racbvh`) has
+//! one layout, so that the same thing is in the same file in each:
+//!
+//! | file | what it holds |
+//! |---|---|
+//! | `mod.rs` | the module docs (the paper's choices and ours), the options type (with `from_settings` and `SETTINGS`; plain has none), the main type's struct definition with its accessors and figures (stats, [`ByteSize`]), and the re-exports that make the public paths (`codec::plain::PlainBvh`, …) |
+//! | `encode.rs` | building the main type from a [`CanonicalBvh`](crate::build::CanonicalBvh) and its mesh |
+//! | `cursor.rs` | the [`NodeCursor`](crate::cursor::NodeCursor) and [`RayCursor`](crate::query::RayCursor) impls, and the node handle type |
+//! | `decode.rs` | only where the codec decodes stored records apart from the cursor: RACBVH's clusters, the o-HCCMesh file into an i-HCCMesh |
+//! | `file.rs` | its self-contained file: the layout, magic and version, `to_bytes`, `from_bytes`, `open` and `save` |
+//! | `verify.rs` | `verify`, the second validation tier, where it is more than a few lines |
+//! | `error.rs` | its error type |
+//! | `contract.rs` | the thin `impl Codec`, delegating to the codec's own methods |
+//! | `node.rs` | the bit layouts of its stored nodes and words |
+//!
+//! An impl block lives in the file whose job it does, whichever type it is
+//! on (the o-HCCMesh's `encode.rs` also holds `HccBvh::to_ooc`). Two
+//! departures: i-HCCMesh's node handle, [`HccNode`](hcc::HccNode), stays in
+//! `hcc/node.rs` with the words it decodes, because the cursor, `trace.rs`
+//! and the o-HCCMesh's cursor and paged trees all use it (and
+//! `hcc::node::HccNode` is a public path); the o-HCCMesh has no `node.rs`
+//! (its trees decode to i-HCCMesh words), and its out-of-core `verify` is
+//! the paged trees' own, in `paged.rs`.
+//!
+//! Beside these, a folder holds whatever else only its codec needs: its
+//! own ray traversal behind the cursor's `RayCursor` (`trace.rs`: HCC,
+//! CLBVH), its out-of-core builder from a chunked model (`stream.rs`:
+//! RACBVH, o-HCCMesh), and its parts. In HCC: `decompose.rs`,
+//! `canonical.rs`, `template.rs`, `pair.rs`, `block.rs`, `ids.rs`,
+//! `vertices.rs`, `grid16.rs`; in the o-HCCMesh: `model.rs`, `rebuild.rs`,
+//! `paged.rs` (the out-of-core mode); in CLBVH: `collapse.rs`, `simd.rs`;
+//! in RACBVH: `context.rs` (coder contexts), `mesh.rs` (the stored mesh),
 //! `cache.rs` (decompressed clusters), `complete.rs` (BV completion),
-//! `access.rs` (the random-access API), `tricache.rs` (each thread's decoded
-//! triangles), `cursor.rs` and `verify.rs`. `common` imports nothing from a
-//! codec, and no codec imports another.
+//! `access.rs` (the random-access API), `nodecache.rs` (decoded nodes),
+//! `tricache.rs` (each thread's decoded triangles). `common` imports
+//! nothing from a codec, and no codec imports another.
 //!
 //! This folder knows neither parry nor rapier.
 //!
 //! # What a new codec adds
 //!
-//! 1. Its folder, `codec/<name>/`: `encode.rs` (from `&CanonicalBvh` and the
-//!    mesh into a `Result`; a value that does not fit is an error), the
-//!    cursor (`decode.rs`, [`NodeCursor`](crate::cursor::NodeCursor) with
-//!    conservative boxes; a binary codec needs only `for_each_child`, a
-//!    wide one also overrides `children` to write its child boxes into the
-//!    batch's lanes at once; and [`RayCursor`](crate::query::RayCursor),
-//!    an empty `impl` for the generic ray traversals, or overriding
-//!    `closest_hit`, `any_hit` or `closest_hits_within` with a traversal of
-//!    its own that gives the same hits, tested against the generic one),
-//!    `file.rs` (its self-contained file: magic,
-//!    version, two-tier validation, atomic save), `error.rs` (a `thiserror`
-//!    enum with fields), [`ByteSize`], and `mod.rs` with the module docs
-//!    (the paper's choices and ours).
+//! 1. Its folder, `codec/<name>/`, laid out as above: `mod.rs` (the module
+//!    docs, the options type, the main type with [`ByteSize`]),
+//!    `encode.rs` (from `&CanonicalBvh` and the mesh into a `Result`; a
+//!    value that does not fit is an error), `cursor.rs`
+//!    ([`NodeCursor`](crate::cursor::NodeCursor) with conservative boxes;
+//!    a binary codec needs only `for_each_child`, a wide one also overrides
+//!    `children` to write its child boxes into the batch's lanes at once;
+//!    and [`RayCursor`](crate::query::RayCursor), an empty `impl` for the
+//!    generic ray traversals, or overriding `closest_hit`, `any_hit` or
+//!    `closest_hits_within` with a traversal of its own that gives the
+//!    same hits, tested against the generic one), `file.rs` (its
+//!    self-contained file: magic, version, two-tier validation, atomic
+//!    save), `verify.rs`, `error.rs` (a `thiserror` enum with fields) and
+//!    `node.rs`.
 //! 2. `impl Codec` in `codec/<name>/contract.rs`, thin: delegating to the
 //!    codec's own methods.
 //! 3. Its options from a front end's [`Settings`] (`Codec::options_from`
