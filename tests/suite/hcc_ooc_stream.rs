@@ -200,46 +200,10 @@ fn bad_and_truncated_input_files_give_clear_errors_and_leave_nothing() {
 #[test]
 fn the_command_line_builds_out_of_core_and_a_killed_build_leaves_no_file() {
     let d = dir("cli");
-    let mesh = generate(Kind::Statue, 100_000, 1, &mut |_, _| {}).unwrap();
-    let ply = d.join("m.ply");
-    cbvh::mesh::save(&mesh, &ply).unwrap();
-    let (p, o) = (ply.to_str().unwrap(), d.join("o.hco"));
-    let out = o.to_str().unwrap();
-    let (ok, stdout, stderr) = cbvh(&[
-        "build",
-        p,
-        "--codec",
-        "hcc-ooc",
-        "--out-of-core",
-        "--chunk-triangles",
-        "12000",
-        "-o",
-        out,
-        "--json",
-    ]);
-    assert!(ok, "{stderr}");
-    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
-    assert_eq!(v["out_of_core"], true);
-    assert!(v["chunks"].as_u64().unwrap() >= 7, "{stdout}");
-    assert_eq!(v["triangles"], mesh.triangles.len() as u64);
-    let (ok, info, stderr) = cbvh(&["info", out]);
-    assert!(ok && info.contains("hcc-ooc"), "{info}{stderr}");
-    // Over the budget: hcc-ooc goes out of core by itself, the others
-    // refuse before any work, naming the way out.
-    let (ok, stdout, stderr) = cbvh(&[
-        "build",
-        p,
-        "--codec",
-        "hcc-ooc",
-        "--memory-mib",
-        "24",
-        "-o",
-        out,
-    ]);
-    assert!(
-        ok && stdout.contains("built out of core"),
-        "{stdout}{stderr}"
-    );
+    let (ply, _) = cli_builds_out_of_core(&d, "hcc-ooc", &d.join("o.hco"));
+    let p = ply.to_str().unwrap();
+    // Over the budget, the other codecs refuse before any work, naming
+    // the way out.
     let plain = d.join("p.bin");
     let (ok, _, stderr) = cbvh(&[
         "build",

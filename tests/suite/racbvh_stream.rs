@@ -211,46 +211,9 @@ fn a_model_without_triangles_and_bad_options_are_handled_and_leave_nothing() {
 #[test]
 fn the_command_line_builds_racbvh_out_of_core() {
     let d = dir("cli");
-    let mesh = generate(Kind::Statue, 100_000, 1, &mut |_, _| {}).unwrap();
-    let ply = d.join("m.ply");
-    cbvh::mesh::save(&mesh, &ply).unwrap();
-    let (p, o) = (ply.to_str().unwrap(), d.join("o.rac"));
-    let out = o.to_str().unwrap();
-    let (ok, stdout, stderr) = cbvh(&[
-        "build",
-        p,
-        "--codec",
-        "racbvh",
-        "--out-of-core",
-        "--chunk-triangles",
-        "12000",
-        "-o",
-        out,
-        "--json",
-    ]);
-    assert!(ok, "{stderr}");
-    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
-    assert_eq!(v["out_of_core"], true);
+    let (ply, v) = cli_builds_out_of_core(&d, "racbvh", &d.join("o.rac"));
     assert_eq!(v["codec"], "racbvh");
-    assert!(v["chunks"].as_u64().unwrap() >= 7, "{stdout}");
-    assert_eq!(v["triangles"], mesh.triangles.len() as u64);
-    let (ok, info, stderr) = cbvh(&["info", out]);
-    assert!(ok && info.contains("racbvh"), "{info}{stderr}");
-    // Over the budget: out of core by itself.
-    let (ok, stdout, stderr) = cbvh(&[
-        "build",
-        p,
-        "--codec",
-        "racbvh",
-        "--memory-mib",
-        "24",
-        "-o",
-        out,
-    ]);
-    assert!(
-        ok && stdout.contains("built out of core"),
-        "{stdout}{stderr}"
-    );
+    let p = ply.to_str().unwrap();
     // A truncated input: the error names the face; no output, no
     // temporary directory.
     let full = std::fs::read(&ply).unwrap();

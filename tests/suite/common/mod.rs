@@ -593,6 +593,60 @@ pub fn cbvh(args: &[&str]) -> (bool, String, String) {
     )
 }
 
+/// What the out-of-core codecs' command-line tests share: a 100 k-triangle
+/// statue saved as `m.ply` in `d`; `cbvh build m.ply --codec CODEC
+/// --out-of-core --chunk-triangles 12000 -o OUT --json` reports an
+/// out-of-core build of 7 chunks or more holding every triangle; `cbvh info
+/// OUT` names the codec; and over a 24 MiB budget the codec builds out of
+/// core by itself. Returns the model's path and the first build's report.
+#[cfg(feature = "app")]
+pub fn cli_builds_out_of_core(
+    d: &std::path::Path,
+    codec: &str,
+    out: &std::path::Path,
+) -> (std::path::PathBuf, serde_json::Value) {
+    use cbvh::scene::{Kind, generate};
+    let mesh = generate(Kind::Statue, 100_000, 1, &mut |_, _| {}).unwrap();
+    let ply = d.join("m.ply");
+    cbvh::mesh::save(&mesh, &ply).unwrap();
+    let (p, out) = (ply.to_str().unwrap(), out.to_str().unwrap());
+    let (ok, stdout, stderr) = cbvh(&[
+        "build",
+        p,
+        "--codec",
+        codec,
+        "--out-of-core",
+        "--chunk-triangles",
+        "12000",
+        "-o",
+        out,
+        "--json",
+    ]);
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["out_of_core"], true);
+    assert!(v["chunks"].as_u64().unwrap() >= 7, "{stdout}");
+    assert_eq!(v["triangles"], mesh.triangles.len() as u64);
+    let (ok, info, stderr) = cbvh(&["info", out]);
+    assert!(ok && info.contains(codec), "{info}{stderr}");
+    // Over the budget: out of core by itself.
+    let (ok, stdout, stderr) = cbvh(&[
+        "build",
+        p,
+        "--codec",
+        codec,
+        "--memory-mib",
+        "24",
+        "-o",
+        out,
+    ]);
+    assert!(
+        ok && stdout.contains("built out of core"),
+        "{stdout}{stderr}"
+    );
+    (ply, v)
+}
+
 /// A fresh temporary directory for test `name` of the suite part `part`
 /// (one per process, so parallel runs do not meet).
 pub fn temp_dir_for(part: &str, name: &str) -> std::path::PathBuf {
