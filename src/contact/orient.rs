@@ -68,8 +68,9 @@
 //! Pairs end before any search when no direction can be accepted by both:
 //! when the two sides' cones do not meet, and when one side is flat (it
 //! accepts only its cone) and the other can accept nothing in that cone
-//! (its face cone too far, its active edges leaning out of the flat plane,
-//! its corners with active edges away from the flat triangle). A scan's
+//! (its face cone too far, its active edges leaning out of the flat plane
+//! or below its third corner, its corners with active edges away from the
+//! flat triangle or never on top along the flat side's normal). A scan's
 //! flat triangles against a CAD part's large sharp ones are mostly such
 //! pairs.
 
