@@ -52,6 +52,18 @@
 //! gives no contact: it would only push into a back face or catch on an
 //! internal edge.
 //!
+//! An accepted axis may separate the pair less than the plain separating
+//! axis does (a triangle behind a one-sided face is pushed out of the
+//! front, deeper than the plain depth). That is a contact only where the
+//! two triangles lie over each other along the normal: their shadows on
+//! the plane across it overlap, within a quarter of the smaller triangle's
+//! longest edge. Side by side, the separation along the normal is that of
+//! two slabs: a sliver of a scan beside a CAD triangle's edge, straddling
+//! its plane, would be reported as penetrating it however far beside it
+//! lies, and a fast body (a large prediction) met such pairs centimetres
+//! apart as millimetres deep. Such pairs give no contact; the triangles
+//! that do lie over each other give the contact.
+//!
 //! The cone angle is the flat angle of the edge flags: a corner of a finely
 //! tessellated sphere is inactive, and the faces around it lie within that
 //! angle of the plane it rests on, so the plane's normal is accepted.
@@ -440,7 +452,8 @@ fn separation(a: &Triangle, b: &Triangle, n: Vec3A) -> f32 {
 /// in A's frame; `None` when no axis is accepted by both sides (or a
 /// triangle has no area), or when the accepted axis would report the pair
 /// deeper than its plain separating-axis depth by more than `slack` plus a
-/// quarter of the smaller triangle's longest edge. See the module docs.
+/// quarter of the smaller triangle's longest edge, or by more than that
+/// quarter with the triangles side by side along it. See the module docs.
 pub fn oriented_axis(
     a: &Triangle,
     fa: u8,
@@ -658,7 +671,8 @@ pub fn oriented_axis_cached(
             .max((t[2] - t[1]).length_squared())
             .max((t[0] - t[2]).length_squared())
     };
-    let limit = plain - slack - 0.25 * longest2(a).min(longest2(b)).sqrt();
+    let lateral = 0.25 * longest2(a).min(longest2(b)).sqrt();
+    let limit = plain - slack - lateral;
     // The face normal replaces the accepted axis only where it does not
     // point into the other side's solid: an active edge of B meeting A's
     // inactive corner accepts an axis within the cone of A's normal, but
@@ -685,7 +699,50 @@ pub fn oriented_axis_cached(
     // An accepted axis far deeper than the pair's true depth: the features
     // that accept it are not where the triangles meet (a far corner of a
     // large triangle, a facet of a curved body that faces away).
-    (o.sep >= limit).then_some(o)
+    if o.sep < limit {
+        return None;
+    }
+    // Deeper than the plain depth by more than the lateral allowance: a
+    // real contact along `o.normal` only where the triangles lie over each
+    // other along it (a triangle behind a one-sided face is pushed out of
+    // the front), not where they lie side by side: there the separation
+    // along the normal is that of two slabs, and a triangle beside a
+    // floor's edge, straddling the floor's plane, would be reported as
+    // penetrating it however far beside it lies.
+    if o.sep < plain - lateral && side_by_side(a, b, o.normal, lateral) {
+        return None;
+    }
+    Some(o)
+}
+
+/// Whether the triangles' shadows on the plane across the unit direction
+/// `n` lie more than `tol` apart: some direction across `n`, perpendicular
+/// to an edge of either shadow or along one, separates them by more (a
+/// lower bound of the shadows' distance, so a pair it passes may still lie
+/// apart; a shadow seen edge-on is covered by the directions along edges).
+fn side_by_side(a: &Triangle, b: &Triangle, n: Vec3A, tol: f32) -> bool {
+    // Along `m` (not unit, from the edge `e`): the gap between the
+    // projections, compared with `tol` scaled by |m| (no square root).
+    let apart = |m: Vec3A, e: Vec3A| {
+        let len2 = m.length_squared();
+        if len2 <= 1e-10 * e.length_squared() {
+            return false;
+        }
+        let (pa, pb) = (a.map(|v| m.dot(v)), b.map(|v| m.dot(v)));
+        let (min_a, max_a) = (pa[0].min(pa[1]).min(pa[2]), pa[0].max(pa[1]).max(pa[2]));
+        let (min_b, max_b) = (pb[0].min(pb[1]).min(pb[2]), pb[0].max(pb[1]).max(pb[2]));
+        let gap = (min_b - max_a).max(min_a - max_b);
+        gap > 0.0 && gap * gap > tol * tol * len2
+    };
+    let edges = [
+        a[1] - a[0],
+        a[2] - a[1],
+        a[0] - a[2],
+        b[1] - b[0],
+        b[2] - b[1],
+        b[0] - b[2],
+    ];
+    edges.iter().any(|&e| apart(n.cross(e), e)) || edges.iter().any(|&e| apart(e - n * n.dot(e), e))
 }
 
 #[cfg(test)]
@@ -1094,6 +1151,41 @@ mod tests {
             contacts > 1500 && flat_face > 1000,
             "{contacts} contacts, {flat_face} on the flat face"
         );
+    }
+
+    /// A small upright triangle beside a floor triangle's edge, straddling
+    /// the floor's plane, is no penetration of the floor however large the
+    /// prediction: along the floor's normal the two lie side by side.
+    #[test]
+    fn a_triangle_beside_a_floor_is_not_in_it() {
+        // Floor facing down (its winding's normal is -y).
+        let floor = tri([[0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]]);
+        let f = PairFacing::new(Facing::OneSided(1.0), two_sided_toward([0.5, -1.0, 0.0]));
+        let mut checked = 0;
+        for gap in [0.0, 0.001, 0.003, 0.01, 0.03, 0.1] {
+            for dy in [-0.004, -0.001, 0.0005, 0.002] {
+                // 5 mm tall, 5 mm wide, in the plane z = 0, `gap` beyond
+                // the floor's corner at x = 1.
+                let x = 1.0 + gap;
+                let b = tri([[x, dy, 0.0], [x + 0.005, dy, 0.0], [x, dy + 0.005, 0.0]]);
+                for slack in [0.001, 0.05, 0.3, 1.5] {
+                    let plain = plain_axis(&floor, &b).sep;
+                    let o = oriented_axis(&floor, 0, &b, ALL_ACTIVE, &f, slack);
+                    if let Some(o) = o {
+                        checked += 1;
+                        // Beside the floor by more than a quarter of the
+                        // small triangle's edge: never deeper than the
+                        // true depth by more than that quarter.
+                        assert!(
+                            gap <= 0.25 * 0.005 || o.sep >= plain - 0.25 * 0.005 - 1e-6,
+                            "gap {gap}, dy {dy}, slack {slack}: {o:?}, plain {plain}"
+                        );
+                    }
+                }
+            }
+        }
+        // The triangle through the floor's corner touches it.
+        assert!(checked >= 4, "{checked} contacts");
     }
 
     /// A triangle wholly behind a one-sided face, deeper than it is wide,
