@@ -290,10 +290,7 @@ fn run_out_of_core(a: &BuildArgs, p: OutOfCore) -> CliResult {
     let per_tri = file_bytes as f64 / tris.max(1) as f64;
     let parts = &made.parts;
     if a.json {
-        let by_part: serde_json::Map<String, serde_json::Value> = parts
-            .iter()
-            .map(|(k, v)| (k.to_string(), (*v).into()))
-            .collect();
+        let by_part = super::json_object(parts.iter().copied());
         let mut v = serde_json::json!({
             "mesh": p.input.display().to_string(),
             "triangles": tris,
@@ -481,11 +478,7 @@ pub fn run(a: BuildArgs) -> CliResult {
                     // caught here.
                     AnyCodec::open(path, &OpenOptions::default())?;
                 }
-                let extra: serde_json::Map<String, serde_json::Value> = codec
-                    .build_fields()
-                    .into_iter()
-                    .map(|(k, v)| (k.to_string(), v))
-                    .collect();
+                let extra = super::json_object(codec.build_fields());
                 (codec.bytes_by_part(), Some(a.layout), extra.into())
             }
             Structure::Parry => {
@@ -504,10 +497,7 @@ pub fn run(a: BuildArgs) -> CliResult {
     let peak = peak_rss_bytes();
     let threads = rayon::current_num_threads();
     if a.json {
-        let by_part: serde_json::Map<String, serde_json::Value> = parts
-            .iter()
-            .map(|(k, v)| (k.to_string(), (*v).into()))
-            .collect();
+        let by_part = super::json_object(parts.iter().copied());
         let mut v = serde_json::json!({
             "mesh": name,
             "triangles": tris,
