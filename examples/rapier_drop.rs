@@ -16,32 +16,6 @@ use cbvh::codec::{AnyOptions, CodecKind};
 use cbvh::parry::{CbvhShape, Dispatcher};
 use rapier3d::prelude::*;
 
-/// A closed box mesh (12 triangles) from `lo` to `hi`.
-fn slab(lo: [f32; 3], hi: [f32; 3]) -> Mesh {
-    let v: Vec<[f32; 3]> = (0..8)
-        .map(|k| {
-            [
-                if k & 1 == 0 { lo[0] } else { hi[0] },
-                if k & 2 == 0 { lo[1] } else { hi[1] },
-                if k & 4 == 0 { lo[2] } else { hi[2] },
-            ]
-        })
-        .collect();
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let t = quads
-        .iter()
-        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-        .collect();
-    Mesh::new(v, t)
-}
-
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     cbvh::logger::init_stderr();
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -73,7 +47,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     // A floor twice the body's size, its top at y = 0.
     let (c, r) = ((b.min + b.max) * 0.5, size.max(1e-3));
-    let floor = slab(
+    let floor = Mesh::cuboid(
         [c.x - 2.0 * r, -0.1 * r, c.z - 2.0 * r],
         [c.x + 2.0 * r, 0.0, c.z + 2.0 * r],
     );

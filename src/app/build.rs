@@ -199,6 +199,30 @@ struct Made {
     parts: Vec<(&'static str, f64)>,
 }
 
+impl From<crate::codec::racbvh::StreamedBuild> for Made {
+    fn from(m: crate::codec::racbvh::StreamedBuild) -> Self {
+        Made {
+            chunks: m.chunks,
+            largest_chunk: m.largest_chunk,
+            paired_edges: m.paired_edges,
+            extra: vec![("nodes", m.nodes), ("clusters", m.clusters)],
+            parts: m.parts(),
+        }
+    }
+}
+
+impl From<crate::codec::hcc::ooc::StreamedBuild> for Made {
+    fn from(m: crate::codec::hcc::ooc::StreamedBuild) -> Self {
+        Made {
+            chunks: m.chunks,
+            largest_chunk: m.largest_chunk,
+            paired_edges: m.paired_edges,
+            extra: vec![("trees", m.trees as u64)],
+            parts: m.sizes.parts(),
+        }
+    }
+}
+
 /// The out-of-core build (see [`crate::build::chunked`],
 /// [`crate::codec::hcc::ooc::encode_streamed`] and
 /// [`crate::codec::racbvh::encode_streamed`]).
@@ -233,36 +257,13 @@ fn run_out_of_core(a: &BuildArgs, p: OutOfCore) -> CliResult {
     };
     let t1 = Instant::now();
     let show = |phase: &str, done: u64, total: u64| bar.show(phase, done, total);
-    let made = if p.codec == CodecKind::Racbvh {
-        let m = crate::codec::racbvh::encode_streamed(
-            &input,
-            &build_options,
-            &options.racbvh,
-            &p.output,
-            &show,
-        )?;
-        Made {
-            chunks: m.chunks,
-            largest_chunk: m.largest_chunk,
-            paired_edges: m.paired_edges,
-            extra: vec![("nodes", m.nodes), ("clusters", m.clusters)],
-            parts: m.parts(),
-        }
+    let (mesh, out) = (&input, p.output.as_path());
+    let made: Made = if p.codec == CodecKind::Racbvh {
+        crate::codec::racbvh::encode_streamed(mesh, &build_options, &options.racbvh, out, &show)?
+            .into()
     } else {
-        let m = crate::codec::hcc::ooc::encode_streamed(
-            &input,
-            &build_options,
-            &options.hcc_ooc,
-            &p.output,
-            &show,
-        )?;
-        Made {
-            chunks: m.chunks,
-            largest_chunk: m.largest_chunk,
-            paired_edges: m.paired_edges,
-            extra: vec![("trees", m.trees as u64)],
-            parts: m.sizes.parts(),
-        }
+        crate::codec::hcc::ooc::encode_streamed(mesh, &build_options, &options.hcc_ooc, out, &show)?
+            .into()
     };
     let build_s = t1.elapsed().as_secs_f64();
     let tris = input.triangle_count();
@@ -289,10 +290,7 @@ fn run_out_of_core(a: &BuildArgs, p: OutOfCore) -> CliResult {
     let per_tri = file_bytes as f64 / tris.max(1) as f64;
     let parts = &made.parts;
     if a.json {
-        let by_part: serde_json::Map<String, serde_json::Value> = parts
-            .iter()
-            .map(|(k, v)| (k.to_string(), (*v).into()))
-            .collect();
+        let by_part = super::json_object(parts.iter().copied());
         let mut v = serde_json::json!({
             "mesh": p.input.display().to_string(),
             "triangles": tris,
@@ -480,11 +478,7 @@ pub fn run(a: BuildArgs) -> CliResult {
                     // caught here.
                     AnyCodec::open(path, &OpenOptions::default())?;
                 }
-                let extra: serde_json::Map<String, serde_json::Value> = codec
-                    .build_fields()
-                    .into_iter()
-                    .map(|(k, v)| (k.to_string(), v))
-                    .collect();
+                let extra = super::json_object(codec.build_fields());
                 (codec.bytes_by_part(), Some(a.layout), extra.into())
             }
             Structure::Parry => {
@@ -503,10 +497,7 @@ pub fn run(a: BuildArgs) -> CliResult {
     let peak = peak_rss_bytes();
     let threads = rayon::current_num_threads();
     if a.json {
-        let by_part: serde_json::Map<String, serde_json::Value> = parts
-            .iter()
-            .map(|(k, v)| (k.to_string(), (*v).into()))
-            .collect();
+        let by_part = super::json_object(parts.iter().copied());
         let mut v = serde_json::json!({
             "mesh": name,
             "triangles": tris,

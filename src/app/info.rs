@@ -92,15 +92,8 @@ fn codec_info(a: &InfoArgs) -> CliResult {
     let parts = codec.bytes_by_part();
     let per_tri = |b: u64| b as f64 / tris.max(1) as f64;
     if a.json {
-        let fields: serde_json::Map<String, serde_json::Value> = codec
-            .header_fields()
-            .into_iter()
-            .map(|(k, v)| (k.to_string(), v.into()))
-            .collect();
-        let by_part: serde_json::Map<String, serde_json::Value> = parts
-            .iter()
-            .map(|(k, v)| (k.to_string(), (*v).into()))
-            .collect();
+        let fields = super::json_object(codec.header_fields());
+        let by_part = super::json_object(parts.iter().copied());
         let v = serde_json::json!({
             "file": a.file.display().to_string(),
             "codec": codec.name(),

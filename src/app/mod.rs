@@ -51,6 +51,17 @@ pub fn progress_bar(message: &str, total: u64) -> ProgressBar {
     pb
 }
 
+/// Named figures (a codec's bytes by part, header fields or build fields)
+/// as a JSON object, for the `--json` reports.
+pub(crate) fn json_object<'a, V: Into<serde_json::Value>>(
+    fields: impl IntoIterator<Item = (&'a str, V)>,
+) -> serde_json::Map<String, serde_json::Value> {
+    fields
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v.into()))
+        .collect()
+}
+
 /// What a `cbvh gen` or `cbvh build` of `output` killed half way left
 /// beside it: the output's temporary file (`.NAME.tmp-PID-N`, see
 /// [`crate::atomic`]) and an out-of-core build's directory

@@ -50,6 +50,36 @@ impl Mesh {
         }
     }
 
+    /// A closed axis-aligned box from corner `lo` to corner `hi`: 8
+    /// vertices (vertex `k` is at `hi` along the axes whose bit is set in
+    /// `k`: bit 0 x, bit 1 y, bit 2 z, and at `lo` along the others) and 12
+    /// triangles, two a face, wound counter-clockwise seen from outside when
+    /// `lo` is below `hi` on every axis.
+    pub fn cuboid(lo: [f32; 3], hi: [f32; 3]) -> Self {
+        let vertices = (0..8)
+            .map(|k| {
+                [
+                    if k & 1 == 0 { lo[0] } else { hi[0] },
+                    if k & 2 == 0 { lo[1] } else { hi[1] },
+                    if k & 4 == 0 { lo[2] } else { hi[2] },
+                ]
+            })
+            .collect();
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let triangles = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
+        Self::new(vertices, triangles)
+    }
+
     /// Number of triangles.
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()

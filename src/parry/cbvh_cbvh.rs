@@ -8,16 +8,14 @@
 
 use std::ops::ControlFlow;
 
-use parry3d::math::{Pose as PPose, Real, Vector};
+use parry3d::math::{Pose as PPose, Real};
 use parry3d::query::{
     ClosestPoints, Contact, ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher,
     PersistentQueryDispatcher, QueryDispatcher, ShapeDistance, ShapeIntersection,
 };
 
 use super::cones::PairRule;
-use super::patches::{
-    ContactCounters, ContactMode, count_pair_manifolds, drop_opposed_manifolds, patch_manifolds,
-};
+use super::patches::{ContactCounters, ContactMode, manifolds_in_mode};
 use super::shape::{CbvhShape, pose_from_parry, to_parry_triangle};
 use super::workspace::ManifoldUpdate;
 use crate::contact::{Interference, PairFacing, PairKernel, PatchOptions, PatchSet};
@@ -49,28 +47,19 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
     manifolds: &mut Vec<ContactManifold<M, C>>,
     workspace: &mut Option<ContactManifoldsWorkspace>,
 ) {
-    match mode {
-        ContactMode::Patches(opts) => {
-            let box2 = s2.local_aabb();
-            patch_manifolds(
-                opts,
-                workspace,
-                pos12,
-                &s1.local_aabb(),
-                &box2,
-                prediction,
-                false,
-                manifolds,
-                |m| patches(pos12, s1, s2, m, opts, false, counters),
-            );
-        }
-        ContactMode::PerTrianglePair => {
-            contact_manifolds(pos12, s1, s2, prediction, manifolds, workspace);
-            let centre = |s: &CbvhShape| Vector::from(s.local_aabb().center().to_array());
-            drop_opposed_manifolds(pos12, centre(s1), centre(s2), manifolds);
-            count_pair_manifolds(counters, manifolds);
-        }
-    }
+    manifolds_in_mode(
+        mode,
+        counters,
+        pos12,
+        &s1.local_aabb(),
+        &s2.local_aabb(),
+        false,
+        prediction,
+        manifolds,
+        workspace,
+        |pos12, bound, opts| patches(pos12, s1, s2, bound, opts, false, counters),
+        |manifolds, workspace| contact_manifolds(pos12, s1, s2, prediction, manifolds, workspace),
+    );
 }
 
 /// The contact patches of two cbvh shapes (in `s1`'s frame): the parallel

@@ -6,7 +6,7 @@
 
 use std::ops::ControlFlow;
 
-use parry3d::math::{Pose as PPose, Real, Vector};
+use parry3d::math::{Pose as PPose, Real};
 use parry3d::query::{
     Contact, ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher,
     PersistentQueryDispatcher, QueryDispatcher, ShapeIntersection,
@@ -16,9 +16,7 @@ use parry3d::shape::Shape;
 use parry3d::query::details::NormalConstraints;
 
 use super::cones::EdgeCone;
-use super::patches::{
-    ContactCounters, ContactMode, count_pair_manifolds, drop_opposed_manifolds, patch_manifolds,
-};
+use super::patches::{ContactCounters, ContactMode, manifolds_in_mode};
 use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle};
 use super::workspace::ManifoldUpdate;
 use crate::contact::{Facing, PatchOptions, PatchPoint, PatchSet};
@@ -64,34 +62,24 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
     manifolds: &mut Vec<ContactManifold<M, C>>,
     workspace: &mut Option<ContactManifoldsWorkspace>,
 ) {
-    match mode {
-        ContactMode::Patches(opts) => {
-            // The convex shape's pose in the mesh's frame.
-            let pose = if flipped { pos12.inverse() } else { *pos12 };
-            let convex_box = from_parry_aabb(&convex.compute_local_aabb());
-            patch_manifolds(
-                opts,
-                workspace,
-                &pose,
-                &mesh.local_aabb(),
-                &convex_box,
-                prediction,
-                flipped,
-                manifolds,
-                |m| patches(&pose, mesh, convex, m.prediction, opts, false, counters),
-            );
-        }
-        ContactMode::PerTrianglePair => {
+    manifolds_in_mode(
+        mode,
+        counters,
+        pos12,
+        &mesh.local_aabb(),
+        &from_parry_aabb(&convex.compute_local_aabb()),
+        flipped,
+        prediction,
+        manifolds,
+        workspace,
+        // `pose`: the convex shape's pose in the mesh's frame.
+        |pose, bound, opts| patches(pose, mesh, convex, bound.prediction, opts, false, counters),
+        |manifolds, workspace| {
             contact_manifolds(
                 pos12, mesh, convex, flipped, prediction, manifolds, workspace,
-            );
-            let cm = Vector::from(mesh.local_aabb().center().to_array());
-            let cc = convex.compute_local_aabb().center();
-            let (c1, c2) = if flipped { (cc, cm) } else { (cm, cc) };
-            drop_opposed_manifolds(pos12, c1, c2, manifolds);
-            count_pair_manifolds(counters, manifolds);
-        }
-    }
+            )
+        },
+    );
 }
 
 /// The contact patches of a cbvh shape and a convex shape placed at `pose`

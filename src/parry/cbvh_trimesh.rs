@@ -10,15 +10,13 @@
 use std::ops::ControlFlow;
 
 use parry3d::bounding_volume::BoundingVolume;
-use parry3d::math::{Pose as PPose, Real, Vector};
+use parry3d::math::{Pose as PPose, Real};
 use parry3d::query::{
     ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher, PersistentQueryDispatcher,
 };
 use parry3d::shape::{CompositeShape, Shape, TriMesh};
 
-use super::patches::{
-    ContactCounters, ContactMode, count_pair_manifolds, drop_opposed_manifolds, patch_manifolds,
-};
+use super::patches::{ContactCounters, ContactMode, manifolds_in_mode};
 use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle};
 use super::workspace::ManifoldUpdate;
 use parry3d::query::details::NormalConstraints;
@@ -44,31 +42,22 @@ pub fn contact_manifolds_in<M: Default + Clone + Send + Sync, C: Default + Copy 
     manifolds: &mut Vec<ContactManifold<M, C>>,
     workspace: &mut Option<ContactManifoldsWorkspace>,
 ) {
-    match mode {
-        ContactMode::Patches(opts) => {
-            let tm_in_mesh = if flipped { pos12.inverse() } else { *pos12 };
-            let tm_box = from_parry_aabb(&tm.local_aabb());
-            patch_manifolds(
-                opts,
-                workspace,
-                &tm_in_mesh,
-                &mesh.local_aabb(),
-                &tm_box,
-                prediction,
-                flipped,
-                manifolds,
-                |m| patches(&tm_in_mesh, mesh, tm, m.prediction, opts, false, counters),
-            );
-        }
-        ContactMode::PerTrianglePair => {
-            contact_manifolds(pos12, mesh, tm, flipped, prediction, manifolds, workspace);
-            let cm = Vector::from(mesh.local_aabb().center().to_array());
-            let ct = tm.local_aabb().center();
-            let (c1, c2) = if flipped { (ct, cm) } else { (cm, ct) };
-            drop_opposed_manifolds(pos12, c1, c2, manifolds);
-            count_pair_manifolds(counters, manifolds);
-        }
-    }
+    manifolds_in_mode(
+        mode,
+        counters,
+        pos12,
+        &mesh.local_aabb(),
+        &from_parry_aabb(&tm.local_aabb()),
+        flipped,
+        prediction,
+        manifolds,
+        workspace,
+        // `pose`: the `TriMesh`'s pose in the mesh's frame.
+        |pose, bound, opts| patches(pose, mesh, tm, bound.prediction, opts, false, counters),
+        |manifolds, workspace| {
+            contact_manifolds(pos12, mesh, tm, flipped, prediction, manifolds, workspace)
+        },
+    );
 }
 
 /// The contact patches of a cbvh shape and a `TriMesh` placed at

@@ -223,6 +223,57 @@ pub fn patch_manifolds<M: Default + Clone, C: Default + Copy>(
     );
 }
 
+/// Contact manifolds in the dispatcher's `mode` for a pair whose side A is
+/// a cbvh shape, as every pair with one ([`cbvh_cbvh`](super::cbvh_cbvh),
+/// [`cbvh_convex`](super::cbvh_convex),
+/// [`cbvh_trimesh`](super::cbvh_trimesh)) computes them. `local_box_a`
+/// and `local_box_b` are each side's box in its own frame; `flipped` says
+/// A is parry's shape 2. With [`ContactMode::Patches`],
+/// [`patch_manifolds`] over the patches `patches(b_in_a, bound, opts)`
+/// returns (`b_in_a`: side B's pose in A's frame); with
+/// [`ContactMode::PerTrianglePair`], `per_pair(manifolds, workspace)`'s
+/// manifolds, less those [`drop_opposed_manifolds`] drops (the centres:
+/// the boxes'), counted by [`count_pair_manifolds`].
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn manifolds_in_mode<M: Default + Clone, C: Default + Copy>(
+    mode: &ContactMode,
+    counters: Option<&ContactCounters>,
+    pos12: &PPose,
+    local_box_a: &crate::geom::Aabb,
+    local_box_b: &crate::geom::Aabb,
+    flipped: bool,
+    prediction: f32,
+    manifolds: &mut Vec<ContactManifold<M, C>>,
+    workspace: &mut Option<ContactManifoldsWorkspace>,
+    patches: impl FnOnce(&PPose, &MotionBound, &PatchOptions) -> PatchSet,
+    per_pair: impl FnOnce(&mut Vec<ContactManifold<M, C>>, &mut Option<ContactManifoldsWorkspace>),
+) {
+    match mode {
+        ContactMode::Patches(opts) => {
+            let b_in_a = if flipped { pos12.inverse() } else { *pos12 };
+            patch_manifolds(
+                opts,
+                workspace,
+                &b_in_a,
+                local_box_a,
+                local_box_b,
+                prediction,
+                flipped,
+                manifolds,
+                |bound| patches(&b_in_a, bound, opts),
+            );
+        }
+        ContactMode::PerTrianglePair => {
+            per_pair(manifolds, workspace);
+            let centre = |b: &crate::geom::Aabb| Vector::from(b.center().to_array());
+            let (ca, cb) = (centre(local_box_a), centre(local_box_b));
+            let (c1, c2) = if flipped { (cb, ca) } else { (ca, cb) };
+            drop_opposed_manifolds(pos12, c1, c2, manifolds);
+            count_pair_manifolds(counters, manifolds);
+        }
+    }
+}
+
 /// Counts the per-pair mode's work: one contact pair per manifold with
 /// points.
 pub fn count_pair_manifolds<M, C>(

@@ -179,20 +179,26 @@ impl BoxGrid {
     }
 }
 
+/// The grid's tests, and the helpers the scene's other tests share.
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::mesh::{Mesh, boundary_edges, degenerate_triangles};
 
-    pub(crate) fn box_mesh(g: BoxGrid) -> Mesh {
+    /// The mesh of grid `g` with every vertex of the cube `[-1, 1]³` moved
+    /// by `map` (the identity: the cube itself), one vertex and triangle
+    /// after the other.
+    pub(crate) fn grid_mesh(g: BoxGrid, map: impl Fn(Vec3) -> Vec3) -> Mesh {
         let vertices = (0..g.vertices())
-            .map(|v| g.unit(g.vertex_ijk(v)).to_array())
+            .map(|v| map(g.unit(g.vertex_ijk(v))).to_array())
             .collect();
         let triangles = (0..g.triangles()).map(|t| g.triangle(t)).collect();
         Mesh::new(vertices, triangles)
     }
 
-    fn signed_volume(m: &Mesh) -> f64 {
+    /// The volume `m` encloses, summed in `f64`: positive when its
+    /// triangles wind counter-clockwise seen from outside.
+    pub(crate) fn signed_volume(m: &Mesh) -> f64 {
         m.triangles
             .iter()
             .map(|t| {
@@ -206,7 +212,7 @@ mod tests {
     fn grids_are_closed_outward_and_roundtrip() {
         for (nx, ny, nz) in [(1, 1, 1), (1, 2, 3), (3, 1, 2), (4, 5, 6), (7, 2, 1)] {
             let g = BoxGrid::new(nx, ny, nz);
-            let m = box_mesh(g);
+            let m = grid_mesh(g, |q| q);
             assert_eq!(m.triangles.len() as u64, g.triangles());
             m.validate("grid").unwrap();
             assert_eq!(boundary_edges(&m), 0, "{g:?}");

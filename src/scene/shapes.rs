@@ -179,26 +179,9 @@ pub(crate) fn area_half(l: Vec3) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::super::grid::BoxGrid;
+    use super::super::grid::tests::{grid_mesh, signed_volume};
     use super::*;
-    use crate::mesh::{Mesh, boundary_edges, degenerate_triangles};
-
-    pub(crate) fn shape_mesh(s: &Shape, g: BoxGrid) -> Mesh {
-        let vertices = (0..g.vertices())
-            .map(|v| s.map(g.unit(g.vertex_ijk(v))).to_array())
-            .collect();
-        let triangles = (0..g.triangles()).map(|t| g.triangle(t)).collect();
-        Mesh::new(vertices, triangles)
-    }
-
-    fn signed_volume(m: &Mesh) -> f64 {
-        m.triangles
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|i| Vec3::from(m.vertices[i as usize]).as_dvec3());
-                a.dot(b.cross(c)) / 6.0
-            })
-            .sum()
-    }
+    use crate::mesh::{boundary_edges, degenerate_triangles};
 
     #[test]
     fn shapes_are_closed_and_outward() {
@@ -250,7 +233,7 @@ mod tests {
         ];
         for (s, volume) in &shapes {
             let g = BoxGrid::new(24, 40, 24);
-            let m = shape_mesh(s, g);
+            let m = grid_mesh(g, |q| s.map(q));
             m.validate("shape").unwrap();
             assert_eq!(boundary_edges(&m), 0, "{s:?}");
             assert_eq!(degenerate_triangles(&m), 0, "{s:?}");

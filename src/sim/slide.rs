@@ -214,28 +214,8 @@ pub fn cube_mesh(side: f32) -> Mesh {
 /// A closed axis-aligned box of half extents `half` centred on the origin:
 /// 8 vertices, 12 triangles wound outward.
 pub fn box_mesh(half: Vector) -> Mesh {
-    let vertices = (0..8)
-        .map(|k| {
-            [
-                if k & 1 == 0 { -half.x } else { half.x },
-                if k & 2 == 0 { -half.y } else { half.y },
-                if k & 4 == 0 { -half.z } else { half.z },
-            ]
-        })
-        .collect();
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let triangles = quads
-        .iter()
-        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-        .collect();
-    orient(Mesh::new(vertices, triangles), |c| c)
+    let cuboid = Mesh::cuboid((-half).to_array(), half.to_array());
+    orient(cuboid, |c| c)
 }
 
 /// A sphere of radius `radius` centred on the origin: an icosahedron whose

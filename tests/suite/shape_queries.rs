@@ -204,30 +204,7 @@ fn mass_properties_equal_trimesh() {
 #[test]
 fn mass_properties_of_a_box_are_a_solid_box() {
     let (a, b, c) = (2.0f32, 1.0f32, 0.5f32);
-    let vertices: Vec<[f32; 3]> = (0..8)
-        .map(|k| {
-            [
-                if k & 1 == 0 { 0.0 } else { a },
-                if k & 2 == 0 { 0.0 } else { b },
-                if k & 4 == 0 { 0.0 } else { c },
-            ]
-        })
-        .map(|[x, y, z]| [x + 1.0, y - 3.0, z + 0.25])
-        .collect();
-    // Counter-clockwise seen from outside.
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let triangles = quads
-        .iter()
-        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-        .collect();
-    let mesh = Mesh::new(vertices, triangles);
+    let mesh = Mesh::cuboid([1.0, -3.0, 0.25], [a + 1.0, b - 3.0, c + 0.25]);
     for shape in cbvh_shapes(&mesh) {
         let density = 3.0;
         let m = shape.mass_properties(density);

@@ -99,6 +99,62 @@ pub fn of_cursor_open<C: NodeCursor>(c: &C) -> (EdgeFlags, Vec<OpenEdge>) {
     EdgeFlags::from_visit_open(c.triangle_count(), |f| visit_all(c, f))
 }
 
+/// The edge flags of a mesh built part by part (the out-of-core
+/// builders' chunks): each part's flags, computed alone
+/// ([`of_cursor_open`], [`EdgeFlags::from_visit_open`]), appended in order,
+/// its open edges moved to the whole mesh's numbering and its edge counts
+/// summed; [`ChunkedFlags::joined`] then pairs the open edges across parts.
+pub struct ChunkedFlags {
+    /// Every part's flags so far, one byte a triangle.
+    flags: Vec<u8>,
+    /// The parts' edge counts and signed volumes, summed.
+    sum: EdgeFlags,
+    /// The parts' open edges, in the whole mesh's numbering.
+    open: Vec<OpenEdge>,
+}
+
+impl ChunkedFlags {
+    /// No parts yet, with room for `triangles` flags.
+    pub fn with_capacity(triangles: usize) -> Self {
+        Self {
+            flags: Vec::with_capacity(triangles),
+            sum: EdgeFlags::default(),
+            open: Vec::new(),
+        }
+    }
+
+    /// Appends the next part's flags `f` and its open edges `open` (in the
+    /// part's numbering); returns the part's first triangle in the whole
+    /// mesh.
+    pub fn push(&mut self, f: &EdgeFlags, open: Vec<OpenEdge>) -> u64 {
+        let base = self.flags.len() as u64;
+        self.open.extend(open.into_iter().map(|mut e| {
+            e.corner += 3 * base;
+            e
+        }));
+        self.flags.extend_from_slice(f.as_slice());
+        let sum = &mut self.sum;
+        sum.boundary_edges += f.boundary_edges;
+        sum.non_manifold_edges += f.non_manifold_edges;
+        sum.misoriented_edges += f.misoriented_edges;
+        sum.flat_edges += f.flat_edges;
+        sum.signed_volume += f.signed_volume;
+        base
+    }
+
+    /// The whole mesh's flags, with the open edges paired across parts
+    /// ([`EdgeFlags::joined`]), and how many edges were paired; `None` for
+    /// a flag out of range.
+    pub fn joined(self) -> Option<(EdgeFlags, u64)> {
+        let Self {
+            flags,
+            sum,
+            mut open,
+        } = self;
+        EdgeFlags::joined(flags, &sum, &mut open)
+    }
+}
+
 /// Calls `f` with every triangle of `c` and its id.
 fn visit_all<C: NodeCursor>(c: &C, f: &mut dyn FnMut(u32, &crate::geom::Triangle)) {
     let everything = Aabb::new(Vec3A::splat(f32::MIN), Vec3A::splat(f32::MAX));

@@ -13,6 +13,20 @@
 
 use crate::mesh::Mesh;
 
+/// The mean of `vertices` (the origin for none), summed in `f64`: the
+/// reference point every mass sum takes ([`MassProps::of_mesh`], the
+/// out-of-core builders' [`MassAccumulator`]s).
+pub fn vertex_mean(vertices: &[[f32; 3]]) -> [f32; 3] {
+    let mut s = [0f64; 3];
+    for p in vertices {
+        for k in 0..3 {
+            s[k] += f64::from(p[k]);
+        }
+    }
+    let n = vertices.len().max(1) as f64;
+    s.map(|x| (x / n) as f32)
+}
+
 /// Mass properties of a mesh at density 1.
 ///
 /// # Layout
@@ -63,14 +77,7 @@ impl MassProps {
         if mesh.vertices.is_empty() || mesh.triangles.is_empty() {
             return MassProps::ZERO;
         }
-        let mut mean = [0f64; 3];
-        for v in &mesh.vertices {
-            for k in 0..3 {
-                mean[k] += f64::from(v[k]);
-            }
-        }
-        let n = mesh.vertices.len() as f64;
-        let reference = mean.map(|m| (m / n) as f32);
+        let reference = vertex_mean(&mesh.vertices);
         const CHUNK: usize = 1 << 16;
         let v = |i: u32| mesh.vertices[i as usize];
         mesh.triangles

@@ -446,37 +446,42 @@ impl RacOptions {
     /// Checks every field.
     pub fn validate(&self) -> Result<(), RacError> {
         let c = self.cluster_nodes;
-        if !(256..=16384).contains(&c) || !c.is_power_of_two() {
-            return Err(RacError::Option {
-                what: "cluster_nodes",
-                value: u64::from(c),
-                expected: "a power of two in 256..=16384",
-            });
+        allowed(
+            (256..=16384).contains(&c) && c.is_power_of_two(),
+            "cluster_nodes",
+            c,
+            "a power of two in 256..=16384",
+        )?;
+        allowed((8..=24).contains(&self.bits), "bits", self.bits, "8..=24")?;
+        if let Some(b) = self.vertex_bits {
+            let expected = "8..=24, or None for lossless f32 vertices";
+            allowed((8..=24).contains(&b), "vertex_bits", b, expected)?;
         }
-        if !(8..=24).contains(&self.bits) {
-            return Err(RacError::Option {
-                what: "bits",
-                value: u64::from(self.bits),
-                expected: "8..=24",
-            });
-        }
-        if let Some(b) = self.vertex_bits
-            && !(8..=24).contains(&b)
-        {
-            return Err(RacError::Option {
-                what: "vertex_bits",
-                value: u64::from(b),
-                expected: "8..=24, or None for lossless f32 vertices",
-            });
-        }
-        if !(1..=4096).contains(&self.tri_delta_threshold) {
-            return Err(RacError::Option {
-                what: "tri_delta_threshold",
-                value: u64::from(self.tri_delta_threshold),
-                expected: "1..=4096",
-            });
-        }
+        allowed(
+            (1..=4096).contains(&self.tri_delta_threshold),
+            "tri_delta_threshold",
+            self.tri_delta_threshold,
+            "1..=4096",
+        )
+    }
+}
+
+/// `Ok` when `ok`, else the [`RacError::Option`] that says the option
+/// `what` may not be `value` and what to use instead (`expected`).
+fn allowed(
+    ok: bool,
+    what: &'static str,
+    value: u32,
+    expected: &'static str,
+) -> Result<(), RacError> {
+    if ok {
         Ok(())
+    } else {
+        Err(RacError::Option {
+            what,
+            value: u64::from(value),
+            expected,
+        })
     }
 }
 

@@ -77,10 +77,10 @@ use super::{ClusterMeta, Header, RacBvh, RacError, RacOptions};
 use crate::atomic::AtomicFile;
 use crate::build::chunked::{ChunkNode, ChunkScratch, ChunkedMesh};
 use crate::build::{BuildOptions, CanonicalBvh, LEAF_FLAG, build};
-use crate::codec::common::MassAccumulator;
-use crate::codec::common::edges;
+use crate::codec::common::edges::{self, ChunkedFlags};
 use crate::codec::common::packed::{ForPieces, ForWriter};
 use crate::codec::common::quant::{Grid, QBox};
+use crate::codec::common::{MassAccumulator, mass::vertex_mean};
 use crate::contact::EdgeFlags;
 use crate::geom::Aabb;
 
@@ -173,10 +173,8 @@ pub fn encode_streamed(
     // Pass 1: build, box, flag, sum; the index array as it grows.
     let tri_path = temp.join("rac-triangles.bin");
     let mut tri_w = ForWriter::new(create(&tri_path)?);
-    let mut mass = MassAccumulator::new(mean(vertices));
-    let mut flags: Vec<u8> = Vec::with_capacity(total as usize);
-    let mut sum = EdgeFlags::default();
-    let mut open = Vec::new();
+    let mut mass = MassAccumulator::new(vertex_mean(vertices));
+    let mut flags = ChunkedFlags::with_capacity(total as usize);
     let mut chunks: Vec<Chunk> = Vec::with_capacity(input.chunk_count());
     let mut scratch = ChunkScratch::default();
     let mut done = 0u64;
@@ -208,17 +206,7 @@ pub fn encode_streamed(
                 visit(t, &tri(t));
             }
         });
-        let base = flags.len() as u64;
-        open.extend(o.into_iter().map(|mut e| {
-            e.corner += 3 * base;
-            e
-        }));
-        flags.extend_from_slice(f.as_slice());
-        sum.boundary_edges += f.boundary_edges;
-        sum.non_manifold_edges += f.non_manifold_edges;
-        sum.misoriented_edges += f.misoriented_edges;
-        sum.flat_edges += f.flat_edges;
-        sum.signed_volume += f.signed_volume;
+        let base = flags.push(&f, o);
         drop(f);
         let boxes = node_boxes(&bvh, &tri);
         let file = temp.join(format!("rac-chunk-{c}.bin"));
@@ -359,9 +347,9 @@ pub fn encode_streamed(
     }
 
     // The edge flags, paired across chunks.
-    let (edge_flags, paired_edges) = EdgeFlags::joined(flags, &sum, &mut open)
+    let (edge_flags, paired_edges) = flags
+        .joined()
         .ok_or(RacError::Corrupt("edge flags out of range (a bug)"))?;
-    drop(open);
     let flag_bytes = edges::encode(&edge_flags);
     drop(edge_flags);
 
@@ -797,16 +785,4 @@ fn create(path: &Path) -> Result<BufWriter<File>, RacError> {
 fn io(path: &Path) -> impl Fn(std::io::Error) -> RacError {
     let path = path.display().to_string();
     move |e| RacError::Io(format!("{path}: {e}"))
-}
-
-/// The mean of `v`, the mass sum's reference point.
-fn mean(v: &[[f32; 3]]) -> [f32; 3] {
-    let mut s = [0f64; 3];
-    for p in v {
-        for k in 0..3 {
-            s[k] += f64::from(p[k]);
-        }
-    }
-    let n = v.len().max(1) as f64;
-    s.map(|x| (x / n) as f32)
 }

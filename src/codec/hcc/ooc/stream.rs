@@ -27,9 +27,9 @@
 //! unions of the chunks' root boxes, with each chunk's high-level tree
 //! under its leaf, numbered depth-first as the i-HCCMesh encoder numbers
 //! nodes; the edge flags with the open edges paired across chunks
-//! ([`EdgeFlags::resolve_open`]); the header; and the file is written
-//! under a temporary name beside the output and renamed over it at the
-//! end ([`AtomicFile`]).
+//! ([`EdgeFlags::resolve_open`](crate::contact::EdgeFlags::resolve_open));
+//! the header; and the file is written under a temporary name beside the
+//! output and renamed over it at the end ([`AtomicFile`]).
 //!
 //! What stays in memory besides one chunk's build: the model's vertices
 //! (12 bytes each), the edge flags (a byte a triangle), a bit a vertex,
@@ -59,8 +59,8 @@ use super::file::{self, Header, SECTIONS};
 use crate::atomic::AtomicFile;
 use crate::build::chunked::{ChunkNode, ChunkScratch, ChunkedMesh};
 use crate::build::{BuildOptions, build};
-use crate::codec::common::{MassAccumulator, edges};
-use crate::contact::EdgeFlags;
+use crate::codec::common::edges::{self, ChunkedFlags};
+use crate::codec::common::{MassAccumulator, mass::vertex_mean};
 
 /// What the progress callback hears: a phase, work done, work in all;
 /// called from the builder's threads.
@@ -128,10 +128,8 @@ pub fn encode_streamed(
 
     // Pass 1: build, count, flag, sum.
     let mut counts = SymbolCounts::new();
-    let mut mass = MassAccumulator::new(mean(vertices));
-    let mut flags: Vec<u8> = Vec::with_capacity(total as usize);
-    let mut sum = EdgeFlags::default();
-    let mut open = Vec::new();
+    let mut mass = MassAccumulator::new(vertex_mean(vertices));
+    let mut flags = ChunkedFlags::with_capacity(total as usize);
     let mut used = vec![0u64; vertices.len().div_ceil(64)];
     let mut chunks: Vec<Chunk> = Vec::with_capacity(input.chunk_count());
     let mut scratch = ChunkScratch::default();
@@ -162,20 +160,10 @@ pub fn encode_streamed(
         let q = hcc.vertices.quantized().ok_or(OocError::NotQuantized)?;
         counts.add(&hcc, q)?;
         let (f, o) = edges::of_cursor_open(&hcc);
-        let base = flags.len() as u64;
-        open.extend(o.into_iter().map(|mut e| {
-            e.corner += 3 * base;
-            e
-        }));
-        flags.extend_from_slice(f.as_slice());
+        flags.push(&f, o);
         // The chunk's file needs its flags (pass 2 reads them back and
         // drops them).
-        hcc.edges = f.clone();
-        sum.boundary_edges += f.boundary_edges;
-        sum.non_manifold_edges += f.non_manifold_edges;
-        sum.misoriented_edges += f.misoriented_edges;
-        sum.flat_edges += f.flat_edges;
-        sum.signed_volume += f.signed_volume;
+        hcc.edges = f;
         let trees = (0..hcc.headers.len())
             .map(|k| {
                 let h = hcc.headers[k];
@@ -264,12 +252,10 @@ pub fn encode_streamed(
         );
     }
     let firsts = tree_columns(&[&first_tri, &first_vert]);
-    let (edge_flags, paired_edges) =
-        EdgeFlags::joined(flags, &sum, &mut open).ok_or(OocError::Corrupt {
-            tree: u32::MAX,
-            what: "edge flags out of range",
-        })?;
-    drop(open);
+    let (edge_flags, paired_edges) = flags.joined().ok_or(OocError::Corrupt {
+        tree: u32::MAX,
+        what: "edge flags out of range",
+    })?;
     let flag_bytes = edges::encode(&edge_flags);
     drop(edge_flags);
     let node_words: u64 = chunks.iter().map(|c| c.node_words).sum();
@@ -466,16 +452,4 @@ fn quantization_error(q: &Quantized, v: &[[f32; 3]]) -> [f32; 3] {
         }
     }
     error
-}
-
-/// The mean of `v`, the mass sum's reference point.
-fn mean(v: &[[f32; 3]]) -> [f32; 3] {
-    let mut s = [0f64; 3];
-    for p in v {
-        for k in 0..3 {
-            s[k] += f64::from(p[k]);
-        }
-    }
-    let n = v.len().max(1) as f64;
-    s.map(|x| (x / n) as f32)
 }
