@@ -96,6 +96,9 @@ pub const CUBE_SIDE: f32 = 1.0;
 pub const SPHERE_RADIUS: f32 = 0.5;
 /// Subdivisions of the icosphere meshes (4: 5120 triangles).
 pub const SPHERE_SUBDIVISIONS: u32 = 4;
+/// Subdivisions of the fine icosphere of [`Scene::fine_roll`] (5: 20 480
+/// triangles, edges half of [`SPHERE_SUBDIVISIONS`]'s).
+pub const FINE_SPHERE_SUBDIVISIONS: u32 = 6;
 /// Radius of the bowl (m).
 pub const BOWL_RADIUS: f32 = 2.0;
 /// Segments around the bowl (its rings are a quarter as many).
@@ -449,8 +452,22 @@ impl Rep {
                     .iter()
                     .map(|v| Vector::from_array(*v))
                     .collect();
-                SharedShape::convex_hull(&points)
-                    .ok_or_else(|| SlideError::TriMesh("no convex hull of the mesh".into()))?
+                let hull = SharedShape::convex_hull(&points)
+                    .ok_or_else(|| SlideError::TriMesh("no convex hull of the mesh".into()))?;
+                // parry 0.31 merges the hull's near-coplanar triangles into
+                // faces; on a finely tessellated sphere (an icosphere of 5 or
+                // more subdivisions) it can end with no face at all, and its
+                // contacts then index an empty face list and panic.
+                if hull
+                    .as_convex_polyhedron()
+                    .is_some_and(|p| p.faces().is_empty())
+                {
+                    return Err(SlideError::TriMesh(format!(
+                        "parry's convex hull of the mesh ({} vertices) has no faces",
+                        points.len()
+                    )));
+                }
+                hull
             }
             Rep::Cbvh(kind, _) => SharedShape::new(CbvhShape::build(
                 mesh,
@@ -553,10 +570,17 @@ pub enum Scene {
         cells: usize,
     },
     /// A sphere of radius [`SPHERE_RADIUS`] (an icosphere of
-    /// [`SPHERE_SUBDIVISIONS`], or parry's ball) resting on a ramp: it
-    /// rolls at `g sin θ / (1 + I/(m r²))` within [`REL_TOLERANCE`] and
-    /// never moves uphill (it slides at `g (sin θ − μ cos θ)` if the
-    /// friction cannot hold the rolling).
+    /// `subdivisions`, or parry's ball) resting on a ramp: it rolls at
+    /// `g sin θ / (1 + I/(m r²))` within [`REL_TOLERANCE`] and never moves
+    /// uphill (it slides at `g (sin θ − μ cos θ)` if the friction cannot
+    /// hold the rolling).
+    ///
+    /// That is a smooth sphere's answer. A rigid icosphere also loses a
+    /// little energy each time a new facet lands (an inelastic impact,
+    /// as a rolling polygon does), so it rolls slower by roughly its
+    /// facets' angle: about 11 % at [`SPHERE_SUBDIVISIONS`] even with
+    /// parry's exact convex contacts ([`Rep::Hull`]), a few percent at
+    /// [`FINE_SPHERE_SUBDIVISIONS`].
     Roll {
         /// Ramp angle (degrees).
         angle_deg: f32,
@@ -564,6 +588,8 @@ pub enum Scene {
         friction: f32,
         /// Cells per side of the ramp mesh.
         cells: usize,
+        /// Subdivisions of the icosphere mesh ([`icosphere_mesh`]).
+        subdivisions: u32,
     },
     /// A ball of radius [`BOWL_BALL_RADIUS`] released at rest inside a bowl
     /// of radius [`BOWL_RADIUS`] (no primitive ground), `release_deg` up its
@@ -626,7 +652,9 @@ pub enum Scene {
 #[derive(Clone, Copy, Debug)]
 enum Body {
     Cube,
-    Sphere(f32),
+    /// A sphere of this radius: parry's ball, or an icosphere mesh of these
+    /// subdivisions.
+    Sphere(f32, u32),
     /// A box of these half extents.
     Block(Vector),
 }
@@ -635,7 +663,7 @@ impl Body {
     fn mesh(self) -> Mesh {
         match self {
             Body::Cube => cube_mesh(CUBE_SIDE),
-            Body::Sphere(r) => icosphere_mesh(r, SPHERE_SUBDIVISIONS),
+            Body::Sphere(r, subdivisions) => icosphere_mesh(r, subdivisions),
             Body::Block(half) => box_mesh(half),
         }
     }
@@ -646,7 +674,7 @@ impl Body {
                 let h = 0.5 * CUBE_SIDE;
                 Ok(SharedShape::cuboid(h, h, h))
             }
-            (Rep::Primitive, Body::Sphere(r)) => Ok(SharedShape::ball(r)),
+            (Rep::Primitive, Body::Sphere(r, _)) => Ok(SharedShape::ball(r)),
             (Rep::Primitive, Body::Block(h)) => Ok(SharedShape::cuboid(h.x, h.y, h.z)),
             _ => rep.mesh_shape(&self.mesh()),
         }
@@ -655,7 +683,7 @@ impl Body {
     /// How far the body, turned by `rotation`, reaches from its origin
     /// along the unit direction `dir`.
     fn reach(self, rep: Rep, rotation: Rotation, dir: Vector) -> f32 {
-        if let (Rep::Primitive, Body::Sphere(r)) = (rep, self) {
+        if let (Rep::Primitive, Body::Sphere(r, _)) = (rep, self) {
             return r;
         }
         self.mesh()
@@ -929,13 +957,26 @@ impl Scene {
         }
     }
 
-    /// A sphere rolling down a ramp of `cells` per side at
-    /// [`ROLL_ANGLE_DEG`], friction [`ROLL_FRICTION`].
+    /// A sphere (an icosphere of [`SPHERE_SUBDIVISIONS`]) rolling down a
+    /// ramp of `cells` per side at [`ROLL_ANGLE_DEG`], friction
+    /// [`ROLL_FRICTION`].
     pub fn roll(cells: usize) -> Scene {
+        Scene::roll_of(cells, SPHERE_SUBDIVISIONS)
+    }
+
+    /// [`Scene::roll`] with an icosphere of [`FINE_SPHERE_SUBDIVISIONS`]:
+    /// facets fine enough for the smooth sphere's answer.
+    pub fn fine_roll(cells: usize) -> Scene {
+        Scene::roll_of(cells, FINE_SPHERE_SUBDIVISIONS)
+    }
+
+    /// [`Scene::roll`] with an icosphere of `subdivisions`.
+    pub fn roll_of(cells: usize, subdivisions: u32) -> Scene {
         Scene::Roll {
             angle_deg: ROLL_ANGLE_DEG,
             friction: ROLL_FRICTION,
             cells,
+            subdivisions,
         }
     }
 
@@ -957,7 +998,8 @@ impl Scene {
             all.push(Scene::slide(20.0, cells));
             all.push(Scene::slide(40.0, cells));
         }
-        all.extend([Scene::roll(1), Scene::roll(64), Scene::bowl()]);
+        all.extend([Scene::roll(1), Scene::roll(64)]);
+        all.extend([Scene::fine_roll(1), Scene::fine_roll(64), Scene::bowl()]);
         all.extend([
             Scene::Rest { cells: 1 },
             Scene::Stack { count: 5, cells: 1 },
@@ -975,7 +1017,9 @@ impl Scene {
         all
     }
 
-    /// The name in reports: `slide-40deg-64x64`, `roll-15deg-2tri`,
+    /// The name in reports: `slide-40deg-64x64`, `roll-15deg-2tri` (an
+    /// icosphere of other than [`SPHERE_SUBDIVISIONS`] adds its
+    /// subdivisions: `roll-15deg-2tri-ico6`),
     /// `bowl`, `rest-2tri`, `stack5-2tri`, `table-stays-2tri`,
     /// `table-tips-2tri`, `rock-0.5r`.
     pub fn name(&self) -> String {
@@ -984,8 +1028,18 @@ impl Scene {
                 angle_deg, cells, ..
             } => format!("slide-{angle_deg}deg-{}", cells_name(cells)),
             Scene::Roll {
-                angle_deg, cells, ..
-            } => format!("roll-{angle_deg}deg-{}", cells_name(cells)),
+                angle_deg,
+                cells,
+                subdivisions,
+                ..
+            } => {
+                let ico = if subdivisions == SPHERE_SUBDIVISIONS {
+                    String::new()
+                } else {
+                    format!("-ico{subdivisions}")
+                };
+                format!("roll-{angle_deg}deg-{}{ico}", cells_name(cells))
+            }
             Scene::Bowl { .. } => "bowl".into(),
             Scene::Rock { height } => format!("rock-{height}r"),
             Scene::Rest { cells } => format!("rest-{}", cells_name(cells)),
@@ -1020,7 +1074,15 @@ impl Scene {
                 angle_deg,
                 friction,
                 cells,
-            } => roll(&mut world, angle_deg, friction, cells, ground, body)?,
+                subdivisions,
+            } => roll(
+                &mut world,
+                angle_deg,
+                friction,
+                cells,
+                Body::Sphere(SPHERE_RADIUS, subdivisions),
+                (ground, body),
+            )?,
             Scene::Bowl {
                 release_deg,
                 damping,
@@ -1083,7 +1145,7 @@ fn slope_run(
     let frame = SlopeFrame::new(angle_deg);
     let rotation = match body {
         Body::Cube | Body::Block(_) => frame.rotation,
-        Body::Sphere(_) => Rotation::IDENTITY,
+        Body::Sphere(..) => Rotation::IDENTITY,
     };
     let reach = body.reach(body_rep, rotation, -frame.normal);
     let origin = frame.downhill * START_ALONG + frame.normal * reach;
@@ -1204,17 +1266,10 @@ fn roll(
     angle_deg: f32,
     friction: f32,
     cells: usize,
-    ground: Rep,
-    body: Rep,
+    sphere: Body,
+    reps: (Rep, Rep),
 ) -> Result<Outcome, SlideError> {
-    let run = slope_run(
-        world,
-        Body::Sphere(SPHERE_RADIUS),
-        angle_deg,
-        friction,
-        cells,
-        (ground, body),
-    )?;
+    let run = slope_run(world, sphere, angle_deg, friction, cells, reps)?;
     let (s, c) = angle_deg.to_radians().sin_cos();
     // Rolling without slipping: m a = m g sin θ − F, F r = I a / r, so
     // a = g sin θ / (1 + k) with k = I / (m r²), and the friction force
@@ -1237,7 +1292,7 @@ fn bowl(
     body: Rep,
 ) -> Result<Outcome, SlideError> {
     add_ground(world, Ground::Bowl, ground, DEFAULT_FRICTION)?;
-    let ball = Body::Sphere(BOWL_BALL_RADIUS);
+    let ball = Body::Sphere(BOWL_BALL_RADIUS, SPHERE_SUBDIVISIONS);
     let centre = Vector::new(0.0, BOWL_RADIUS, 0.0);
     let (s, c) = release_deg.to_radians().sin_cos();
     let out = Vector::new(s, -c, 0.0);
