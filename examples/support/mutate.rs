@@ -13,6 +13,8 @@
 //!   ×10³⁰), checksums recomputed;
 //! - every section-table entry forged (offsets and lengths past the end,
 //!   zero, overlapping the previous section), checksums recomputed;
+//! - the first words of every section (a root node's box, a high-level
+//!   root, a grid) forged with the header's values, checksums recomputed;
 //! - structurally corrupt trees written by the codec's own encoder from a
 //!   corrupted canonical tree (a child named twice, a node with two
 //!   parents, a deep DAG), where the encoder takes them.
@@ -25,7 +27,8 @@
 //! physical. A forger who recomputes checksums can write any consistent
 //! file, so those are allowed where checksums were recomputed; a file
 //! that is accepted and *inconsistent* (answers that disagree with its own
-//! triangles, a root box looser than the mesh, an impossible mass) is
+//! triangles, a root box looser than the mesh, a vertex beyond the
+//! coordinate limit, an impossible mass) is
 //! always a bug, as is a panic. A header forgery that is accepted with the
 //! original's answers is an *ignored* header word (a reserved word, a
 //! flag the reader does not check): also a bug.
@@ -43,6 +46,9 @@ use xxhash_rust::xxh3::xxh3_64;
 
 /// A small deterministic generator.
 pub struct Rng(pub u64);
+
+/// Words forged at the start of each section ([`Subject::run`]).
+const SECTION_HEAD_WORDS: usize = 16;
 
 impl Rng {
     pub fn next(&mut self) -> u64 {
@@ -194,9 +200,11 @@ fn answers(c: &AnyCodec, rays: &[Ray], boxes: &[Aabb]) -> Answers {
 }
 
 /// Why an accepted file is inconsistent with its own triangles, if it is:
-/// answers that brute force over its decoded mesh does not give, a root
-/// box not tight around the mesh (within 1 % of its diagonal: the grid of
-/// a quantized codec rounds outwards), or an impossible mass.
+/// a decoded vertex beyond the coordinate limit every encoder enforces
+/// ([`cbvh::mesh::MAX_COORDINATE`]), answers that brute force over its
+/// decoded mesh does not give, a root box not tight around the mesh
+/// (within 1 % of its diagonal: the grid of a quantized codec rounds
+/// outwards), or an impossible mass.
 fn inconsistency(a: &Answers, rays: &[Ray], boxes: &[Aabb]) -> Option<String> {
     let verts: Vec<Vec3A> = a
         .mesh
@@ -204,6 +212,12 @@ fn inconsistency(a: &Answers, rays: &[Ray], boxes: &[Aabb]) -> Option<String> {
         .iter()
         .map(|v| Vec3A::from(v.map(f32::from_bits)))
         .collect();
+    if let Some(v) = verts
+        .iter()
+        .find(|v| !v.is_finite() || v.abs().max_element() > cbvh::mesh::MAX_COORDINATE)
+    {
+        return Some(format!("a decoded vertex {v} beyond the coordinate limit"));
+    }
     let tris: Vec<Triangle> = a
         .mesh
         .1
@@ -510,6 +524,10 @@ impl Subject {
         // Forged section tables.
         let tables = self.forged_tables();
         rows.push(self.row("forged section table (checksummed)", false, false, tables));
+        // Forged words at the start of each section, where the root's box
+        // and the grids live.
+        let heads = self.forged_section_heads(per_word, &mut rng);
+        rows.push(self.row("forged section head (checksummed)", false, false, heads));
         rows
     }
 
@@ -517,8 +535,33 @@ impl Subject {
     /// version) replaced by each of a set of hostile values (at most
     /// `per_word` of them, chosen with `rng`), the checksums recomputed.
     fn forged_words(&self, per_word: usize, rng: &mut Rng) -> Vec<(Vec<u8>, String)> {
+        self.forged_at((12..self.frame.table).step_by(4), per_word, rng)
+    }
+
+    /// The first [`SECTION_HEAD_WORDS`] 4-byte words of every section (a
+    /// plain or clbvh root node's box, the i-HCCMesh high-level root, a
+    /// grid's origin and steps) forged as [`Self::forged_words`] forges
+    /// the header's: a root box made looser, a grid stretched.
+    fn forged_section_heads(&self, per_word: usize, rng: &mut Rng) -> Vec<(Vec<u8>, String)> {
+        let mut at = Vec::new();
+        for k in 0..self.frame.sections.len() {
+            let (off, len, _) = self.frame.entry(&self.bytes, k);
+            let (off, len) = (off as usize, len as usize);
+            at.extend((off..off + len.min(4 * SECTION_HEAD_WORDS)).step_by(4));
+        }
+        at.retain(|&a| a + 4 <= self.bytes.len());
+        self.forged_at(at.into_iter(), per_word, rng)
+    }
+
+    /// The words at `at` forged with hostile values, each file resealed.
+    fn forged_at(
+        &self,
+        at: impl Iterator<Item = usize>,
+        per_word: usize,
+        rng: &mut Rng,
+    ) -> Vec<(Vec<u8>, String)> {
         let mut out = Vec::new();
-        for at in (12..self.frame.table).step_by(4) {
+        for at in at {
             let old = u32::from_le_bytes(self.bytes[at..at + 4].try_into().unwrap());
             let f = f32::from_bits(old);
             let mut vals = vec![
@@ -559,8 +602,8 @@ impl Subject {
             for v in vals {
                 let mut b = self.bytes.clone();
                 b[at..at + 4].copy_from_slice(&v.to_le_bytes());
-                self.frame.reseal(&mut b);
-                out.push((b, format!("header word at {at}: {old:#x} -> {v:#x}")));
+                self.reseal(&mut b);
+                out.push((b, format!("word at {at}: {old:#x} -> {v:#x}")));
             }
         }
         out

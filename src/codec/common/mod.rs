@@ -47,3 +47,27 @@ pub use store::Store;
 
 /// The first four bytes of every cbvh codec file (`CBVHRAC\0`, `CBVHPLN\0`).
 pub const MAGIC_PREFIX: [u8; 4] = *b"CBVH";
+
+/// Whether `root` is the bounds of the triangles: each face of `root`
+/// within `slack[a]` of the same face of `bounds`, the union of the
+/// triangles' decoded vertices (the codec's quantization step on its axis,
+/// 0 for `f32` boxes), plus the rounding of coordinates of that magnitude.
+/// Consumers rely on the root's box being the mesh's bounds
+/// (`AnyCodec::root_box`; a renderer frames its camera from it), which a
+/// containment check alone does not prove: a forged file with a looser
+/// root still answers every query alike. Where the codec proves
+/// containment elsewhere this adds tightness; where it does not (vertices
+/// decoded from a grid, checked only against their own trees' boxes) it
+/// also catches a grid that puts them outside the root.
+pub fn root_matches(root: &crate::geom::Aabb, bounds: &crate::geom::Aabb, slack: [f32; 3]) -> bool {
+    if bounds.is_empty() {
+        // No vertex: nothing to match.
+        return true;
+    }
+    (0..3).all(|a| {
+        let size = bounds.min[a].abs().max(bounds.max[a].abs());
+        let tol = f64::from(slack[a]) + 1e-6 * f64::from(size);
+        (f64::from(bounds.min[a]) - f64::from(root.min[a])).abs() <= tol
+            && (f64::from(root.max[a]) - f64::from(bounds.max[a])).abs() <= tol
+    })
+}

@@ -10,6 +10,7 @@ use super::node::{
 };
 use super::template::{TEMPLATE_COUNT, TEMPLATES};
 use super::vertices::Vertices;
+use crate::codec::common::root_matches;
 use crate::cursor::NodeCursor;
 use crate::geom::Aabb;
 
@@ -27,13 +28,14 @@ impl HccBvh {
     /// the arrays; every node word, template id, inter-connection, vertex
     /// index, triangle block and slot is in range; every node is reached
     /// once; every vertex and decoded box is finite and every box inside
-    /// its parent's; the leaves hold `triangle_count` triangles, each rank
+    /// its parent's, the root's the vertices' bounds (within a grid
+    /// step); the leaves hold `triangle_count` triangles, each rank
     /// once; the id map (when kept) is a permutation whose inverse finds every id; the
     /// vertex ids cover the input vertices, copies decoding alike.
     pub fn verify(&self) -> Result<(), HccError> {
         let nt = self.headers.len();
         let stored = self.stats.tree_vertices;
-        self.verify_vertices()?;
+        let bounds = self.verify_vertices()?;
         if let Some(ids) = &self.ids {
             if ids.len() != self.triangle_count {
                 return Err(bad(0, 0, "the id map does not hold the triangle count"));
@@ -98,6 +100,11 @@ impl HccBvh {
                 }
             }
         }
+        let slack = self.vertices.quantized().map_or([0.0; 3], |q| q.step);
+        let root = &self.high[0];
+        if !root_matches(&Aabb::from_arrays(root.min, root.max), &bounds, slack) {
+            return Err(bad(0, 0, "the root's box is not the vertices' bounds"));
+        }
         let mut tree_box = vec![Aabb::EMPTY; nt];
         for n in self.high.iter().filter(|n| n.is_leaf()) {
             tree_box[n.a as usize] = Aabb::from_arrays(n.min, n.max);
@@ -157,8 +164,9 @@ impl HccBvh {
     }
 
     /// Every stored vertex decodes to a finite point (packed runs inside
-    /// the data).
-    fn verify_vertices(&self) -> Result<(), HccError> {
+    /// the data); returns their bounds.
+    fn verify_vertices(&self) -> Result<Aabb, HccError> {
+        let mut bounds = Aabb::EMPTY;
         let stored = self.stats.tree_vertices;
         match &self.vertices {
             Vertices::F32(v) => {
@@ -167,6 +175,9 @@ impl HccBvh {
                 }
                 if v.iter().any(|p| p.iter().any(|c| !c.is_finite())) {
                     return Err(bad(0, 0, "a vertex has a non-finite coordinate"));
+                }
+                for p in v {
+                    bounds.grow((*p).into());
                 }
             }
             Vertices::Packed(q) => {
@@ -181,14 +192,16 @@ impl HccBvh {
                     let count = ve - h.vertex_start;
                     q.check_tree(k, count).map_err(|what| bad(k, 0, what))?;
                     for i in 0..count {
-                        if q.point(k, i).iter().any(|c| !c.is_finite()) {
+                        let p = q.point(k, i);
+                        if p.iter().any(|c| !c.is_finite()) {
                             return Err(bad(k, 0, "a vertex decodes to a non-finite point"));
                         }
+                        bounds.grow(p.into());
                     }
                 }
             }
         }
-        Ok(())
+        Ok(bounds)
     }
 
     /// With vertex ids: one per stored vertex, each input vertex covered

@@ -32,6 +32,7 @@ use glam::Vec3A;
 
 use crate::codec::common::FormatError;
 use crate::codec::common::le::u64_at_padded;
+use crate::mesh::MAX_COORDINATE;
 
 /// Bits of a [`VertexTree`] field's base.
 pub const BASE_BITS: u32 = 24;
@@ -247,7 +248,11 @@ impl Quantized {
         Ok(())
     }
 
-    /// Checks the grid itself: bits in range, finite origin and steps.
+    /// Checks the grid itself: bits in range, finite origin and steps, the
+    /// whole grid (origin to its far corner) within the encoder's limit
+    /// on coordinates ([`MAX_COORDINATE`]), and the recorded quantization
+    /// error no larger than a step (plus the rounding of coordinates of
+    /// that magnitude).
     pub fn check_grid(&self) -> Result<(), FormatError> {
         if !(1..=MAX_VERTEX_BITS).contains(&self.bits) {
             return Err(FormatError::header(
@@ -267,6 +272,32 @@ impl Quantized {
                 "vertex grid",
                 "a value is not finite or a step is negative",
             ));
+        }
+        // The far corner is origin + step · max_q in f32 steps: allow it
+        // the rounding of a step computed from a mesh at the limit.
+        let limit = f64::from(MAX_COORDINATE) * (1.0 + 1e-6);
+        for a in 0..3 {
+            let origin = f64::from(self.origin[a]);
+            let far = origin + f64::from(self.step[a]) * f64::from(self.max_q());
+            if origin.abs() > limit || far.abs() > limit {
+                return Err(FormatError::header(
+                    "vertex grid",
+                    format!(
+                        "axis {a} spans {origin:e} to {far:e}, beyond the coordinate limit ±{limit:e}"
+                    ),
+                ));
+            }
+            let rounding = 1e-6 * origin.abs().max(far.abs());
+            let error = f64::from(self.error[a]);
+            if !(0.0..=f64::from(self.step[a]) + rounding).contains(&error) {
+                return Err(FormatError::header(
+                    "vertex grid",
+                    format!(
+                        "axis {a}'s quantization error {error:e} is not within its step {:e}",
+                        self.step[a]
+                    ),
+                ));
+            }
         }
         Ok(())
     }

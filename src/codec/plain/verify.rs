@@ -2,6 +2,8 @@
 //! query relies on.
 
 use super::{PlainBvh, PlainError};
+use crate::codec::common::root_matches;
+use crate::geom::Aabb;
 
 impl PlainBvh {
     /// Proves what every query relies on, in O(nodes + triangles) without
@@ -9,7 +11,8 @@ impl PlainBvh {
     /// in range, no repeats, no cycles, none unreachable), child boxes lie
     /// inside their parent's, leaves hold valid triangle ids (each triangle
     /// in exactly one leaf) and their boxes contain their triangles, vertex
-    /// indices are in range and vertices finite.
+    /// indices are in range and vertices finite, and the root's box is the
+    /// triangles' bounds (not looser).
     pub fn verify(&self) -> Result<(), PlainError> {
         let bad = |node: usize, what| PlainError::Corrupt {
             node: node as u64,
@@ -104,6 +107,15 @@ impl PlainBvh {
         }
         if let Some(t) = seen_tri.iter().position(|s| !s) {
             return Err(bad(t, "triangle is in no leaf"));
+        }
+        let mut bounds = Aabb::EMPTY;
+        for tri in &self.triangles {
+            for &v in tri {
+                bounds.grow(self.vertices[v as usize].into());
+            }
+        }
+        if !root_matches(&self.nodes[0].aabb(), &bounds, [0.0; 3]) {
+            return Err(bad(0, "the root's box is not its triangles' bounds"));
         }
         Ok(())
     }

@@ -4,6 +4,8 @@
 use super::node::qbox_of;
 use super::{RacBvh, RacError};
 use crate::build::LEAF_FLAG;
+use crate::codec::common::root_matches;
+use crate::geom::Aabb;
 
 impl RacBvh {
     /// Proves everything a query relies on: every cluster decodes and
@@ -11,7 +13,9 @@ impl RacBvh {
     /// exactly one parent, and children come after their parent (so no
     /// repeats and no cycles: a query visits each node at most once); child
     /// boxes lie inside their parent's; every triangle id is in exactly one
-    /// leaf and leaf boxes contain their triangles; the mesh sections'
+    /// leaf and leaf boxes contain their triangles, the root's box is the
+    /// triangles' bounds (within a step of the boxes' grid); the mesh
+    /// sections'
     /// checksum matches and every vertex index is in range. Runs in
     /// O(nodes + triangles) without recursion; uses (and fills) the cache.
     pub fn verify(&self) -> Result<(), RacError> {
@@ -22,6 +26,7 @@ impl RacBvh {
         // more than the file (open checks a bit of cluster data per node).
         let mut seen = BitSet::new(self.header.triangle_count as usize);
         let mut has_parent = BitSet::new(n as usize);
+        let mut bounds = Aabb::EMPTY;
         for g in 0..n {
             let w = self.try_words(g)?;
             if w[7] & LEAF_FLAG != 0 {
@@ -32,6 +37,9 @@ impl RacBvh {
                         bad = bad.or(Some("a triangle id appears in two leaves"));
                     }
                     let t = self.mesh.triangle(id);
+                    for &v in &t {
+                        bounds.grow(v);
+                    }
                     if !self.header.empty && t.iter().any(|&v| !b.contains_point(v)) {
                         bad = bad.or(Some("the leaf's box does not contain its triangle"));
                     }
@@ -61,6 +69,12 @@ impl RacBvh {
         }
         if (0..self.header.triangle_count as usize).any(|t| !seen.get(t)) {
             return Err(RacError::Corrupt("a triangle id appears in no leaf"));
+        }
+        if n > 0 && !self.header.empty {
+            let root = self.box_of(&self.try_words(0)?);
+            if !root_matches(&root, &bounds, self.header.grid.step.to_array()) {
+                return Err(corrupt(0, "the root's box is not its triangles' bounds"));
+            }
         }
         Ok(())
     }
