@@ -32,7 +32,7 @@ fn main() -> Result<(), String> {
         mesh.triangles.len()
     );
     let mut rows = Vec::new();
-    for &v in mutate::VARIANTS {
+    for v in mutate::variants() {
         let (subject, bvh, options) = mutate::variant(&mesh, v);
         rows.extend(subject.run(cases as usize, seed));
         let n = (cases as usize / 10).max(10);

@@ -49,7 +49,7 @@ fn every_codec_survives_the_mutation_harness() {
     let mesh = cbvh::scene::generate(cbvh::scene::Kind::Statue, 1000, 7, &mut |_, _| {}).unwrap();
     let mut rows = Vec::new();
     let mut originals = Vec::new();
-    for &v in mutate::VARIANTS {
+    for v in mutate::variants() {
         let (mut subject, bvh, options) = mutate::variant(&mesh, v);
         subject.probe = Some(|| LARGEST.swap(0, std::sync::atomic::Ordering::Relaxed));
         // What reading the original allocates at most.

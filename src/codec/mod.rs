@@ -99,7 +99,10 @@
 //!    it is missing. The CLI's `--codec`, the sims' `--shapes`, the
 //!    renderer, `cbvh info` and the parry shape then know the codec.
 //! 5. One line in the shared codec test suite (`tests/suite/codec_suite.rs`),
-//!    which runs every test on every codec.
+//!    which runs every test on every codec. The mutation harness
+//!    (`examples/support/mutate.rs`, run by `tests/mutation.rs`) attacks
+//!    every registered codec's default file by itself; a variant with other
+//!    options is a line in its `EXTRA_VARIANTS`.
 //! 6. Its name and paper in the README's list of codecs.
 
 pub mod any;
