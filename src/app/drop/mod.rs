@@ -399,7 +399,9 @@ pub fn run_sim(
     let (mut dropped, dropped_file, scale) = match dropped {
         Dropped::Mesh(mut m) => {
             for _ in 0..args.subdivide {
-                m = m.subdivided();
+                m = m
+                    .subdivided()
+                    .map_err(|e| format!("--subdivide {}: {e}", args.subdivide))?;
             }
             let scale = droptest::place(&mut m, &base, &placement);
             (m, None, scale)
