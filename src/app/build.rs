@@ -47,10 +47,17 @@ pub struct BuildArgs {
     pub out_of_core: bool,
     /// Out of core: the most triangles a chunk holds, instead of what the
     /// memory budget allows (smaller chunks cost quality at the top of the
-    /// tree; for tests and experiments).
-    #[arg(long, value_name = "N")]
+    /// tree; for tests and experiments). From 1 to 4 294 967 295 (a chunk
+    /// is built in memory, its triangles numbered by `u32`), and a chunk
+    /// of that many of the model's triangles must be buildable within the
+    /// memory budget (about 260 bytes a triangle).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_CHUNK_TRIANGLES))]
     pub chunk_triangles: Option<u64>,
 }
+
+/// The largest `--chunk-triangles`: a chunk is built in memory as a mesh,
+/// its triangles numbered by `u32`.
+const MAX_CHUNK_TRIANGLES: u64 = u32::MAX as u64;
 
 /// Bytes a triangle the in-memory build holds at its peak (the mesh, the
 /// canonical tree with its boxes, the codec's encoder; measured 232 on a
@@ -62,18 +69,10 @@ const IN_MEMORY_BYTES_A_TRIANGLE: u64 = 260;
 /// a triangle of the model (see `--memory-mib`).
 const CHUNK_BYTES_A_TRIANGLE: u64 = 32;
 
-/// The machine's memory (Linux `MemTotal`), if known.
-fn machine_memory() -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = s.lines().find(|l| l.starts_with("MemTotal:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
-
 /// The build's memory budget in bytes.
 fn budget(a: &BuildArgs) -> u64 {
     a.memory_mib.map_or_else(
-        || machine_memory().map_or(8 << 30, |m| m / 2),
+        || super::machine_memory().map_or(8 << 30, |m| m / 2),
         |m| m.saturating_mul(1 << 20),
     )
 }
@@ -166,6 +165,24 @@ fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> 
             gib(budget)
         )
         .into());
+    }
+    // A chunk is built in memory: one of as many of the model's triangles
+    // as --chunk-triangles asks must fit the budget.
+    if let Some(n) = a.chunk_triangles {
+        let chunk_bytes = n
+            .min(estimated.1)
+            .saturating_mul(IN_MEMORY_BYTES_A_TRIANGLE);
+        if chunk_bytes > budget {
+            return Err(format!(
+                "--chunk-triangles {n}: building a chunk of {} triangles in memory needs about \
+                 {}, over the {} budget (--memory-mib): give fewer triangles a chunk, or none \
+                 to size chunks from the budget",
+                n.min(estimated.1),
+                gib(chunk_bytes),
+                gib(budget)
+            )
+            .into());
+        }
     }
     // Chunks as large as the budget allows; without a budget given, as
     // large as 32 bytes a triangle above what the build holds anyway allow
@@ -439,6 +456,11 @@ fn build_with_progress(
 
 /// Runs `cbvh build`.
 pub fn run(a: BuildArgs) -> CliResult {
+    // Every flag before any work: the output's place, the generator's count.
+    if let Some(path) = &a.output {
+        super::check_output("--output", path, &[])?;
+    }
+    a.source.check()?;
     if a.output.is_some() && a.codec == Structure::Parry {
         return Err(format!(
             "--codec parry has no cbvh file to write: choose --codec {} with -o",

@@ -13,7 +13,9 @@ use super::CliResult;
 pub struct GenArgs {
     /// What to generate: statue, turbine, plant, robot or isosurface.
     pub kind: Kind,
-    /// Requested triangle count (the result is within 5 %; default: the kind's default).
+    /// Requested triangle count (the result is within 5 %; default: the
+    /// kind's default), from 1 000 to the limit of the output's form (see
+    /// `--output`).
     #[arg(long)]
     pub tris: Option<usize>,
     /// Seed: the same seed gives the same mesh.
@@ -32,12 +34,18 @@ pub struct GenArgs {
 /// temporary file beside the output, so that a failed or killed run leaves
 /// nothing under the output's name.
 pub fn run(a: GenArgs) -> CliResult {
-    // Check the output extension before spending time generating.
+    // Every flag before spending time generating: the output's place and
+    // extension, and the count against what the generator makes (to a
+    // PLY file, the kinds that stream go further than a mesh in memory).
+    super::check_output("--output", &a.output, &["ply", "obj"])?;
     let format = crate::mesh::Format::from_path(&a.output)?;
-    if !matches!(format, crate::mesh::Format::Ply | crate::mesh::Format::Obj) {
-        return Err(format!("{}: can only write .ply or .obj files", a.output.display()).into());
-    }
     let tris = a.tris.unwrap_or_else(|| crate::scene::default_tris(a.kind));
+    let max = if format == crate::mesh::Format::Ply && a.kind.streams() {
+        crate::scene::MAX_STREAMED_TRIS
+    } else {
+        crate::scene::MAX_TRIS
+    };
+    super::check_tris("--tris", a.kind, tris, max)?;
     super::clear_stale(&a.output);
     if format == crate::mesh::Format::Ply {
         return write_ply(&a, tris);

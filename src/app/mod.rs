@@ -8,6 +8,8 @@
 //!   `build`, `render`.
 //! - [`drop`](mod@drop): `cbvh lucy-on-turbine` and `cbvh robot-in-plant`.
 //! - [`plot`]: the drop tests' PNG line plots.
+//! - [`check_output`], [`check_threads`], [`check_tris`]: the checks every
+//!   command makes of its flags before any work, naming the flag.
 //!
 //! The binaries are a line each: [`main`] for `cbvh`, and
 //! [`exit`]`(drop::lucy::run(...))` for a drop test under its own name.
@@ -24,7 +26,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use crate::Mesh;
 use crate::codec::{AnyCodec, CodecKind, OpenOptions};
@@ -60,6 +62,91 @@ pub(crate) fn json_object<'a, V: Into<serde_json::Value>>(
         .into_iter()
         .map(|(k, v)| (k.to_string(), v.into()))
         .collect()
+}
+
+/// Checks, before any work, that a command can write its output `path`,
+/// given by `flag` (named in every error): the path names a file, not a
+/// directory; its directory exists (it is never created); a file can be
+/// made there (probed with the temporary file every save goes through,
+/// [`crate::atomic`], removed at once); and, unless `exts` is empty, its
+/// extension is one of `exts` (lower case; any case accepted). Nothing is
+/// left behind.
+pub fn check_output(flag: &str, path: &Path, exts: &[&str]) -> Result<(), String> {
+    let shown = path.display();
+    if !exts.is_empty() {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .unwrap_or("")
+            .to_ascii_lowercase();
+        if !exts.contains(&ext.as_str()) {
+            let names: Vec<String> = exts.iter().map(|e| format!(".{e}")).collect();
+            return Err(format!(
+                "{flag} {shown}: name the file {}",
+                names.join(" or ")
+            ));
+        }
+    }
+    let fail = |why: String| format!("{flag} {shown}: cannot write there: {why}");
+    if path.file_name().is_none() || path.is_dir() {
+        return Err(fail("it is a directory: name a file".into()));
+    }
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if !dir.is_dir() {
+        return Err(fail(if dir.exists() {
+            format!("{} is not a directory", dir.display())
+        } else {
+            format!("directory {} does not exist", dir.display())
+        }));
+    }
+    // Dropped uncommitted: the temporary file is removed.
+    crate::atomic::AtomicFile::create(path).map_err(|e| fail(e.to_string()))?;
+    Ok(())
+}
+
+/// Checks `--threads` before any work: at least 1, and at most 4 × the
+/// machine's hardware threads (more only adds stacks and switching; a
+/// pool of a hundred thousand threads can take the machine down).
+pub fn check_threads(threads: Option<usize>) -> Result<(), String> {
+    match threads {
+        Some(0) => Err("--threads must be at least 1".into()),
+        Some(t) => {
+            let machine = std::thread::available_parallelism().map_or(1, |n| n.get());
+            if t > 4 * machine {
+                Err(format!(
+                    "--threads {t} is more than 4 × the {machine} hardware threads of this machine"
+                ))
+            } else {
+                Ok(())
+            }
+        }
+        None => Ok(()),
+    }
+}
+
+/// Checks a generator's triangle count, given by `flag`, before any work:
+/// from [`crate::scene::MIN_TRIS`] to `max` ([`crate::scene::MAX_TRIS`],
+/// or [`crate::scene::MAX_STREAMED_TRIS`] where the kind streams to a file).
+pub fn check_tris(flag: &str, kind: Kind, tris: usize, max: usize) -> Result<(), String> {
+    let min = crate::scene::MIN_TRIS;
+    if (min..=max).contains(&tris) {
+        Ok(())
+    } else {
+        Err(format!(
+            "{flag} {tris}: the {kind} generator makes {min} to {max} triangles"
+        ))
+    }
+}
+
+/// The machine's memory (Linux `MemTotal`), if known.
+pub(crate) fn machine_memory() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = s.lines().find(|l| l.starts_with("MemTotal:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
 }
 
 /// What a `cbvh gen` or `cbvh build` of `output` killed half way left
@@ -134,7 +221,8 @@ pub struct MeshSource {
     /// Generate the mesh instead: statue, turbine, plant, robot or isosurface.
     #[arg(long = "gen", value_name = "KIND")]
     pub gen_kind: Option<Kind>,
-    /// Triangle count to generate (default: the kind's default).
+    /// Triangle count to generate, 1 000 to 200 000 000 (default: the
+    /// kind's default).
     #[arg(long, requires = "gen_kind")]
     pub tris: Option<usize>,
     /// Generator seed.
@@ -143,6 +231,16 @@ pub struct MeshSource {
 }
 
 impl MeshSource {
+    /// Checks the flags before any work: `--tris` within the generator's
+    /// range (the mesh is generated in memory: up to
+    /// [`crate::scene::MAX_TRIS`]).
+    pub fn check(&self) -> Result<(), String> {
+        match (self.gen_kind, self.tris) {
+            (Some(kind), Some(tris)) => check_tris("--tris", kind, tris, crate::scene::MAX_TRIS),
+            _ => Ok(()),
+        }
+    }
+
     /// Loads a mesh or opens a codec file (chosen by the file's magic), or
     /// generates a mesh.
     pub fn load_any(&self) -> Result<Loaded, Box<dyn std::error::Error>> {

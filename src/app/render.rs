@@ -2,7 +2,7 @@
 //! --lights L --reflect-depth D --threads T] -o out.png [--json]
 //! [--turntable N --turntable-out anim.png]`
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use crate::Mesh;
@@ -58,7 +58,9 @@ pub struct RenderArgs {
     #[arg(short = 'o', long, value_name = "PNG")]
     pub output: PathBuf,
     /// Also render an animated turntable of N frames (camera and lights
-    /// circling the scene).
+    /// circling the scene), 1 to 3600. The frames are held in memory until
+    /// they are written: N × width × height × 3 bytes must be within half
+    /// the machine's memory, checked before any work.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=3600))]
     pub turntable: Option<u32>,
     /// Where to write the turntable: `.png` (animated PNG, lossless) or
@@ -115,38 +117,6 @@ fn build_tree(
     bvh
 }
 
-/// Refuses, before rendering, an output path whose directory does not
-/// exist or whose extension is not one of `exts`.
-fn check_output(path: &Path, exts: &[&str]) -> CliResult {
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    if !dir.is_dir() {
-        return Err(format!(
-            "cannot write {}: directory {} does not exist",
-            path.display(),
-            dir.display()
-        )
-        .into());
-    }
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    if !exts.contains(&ext.as_str()) {
-        let names: Vec<String> = exts.iter().map(|e| format!(".{e}")).collect();
-        return Err(format!(
-            "cannot write {}: name the file {} (images are PNG; turntables animated PNG or GIF)",
-            path.display(),
-            names.join(" or ")
-        )
-        .into());
-    }
-    Ok(())
-}
-
 fn turntable_path(a: &RenderArgs) -> PathBuf {
     a.turntable_out.clone().unwrap_or_else(|| {
         let stem = a
@@ -159,13 +129,31 @@ fn turntable_path(a: &RenderArgs) -> PathBuf {
 }
 
 /// The flags clap's ranges do not cover, checked before any work: the
-/// thread count against the machine and the camera angles.
+/// thread count against the machine, `--tris`, the turntable's memory and
+/// the camera angles.
 fn check_flags(a: &RenderArgs) -> CliResult {
-    if let Some(t) = a.threads {
-        let machine = std::thread::available_parallelism().map_or(1, |n| n.get());
-        if t as usize > 4 * machine {
+    super::check_threads(a.threads.map(|t| t as usize))?;
+    a.source.check()?;
+    if let Some(frames) = a.turntable {
+        let need = turntable_bytes(frames, a.width, a.height);
+        let (limit, whose) = match super::machine_memory() {
+            Some(m) => (m / 2, "half this machine's memory"),
+            None => (
+                TURNTABLE_BYTES_UNKNOWN_MEMORY,
+                "the limit where the machine's memory is unknown",
+            ),
+        };
+        if need > limit {
             return Err(format!(
-                "--threads {t} is more than 4 × the {machine} hardware threads of this machine"
+                "--turntable {frames} at --width {} --height {} holds {frames} frames of {} × {} \
+                 pixels in memory until they are written: {:.1} GiB, over {whose} ({:.1} GiB); \
+                 give fewer frames or a smaller image",
+                a.width,
+                a.height,
+                a.width,
+                a.height,
+                need as f64 / (1u64 << 30) as f64,
+                limit as f64 / (1u64 << 30) as f64
             )
             .into());
         }
@@ -179,15 +167,25 @@ fn check_flags(a: &RenderArgs) -> CliResult {
     Ok(())
 }
 
+/// Bytes a turntable's frames hold: every frame is kept (3 bytes a pixel)
+/// until they are written together.
+fn turntable_bytes(frames: u32, width: u32, height: u32) -> u64 {
+    u64::from(frames) * u64::from(width) * u64::from(height) * 3
+}
+
+/// The most bytes of frames a turntable may hold where the machine's
+/// memory is unknown (elsewhere: half of it).
+const TURNTABLE_BYTES_UNKNOWN_MEMORY: u64 = 4 << 30;
+
 /// A still image, its stats, and the turntable's frames and stats if asked.
 type Rendered = (Image, RenderStats, Option<(Vec<Image>, RenderStats)>);
 
 /// Runs `cbvh render`.
 pub fn run(mut a: RenderArgs) -> CliResult {
     check_flags(&a)?;
-    check_output(&a.output, &["png"])?;
+    super::check_output("--output", &a.output, &["png"])?;
     if a.turntable.is_some() {
-        check_output(&turntable_path(&a), &["png", "gif"])?;
+        super::check_output("--turntable-out", &turntable_path(&a), &["png", "gif"])?;
     }
     let t0 = Instant::now();
     let (mesh, name, target) = match a.source.load_any()? {

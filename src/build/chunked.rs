@@ -65,9 +65,10 @@ pub struct ChunkOptions {
     /// from a sample, so a chunk may exceed it by a few percent; a chunk
     /// whose centroids all coincide cannot be split at all).
     pub chunk_triangles: u64,
-    /// A directory for the temporary files, created if missing and
-    /// removed when done; it must not exist yet (so that nothing of the
-    /// caller's is ever removed).
+    /// A directory for the temporary files, created and removed when
+    /// done; it must not exist yet (so that nothing of the caller's is
+    /// ever removed), and its parent must (it is never created: a missing
+    /// directory is an error, not a tree of new ones).
     pub temp_dir: PathBuf,
 }
 
@@ -418,7 +419,9 @@ fn make_dir(dir: &Path) -> Result<TempDir, ChunkError> {
     if dir.exists() {
         return Err(ChunkError::TempExists(dir.to_path_buf()));
     }
-    std::fs::create_dir_all(dir).map_err(|source| ChunkError::Io {
+    // Not create_dir_all: a build must not make the directories of a
+    // mistyped output path and report success.
+    std::fs::create_dir(dir).map_err(|source| ChunkError::Io {
         path: dir.to_path_buf(),
         source,
     })?;
@@ -783,5 +786,17 @@ mod tests {
         let e = ChunkedMesh::from_mesh(&bad, &opts, &|_, _, _| {}).unwrap_err();
         assert!(e.to_string().contains("vertex 7"), "{e}");
         assert!(!opts.temp_dir.exists());
+        // A temporary directory whose parent is missing is an error, and
+        // the parent is not made.
+        let parent = temp("no-parent");
+        let opts = ChunkOptions {
+            chunk_triangles: 4,
+            temp_dir: parent.join("t"),
+        };
+        assert!(matches!(
+            ChunkedMesh::from_mesh(&mesh, &opts, &|_, _, _| {}),
+            Err(ChunkError::Io { .. })
+        ));
+        assert!(!parent.exists());
     }
 }

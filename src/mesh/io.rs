@@ -226,7 +226,25 @@ fn read_into<R: BufRead>(
 /// # Errors
 /// An unknown extension, or the file cannot be opened.
 pub fn estimate_counts(path: impl AsRef<Path>) -> Result<(u64, u64), MeshError> {
-    let path = path.as_ref();
+    counts(path.as_ref()).map(|(c, _)| c)
+}
+
+/// The triangle count the header of the mesh file at `path` states, read
+/// without reading the rest: PLY's and OFF's face count (a polygon gives
+/// more triangles, so it is at least the count the file loads as) and
+/// binary STL's; `None` for OBJ and ASCII STL, which state none (see
+/// [`estimate_counts`] for a guess). For refusing, before any work, a
+/// model some later step could not take.
+///
+/// # Errors
+/// An unknown extension, or the file cannot be opened.
+pub fn header_triangles(path: impl AsRef<Path>) -> Result<Option<u64>, MeshError> {
+    counts(path.as_ref()).map(|((_, t), stated)| stated.then_some(t))
+}
+
+/// [`estimate_counts`], and whether the triangles' count is the header's
+/// (PLY, OFF, binary STL) rather than a guess from the file's length.
+fn counts(path: &Path) -> Result<((u64, u64), bool), MeshError> {
     let (format, mut file, len) = open(path)?;
     let mut head = Vec::new();
     std::io::Read::take(&mut file, 1 << 16)
@@ -256,7 +274,7 @@ pub fn estimate_counts(path: impl AsRef<Path>) -> Result<(u64, u64), MeshError> 
                     _ => {}
                 }
             }
-            (nv.unwrap_or(0), nf.unwrap_or(0))
+            ((nv.unwrap_or(0), nf.unwrap_or(0)), nf.is_some())
         }
         Format::Off => {
             let first = words.next().unwrap_or_default();
@@ -269,9 +287,10 @@ pub fn estimate_counts(path: impl AsRef<Path>) -> Result<(u64, u64), MeshError> 
             } else {
                 first
             };
+            let faces = num(counts.get(1));
             (
-                num(counts.first()).unwrap_or(0),
-                num(counts.get(1)).unwrap_or(0),
+                (num(counts.first()).unwrap_or(0), faces.unwrap_or(0)),
+                faces.is_some(),
             )
         }
         Format::Stl => {
@@ -279,12 +298,12 @@ pub fn estimate_counts(path: impl AsRef<Path>) -> Result<(u64, u64), MeshError> 
                 u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
             });
             if len == 84 + 50 * n {
-                (n / 2, n)
+                ((n / 2, n), true)
             } else {
-                guess(250)
+                (guess(250), false)
             }
         }
-        Format::Obj => guess(40),
+        Format::Obj => (guess(40), false),
     })
 }
 

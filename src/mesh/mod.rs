@@ -18,10 +18,11 @@ mod subdivide;
 
 pub use error::{MeshError, Place};
 pub use io::{
-    Encoding, Format, FormatDetail, PlyWriter, Streamed, TriangleBatches, estimate_counts, load,
-    load_bytes, load_bytes_with_detail, load_with_detail, save, stream,
+    Encoding, Format, FormatDetail, PlyWriter, Streamed, TriangleBatches, estimate_counts,
+    header_triangles, load, load_bytes, load_bytes_with_detail, load_with_detail, save, stream,
 };
 pub use stats::{MeshStats, boundary_edges, degenerate_triangles};
+pub use subdivide::{MAX_SUBDIVIDED, SubdivideError, subdivided_triangles};
 
 /// The largest coordinate magnitude cbvh accepts. Ray/triangle tests
 /// multiply three coordinate differences, and `f32` overflows near 3.4e38:

@@ -583,3 +583,148 @@ fn a_deep_chain_of_clusters_completes_without_recursion() {
         .join()
         .unwrap();
 }
+
+/// Issue 33: `cbvh gen`, `build` and `render` check a generator's
+/// `--tris` and the output's place before any work, naming the flag; a
+/// refused output's missing directory is not created, in memory or out of
+/// core; and `--chunk-triangles` is bounded.
+#[test]
+fn cli_checks_counts_outputs_and_chunks_before_any_work() {
+    let d = temp_dir_for("files", "flags");
+    let at = |name: &str| d.join(name).to_str().unwrap().to_string();
+    let (ply, obj, png) = (at("g.ply"), at("g.obj"), at("g.png"));
+    // A generator's count out of its range, named with the range.
+    for (args, want) in [
+        (
+            vec!["gen", "statue", "--tris", "0", "-o", &ply],
+            "--tris 0: the statue generator makes 1000 to 1000000000 triangles",
+        ),
+        (
+            vec!["gen", "statue", "--tris", "1500000000", "-o", &ply],
+            "--tris 1500000000: the statue generator makes 1000 to 1000000000",
+        ),
+        (
+            vec!["gen", "statue", "--tris", "300000000", "-o", &obj],
+            "--tris 300000000: the statue generator makes 1000 to 200000000",
+        ),
+        (
+            vec!["gen", "isosurface", "--tris", "300000000", "-o", &ply],
+            "--tris 300000000: the isosurface generator makes 1000 to 200000000",
+        ),
+        (
+            vec!["build", "--gen", "robot", "--tris", "999"],
+            "--tris 999: the robot generator",
+        ),
+        (
+            vec!["render", "--gen", "plant", "--tris", "0", "-o", &png],
+            "--tris 0: the plant generator",
+        ),
+        (vec!["gen", "robot", "-o", &at("g.stl")], "--output"),
+        (
+            vec![
+                "build",
+                "--gen",
+                "robot",
+                "--tris",
+                "1000",
+                "-o",
+                d.to_str().unwrap(),
+            ],
+            "it is a directory",
+        ),
+    ] {
+        let e = cbvh_refuses_within(&args, 20);
+        assert!(e.contains(want), "{args:?}: {e}");
+    }
+    // An output in a missing directory: refused before generating (a
+    // 3 M-triangle statue would take a while), naming -o's flag, and the
+    // directory is not made.
+    let missing = d.join("no");
+    let inside = |name: &str| {
+        missing
+            .join("such")
+            .join(name)
+            .to_str()
+            .unwrap()
+            .to_string()
+    };
+    for args in [
+        vec!["gen", "statue", "--tris", "3000000", "-o", &inside("s.ply")],
+        vec![
+            "build",
+            "--gen",
+            "statue",
+            "--tris",
+            "3000000",
+            "-o",
+            &inside("s.plain"),
+        ],
+        vec![
+            "render",
+            "--gen",
+            "statue",
+            "--tris",
+            "3000000",
+            "-o",
+            &inside("s.png"),
+        ],
+    ] {
+        let e = cbvh_refuses_within(&args, 20);
+        assert!(
+            e.contains("--output") && e.contains("does not exist"),
+            "{args:?}: {e}"
+        );
+        assert!(!missing.exists(), "{args:?} made {}", missing.display());
+    }
+    // Out of core, which used to make the output's directories and report
+    // success.
+    cbvh::mesh::save(&statue(100_000), &ply).unwrap();
+    for codec in ["hcc-ooc", "racbvh"] {
+        let args = [
+            "build",
+            &ply,
+            "--codec",
+            codec,
+            "--out-of-core",
+            "--chunk-triangles",
+            "12000",
+            "-o",
+            &inside("s.cbvh"),
+        ];
+        let e = cbvh_refuses_within(&args, 20);
+        assert!(
+            e.contains("--output") && e.contains("does not exist"),
+            "{codec}: {e}"
+        );
+        assert!(!missing.exists(), "{codec} made {}", missing.display());
+    }
+    // --chunk-triangles: at least 1, numbered by u32, and a chunk that fits
+    // the memory budget.
+    let out = at("c.hcc");
+    for (extra, want) in [
+        (&["--chunk-triangles", "0"][..], "'--chunk-triangles <N>'"),
+        (
+            &["--chunk-triangles", "4294967296"],
+            "'--chunk-triangles <N>'",
+        ),
+        (
+            &["--chunk-triangles", "1000000", "--memory-mib", "23"],
+            "--chunk-triangles 1000000: building a chunk of",
+        ),
+    ] {
+        let mut args = vec![
+            "build",
+            &ply,
+            "--codec",
+            "hcc-ooc",
+            "--out-of-core",
+            "-o",
+            &out,
+        ];
+        args.extend_from_slice(extra);
+        let e = cbvh_refuses_within(&args, 20);
+        assert!(e.contains(want), "{extra:?}: {e}");
+        assert!(!std::path::Path::new(&out).exists());
+    }
+    std::fs::remove_dir_all(&d).ok();
+}

@@ -717,3 +717,53 @@ fn cli_bad_arguments_give_clear_errors() {
     assert!(!ok && e.contains("missing.off"), "{e}");
     assert!(!out.exists());
 }
+
+/// Issue 33: a turntable keeps its frames in memory until it writes them,
+/// so frames × width × height is bounded before any work (3600 frames of
+/// 16384² pixels are 2.9 TB: rendering the still alone would take long);
+/// and each output's flag is named when its directory is missing, which
+/// is not made.
+#[test]
+fn cli_bounds_the_turntable_memory_and_names_the_output_flags() {
+    let base = ["render", "--gen", "robot", "--tris", "1000"];
+    let refused = |extra: &[&str]| {
+        let args: Vec<&str> = base.iter().chain(extra).copied().collect();
+        crate::common::cbvh_refuses_within(&args, 20)
+    };
+    let out = temp("tt.png");
+    let o = out.to_str().unwrap();
+    let e = refused(&[
+        "--width",
+        "16384",
+        "--height",
+        "16384",
+        "--turntable",
+        "3600",
+        "-o",
+        o,
+    ]);
+    assert!(
+        e.contains("--turntable 3600 at --width 16384 --height 16384") && e.contains("memory"),
+        "{e}"
+    );
+    let missing = temp("no-such-dir");
+    let inside = missing.join("x.gif");
+    let e = refused(&[
+        "-o",
+        o,
+        "--turntable",
+        "2",
+        "--turntable-out",
+        inside.to_str().unwrap(),
+    ]);
+    assert!(
+        e.contains("--turntable-out") && e.contains("does not exist"),
+        "{e}"
+    );
+    let e = refused(&["-o", missing.join("x.png").to_str().unwrap()]);
+    assert!(
+        e.contains("--output") && e.contains("does not exist"),
+        "{e}"
+    );
+    assert!(!missing.exists() && !out.exists());
+}

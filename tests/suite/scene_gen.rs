@@ -368,7 +368,8 @@ fn cbvh_gen_writes_ply_atomically() {
             "{kind}"
         );
     }
-    // A failed run (a count out of range) leaves no file, temporary or not.
+    // A failed run (a count out of range, refused naming the flag before
+    // any work) leaves no file, temporary or not.
     let (ok, _, err) = crate::common::cbvh(&[
         "gen",
         "robot",
@@ -377,7 +378,10 @@ fn cbvh_gen_writes_ply_atomically() {
         "-o",
         dir.join("bad.ply").to_str().unwrap(),
     ]);
-    assert!(!ok && err.contains("between"), "{err}");
+    assert!(
+        !ok && err.contains("--tris 10: the robot generator makes 1000 to"),
+        "{err}"
+    );
     assert_eq!(names(&dir), ["i.ply", "s.ply"]);
     let _ = std::fs::remove_dir_all(dir);
 }

@@ -363,3 +363,202 @@ fn leaf_size_sets_the_cbvh_shapes_leaves() {
     assert!(stderr.contains("--leaf-size"), "{stderr}");
     assert!(!stderr.contains("dropping"), "{stderr}");
 }
+
+/// `bin` with `args` refused within 20 s (a bad flag checked before any
+/// mesh is made): its stderr. Fails if it runs or succeeds.
+fn refused_within(bin: &str, args: &[&str]) -> String {
+    match crate::common::run_within(bin, args, 20) {
+        Some((false, _, stderr)) => {
+            assert!(!stderr.contains("dropping"), "{args:?} ran first: {stderr}");
+            stderr
+        }
+        Some((true, _, stderr)) => panic!("{args:?} was accepted: {stderr}"),
+        None => panic!("{args:?} still ran after 20 s: not refused before the work"),
+    }
+}
+
+/// Issue 33: every mesh's count flag is checked before any mesh is made
+/// and named (`--turbine-tris 0` used to fail after the statue was
+/// generated, with the generator's message); so is the product of a
+/// count and `--subdivide`, from the generator's plan or a file's header
+/// (a 200 M-triangle robot subdivided three times is more triangles than
+/// a mesh can number: it used to be generated, then hit an assert).
+#[test]
+fn sims_check_mesh_counts_and_subdivide_before_any_mesh() {
+    let lucy = env!("CARGO_BIN_EXE_lucy-on-turbine");
+    let robot = env!("CARGO_BIN_EXE_robot-in-plant");
+    // The other mesh is large: were it made first, 20 s would not do.
+    let cases: [(&str, &[&str], &str); 6] = [
+        (
+            lucy,
+            &["--statue-tris", "30000000", "--turbine-tris", "0"],
+            "--turbine-tris 0: the turbine generator makes 1000 to 200000000 triangles",
+        ),
+        (
+            lucy,
+            &["--statue-tris", "999", "--turbine-tris", "30000000"],
+            "--statue-tris 999: the statue generator",
+        ),
+        (
+            robot,
+            &["--robot-tris", "30000000", "--plant-tris", "0"],
+            "--plant-tris 0: the plant generator",
+        ),
+        (
+            robot,
+            &["--robot-tris", "300000000"],
+            "--robot-tris 300000000: the robot generator makes 1000 to 200000000",
+        ),
+        (
+            robot,
+            &["--robot-tris", "200000000", "--subdivide", "3"],
+            "--subdivide 3: the robot of --robot-tris 200000000 has",
+        ),
+        (
+            lucy,
+            &[
+                "--statue-tris",
+                "200000000",
+                "--subdivide",
+                "3",
+                "--turbine-tris",
+                "1000",
+            ],
+            "more than the 4294967295 a mesh can number",
+        ),
+    ];
+    for (bin, args, want) in cases {
+        let e = refused_within(bin, args);
+        assert!(e.contains(want), "{args:?}: {e}");
+    }
+    // A file's header: a PLY stating 1.1 G faces (and holding none, so
+    // that loading it would fail otherwise) times 4.
+    let ply = temp("huge-header.ply");
+    std::fs::write(
+        &ply,
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n\
+         property float y\nproperty float z\nelement face 1100000000\n\
+         property list uchar int vertex_indices\nend_header\n",
+    )
+    .unwrap();
+    let e = refused_within(
+        robot,
+        &["--robot", ply.to_str().unwrap(), "--subdivide", "1"],
+    );
+    assert!(
+        e.contains("--subdivide 1:") && e.contains("has 1100000000 triangles"),
+        "{e}"
+    );
+    // A missing file is named with its flag before the other mesh is made.
+    let e = refused_within(
+        lucy,
+        &[
+            "--statue-tris",
+            "30000000",
+            "--turbine",
+            temp("none.off").to_str().unwrap(),
+        ],
+    );
+    assert!(e.contains("--turbine") && e.contains("none.off"), "{e}");
+    std::fs::remove_file(&ply).ok();
+}
+
+/// Issue 33: `--replay-rounds` is 1 to 1000 (each round costs about a
+/// run's narrow phase); the outputs' directories are checked, named and
+/// never made, and the plot and frame are PNG files.
+#[test]
+fn sims_bound_replay_rounds_and_check_outputs() {
+    let bin = env!("CARGO_BIN_EXE_robot-in-plant");
+    let small = [
+        "--robot-tris",
+        "1000",
+        "--plant-tris",
+        "2000",
+        "--steps",
+        "1",
+    ];
+    fn with<'a>(small: &[&'a str], extra: &[&'a str]) -> Vec<&'a str> {
+        small.iter().chain(extra).copied().collect()
+    }
+    let e = refused_within(bin, &with(&small, &["--replay", "--replay-rounds", "1001"]));
+    assert!(e.contains("--replay-rounds") && e.contains("1001"), "{e}");
+    let e = refused_within(bin, &with(&small, &["--replay", "--replay-rounds", "0"]));
+    assert!(e.contains("--replay-rounds"), "{e}");
+    let json = temp("rounds.json");
+    let (ok, stderr) = run(
+        bin,
+        &with(
+            &small,
+            &[
+                "--replay",
+                "--replay-rounds",
+                "1000",
+                "--shapes",
+                "plain-patches",
+                "--json",
+                json.to_str().unwrap(),
+            ],
+        ),
+    );
+    report(ok, &stderr, &json);
+    let missing = temp("no-such-dir");
+    for flag in ["--json", "--plot", "--render"] {
+        let p = missing.join("sub").join("x.png");
+        let e = refused_within(bin, &with(&small, &[flag, p.to_str().unwrap()]));
+        assert!(
+            e.contains(&format!("{flag} {}", p.display())) && e.contains("does not exist"),
+            "{flag}: {e}"
+        );
+        assert!(!missing.exists());
+    }
+    for flag in ["--plot", "--render"] {
+        let p = temp("x.txt");
+        let e = refused_within(bin, &with(&small, &[flag, p.to_str().unwrap()]));
+        assert!(e.contains(flag) && e.contains(".png"), "{flag}: {e}");
+        assert!(!p.exists());
+    }
+}
+
+/// Issue 33: the thread count is checked by one function for `cbvh render`
+/// and the sims: the same words for the same value.
+#[test]
+fn render_and_sims_check_threads_alike() {
+    let sim = |t: &str| {
+        refused_within(
+            env!("CARGO_BIN_EXE_robot-in-plant"),
+            &[
+                "--robot-tris",
+                "1000",
+                "--plant-tris",
+                "2000",
+                "--threads",
+                t,
+            ],
+        )
+    };
+    let render = |t: &str| {
+        crate::common::cbvh_refuses_within(
+            &[
+                "render",
+                "--gen",
+                "robot",
+                "--tris",
+                "1000",
+                "-o",
+                "x.png",
+                "--threads",
+                t,
+            ],
+            20,
+        )
+    };
+    let line = |e: String| {
+        e.lines()
+            .find(|l| l.starts_with("error: "))
+            .map(str::to_string)
+            .unwrap_or(e)
+    };
+    let (s, r) = (line(sim("100000")), line(render("100000")));
+    assert!(s.contains("--threads 100000 is more than 4 ×"), "{s}");
+    assert_eq!(s, r);
+}

@@ -10,10 +10,10 @@ use crate::scene::Kind;
 #[derive(clap::Parser, Debug)]
 #[command(name = "lucy-on-turbine", version, about)]
 pub struct LucyArgs {
-    /// Triangles of the generated statue.
+    /// Triangles of the generated statue (1 000 to 200 000 000).
     #[arg(long, default_value_t = 200_000)]
     pub statue_tris: usize,
-    /// Triangles of the generated turbine.
+    /// Triangles of the generated turbine (1 000 to 200 000 000).
     #[arg(long, default_value_t = 100_000)]
     pub turbine_tris: usize,
     /// Use this mesh file (or cbvh codec file) as the statue instead (any units and offset: it is scaled and placed).
@@ -35,9 +35,27 @@ pub struct LucyArgs {
 /// Runs the drop test.
 pub fn run(mut a: LucyArgs) -> Result<(), String> {
     a.sim.width_fraction.get_or_insert(0.5);
-    super::start(&a.sim)?;
-    let (statue, sn) =
-        super::dropped_from(&a.statue, Kind::Statue, a.statue_tris, a.sim.seed, "statue")?;
+    super::start(
+        &a.sim,
+        &super::MeshFlags {
+            file: ("--statue", &a.statue),
+            tris: ("--statue-tris", a.statue_tris),
+            kind: Kind::Statue,
+        },
+        &super::MeshFlags {
+            file: ("--turbine", &a.turbine),
+            tris: ("--turbine-tris", a.turbine_tris),
+            kind: Kind::Turbine,
+        },
+    )?;
+    let (statue, sn) = super::dropped_from(
+        &a.statue,
+        Kind::Statue,
+        a.statue_tris,
+        a.sim.seed,
+        "statue",
+        a.sim.subdivide,
+    )?;
     let (mut turbine, tn) = super::mesh_from(
         &a.turbine,
         Kind::Turbine,

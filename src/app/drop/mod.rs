@@ -87,19 +87,24 @@ pub struct SimArgs {
     /// their contacts differently.
     #[arg(long)]
     pub replay: bool,
-    /// How many times `--replay` replays the trajectory; each step keeps
-    /// its best time. More rounds take more out of a noisy machine's
-    /// timings (each round costs about one run's narrow phase).
+    /// How many times `--replay` replays the trajectory, 1 to 1000; each
+    /// step keeps its best time. More rounds take more out of a noisy
+    /// machine's timings, but each costs about one run's narrow phase per
+    /// shape, and a best time falls ever less with more of them: 1000 is
+    /// ten times the 100 that steadies a busy machine.
     #[arg(
         long,
         default_value_t = droptest::REPLAY_ROUNDS as u32,
-        value_parser = clap::value_parser!(u32).range(1..),
+        value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_REPLAY_ROUNDS)),
         requires = "replay"
     )]
     pub replay_rounds: u32,
     /// Midpoint-subdivide the dropped mesh this many times (each ×4
     /// triangles, same shape): a scan at a higher resolution, e.g. the
-    /// 75 k bunny with 3 gives 4.8 M triangles.
+    /// 75 k bunny with 3 gives 4.8 M triangles. At most 6, and the result
+    /// must stay within the 4 294 967 295 triangles a mesh can number
+    /// (checked before any work from the generator's plan or the file's
+    /// header, and once the mesh is loaded).
     #[arg(long, default_value_t = 0)]
     pub subdivide: u32,
     /// The cbvh shapes' codec settings.
@@ -146,15 +151,27 @@ impl std::fmt::Display for Offset {
 /// The most steps a run takes: its per-step timings and samples are kept.
 pub const MAX_STEPS: usize = 1_000_000;
 
+/// The most `--replay-rounds`: ten times the 100 that steadies a busy
+/// machine's timings. Each round replays the trajectory once per shape
+/// (about one run's narrow phase), and a step's best time falls ever less
+/// with more rounds: beyond this they only multiply the time.
+pub const MAX_REPLAY_ROUNDS: u32 = 1000;
+
+/// The most `--subdivide`: 4^6 = 4096 times the triangles.
+pub const MAX_SUBDIVIDE: u32 = 6;
+
 /// The largest `--width-fraction`, `--gap` and `--offset` component: a
 /// dropped mesh a thousand times the base's width, or that far away, is no
 /// drop test, and larger fractions only reach the coordinate limit.
 pub const MAX_FRACTION: f32 = 1000.0;
 
-/// Checks every flag before anything runs, so that a bad value never ends
-/// a run half-way (or, worse, runs and reports nonsense): steps, width
-/// fraction, gap and offset finite and in range, the cluster size, the
-/// thread count, and that the JSON, plot and render files can be written.
+/// Checks every flag of [`SimArgs`] before anything runs, so that a bad
+/// value never ends a run half-way (or, worse, runs and reports nonsense):
+/// steps, width fraction, gap and offset finite and in range, the cluster
+/// size, the thread count ([`check_threads`](super::check_threads)), and
+/// that the JSON, plot and render files can be written
+/// ([`check_output`](super::check_output)). [`start`] also checks the
+/// meshes' flags ([`validate_meshes`]).
 pub fn validate(args: &SimArgs) -> Result<(), String> {
     if args.steps == 0 {
         return Err("--steps must be at least 1".into());
@@ -165,17 +182,7 @@ pub fn validate(args: &SimArgs) -> Result<(), String> {
             args.steps
         ));
     }
-    if args.threads == Some(0) {
-        return Err("--threads must be at least 1".into());
-    }
-    if let Some(t) = args.threads {
-        let machine = std::thread::available_parallelism().map_or(1, |n| n.get());
-        if t > 4 * machine {
-            return Err(format!(
-                "--threads {t} is more than 4 × the {machine} hardware threads of this machine"
-            ));
-        }
-    }
+    super::check_threads(args.threads)?;
     if args.shapes.is_empty() {
         return Err("--shapes names no shape".into());
     }
@@ -197,39 +204,97 @@ pub fn validate(args: &SimArgs) -> Result<(), String> {
             args.offset
         ));
     }
-    if args.subdivide > 6 {
+    if args.subdivide > MAX_SUBDIVIDE {
         return Err(format!(
-            "--subdivide {} multiplies the triangles by 4^{}: use at most 6 (×4096)",
+            "--subdivide {} multiplies the triangles by 4^{}: use at most {MAX_SUBDIVIDE} (×4096)",
             args.subdivide, args.subdivide
         ));
     }
     options(args, &run_specs(args)?)?;
-    for (flag, path) in [
-        ("--json", &args.json),
-        ("--plot", &args.plot),
-        ("--render", &args.render),
+    // The report is JSON whatever its name; the plot and the frame PNG.
+    for (flag, path, exts) in [
+        ("--json", &args.json, &[][..]),
+        ("--plot", &args.plot, &["png"][..]),
+        ("--render", &args.render, &["png"][..]),
     ] {
         if let Some(p) = path {
-            check_writable(flag, p)?;
+            super::check_output(flag, p, exts)?;
         }
     }
     Ok(())
 }
 
-/// Whether `path` can be written: opened for writing (created and removed
-/// again if it did not exist), without touching an existing file's bytes.
-fn check_writable(flag: &str, path: &std::path::Path) -> Result<(), String> {
-    let existed = path.exists();
-    std::fs::OpenOptions::new()
-        .write(true)
-        .create(true)
-        .truncate(false)
-        .open(path)
-        .map_err(|e| format!("{flag} {}: cannot write there: {e}", path.display()))?;
-    if !existed {
-        std::fs::remove_file(path).ok();
+/// One of a drop test's two meshes as its flags give it: a file
+/// (`--statue FILE`), or else generated at `--statue-tris N` triangles.
+#[derive(Clone, Copy, Debug)]
+pub struct MeshFlags<'a> {
+    /// The file flag, e.g. `--statue`, and its value.
+    pub file: (&'static str, &'a Option<PathBuf>),
+    /// The count flag, e.g. `--statue-tris`, and its value.
+    pub tris: (&'static str, usize),
+    /// What the generator makes.
+    pub kind: Kind,
+}
+
+/// Checks the meshes' flags before any mesh is made: a generated mesh's
+/// count within the generator's range; a file that opens and, for the
+/// dropped mesh under `--subdivide`, is a mesh file (not a codec file,
+/// used as stored) whose header's count subdivided stays within what a
+/// mesh can number; a generated dropped mesh's planned count likewise.
+pub fn validate_meshes(
+    args: &SimArgs,
+    dropped: &MeshFlags,
+    base: &MeshFlags,
+) -> Result<(), String> {
+    for (m, is_dropped) in [(dropped, true), (base, false)] {
+        let subdivide = if is_dropped { args.subdivide } else { 0 };
+        match m.file.1 {
+            None => {
+                let (flag, tris) = m.tris;
+                super::check_tris(flag, m.kind, tris, crate::scene::MAX_TRIS)?;
+                if subdivide > 0 {
+                    let planned = crate::scene::planned_triangles(m.kind, tris, args.seed)
+                        .map_err(|e| format!("{flag} {tris}: {e}"))?;
+                    check_subdivide(
+                        subdivide,
+                        planned as u64,
+                        &format!("the {} of {flag} {tris}", m.kind),
+                    )?;
+                }
+            }
+            Some(p) if CodecKind::of_file(p).is_some() => {
+                if subdivide > 0 {
+                    return Err(format!(
+                        "--subdivide needs a mesh to subdivide: {} {} is a codec file, used as \
+                         stored; give the mesh file instead",
+                        m.file.0,
+                        p.display()
+                    ));
+                }
+            }
+            Some(p) => {
+                let stated =
+                    crate::mesh::header_triangles(p).map_err(|e| format!("{} {}", m.file.0, e))?;
+                if let Some(t) = stated.filter(|_| subdivide > 0) {
+                    check_subdivide(subdivide, t, &p.display().to_string())?;
+                }
+            }
+        }
     }
     Ok(())
+}
+
+/// Checks that `triangles` (those of `what`) subdivided `times` times stay
+/// within the [`crate::mesh::MAX_SUBDIVIDED`] triangles a mesh can number.
+pub fn check_subdivide(times: u32, triangles: u64, what: &str) -> Result<(), String> {
+    if crate::mesh::subdivided_triangles(triangles, times).is_some() {
+        return Ok(());
+    }
+    Err(format!(
+        "--subdivide {times}: {what} has {triangles} triangles, and 4^{times} times as many are \
+         more than the {} a mesh can number; subdivide fewer times or start from fewer triangles",
+        crate::mesh::MAX_SUBDIVIDED
+    ))
 }
 
 /// The runs `--shapes` and `--contacts` ask for, in order: a bare cbvh
@@ -289,13 +354,15 @@ pub enum Dropped {
 }
 
 /// The dropped mesh from a file (a mesh, or a codec file used as stored),
-/// or generated.
+/// or generated; a mesh's count is checked against `subdivide` as soon as
+/// it is known ([`check_subdivide`]), before anything else is made.
 pub fn dropped_from(
     file: &Option<PathBuf>,
     kind: Kind,
     tris: usize,
     seed: u64,
     what: &str,
+    subdivide: u32,
 ) -> Result<(Dropped, String), String> {
     match file {
         // Opened and verified once, out of core (1 MiB cache): nothing of
@@ -319,7 +386,11 @@ pub fn dropped_from(
             let name = format!("{} ({} file, used as stored)", p.display(), codec.name());
             Ok((Dropped::File(f), name))
         }
-        _ => mesh_from(file, kind, tris, seed, what).map(|(m, n)| (Dropped::Mesh(m), n)),
+        _ => {
+            let (m, n) = mesh_from(file, kind, tris, seed, what)?;
+            check_subdivide(subdivide, m.triangle_count() as u64, &n)?;
+            Ok((Dropped::Mesh(m), n))
+        }
     }
 }
 
@@ -357,10 +428,11 @@ pub fn mesh_from(
 }
 
 /// Everything a drop test does before it makes a mesh: every flag
-/// checked ([`validate`], shape names included), then the thread pool and
-/// the logger ([`init_threads`]).
-pub fn start(args: &SimArgs) -> Result<(), String> {
+/// checked ([`validate`], shape names included, and [`validate_meshes`]),
+/// then the thread pool and the logger ([`init_threads`]).
+pub fn start(args: &SimArgs, dropped: &MeshFlags, base: &MeshFlags) -> Result<(), String> {
     validate(args)?;
+    validate_meshes(args, dropped, base)?;
     init_threads(args)
 }
 
@@ -368,8 +440,8 @@ pub fn start(args: &SimArgs) -> Result<(), String> {
 /// generation and loading already use the pool.
 pub fn init_threads(args: &SimArgs) -> Result<(), String> {
     crate::logger::init_stderr();
+    super::check_threads(args.threads)?;
     match args.threads {
-        Some(0) => Err("--threads must be at least 1".into()),
         Some(t) => rayon::ThreadPoolBuilder::new()
             .num_threads(t)
             .build_global()
@@ -399,7 +471,9 @@ pub fn run_sim(
     let (mut dropped, dropped_file, scale) = match dropped {
         Dropped::Mesh(mut m) => {
             for _ in 0..args.subdivide {
-                m = m.subdivided();
+                m = m
+                    .subdivided()
+                    .map_err(|e| format!("--subdivide {}: {e}", args.subdivide))?;
             }
             let scale = droptest::place(&mut m, &base, &placement);
             (m, None, scale)

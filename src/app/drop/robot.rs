@@ -10,10 +10,10 @@ use crate::scene::Kind;
 #[derive(clap::Parser, Debug)]
 #[command(name = "robot-in-plant", version, about)]
 pub struct RobotArgs {
-    /// Triangles of the generated robot.
+    /// Triangles of the generated robot (1 000 to 200 000 000).
     #[arg(long, default_value_t = 16_000)]
     pub robot_tris: usize,
-    /// Triangles of the generated plant.
+    /// Triangles of the generated plant (1 000 to 200 000 000).
     #[arg(long, default_value_t = 200_000)]
     pub plant_tris: usize,
     /// Use this mesh file (or cbvh codec file) as the robot instead.
@@ -32,9 +32,27 @@ pub fn run(mut a: RobotArgs) -> Result<(), String> {
     // The robot is small next to a plant: a tenth of its width unless the
     // user chose a width.
     a.sim.width_fraction.get_or_insert(0.1);
-    super::start(&a.sim)?;
-    let (robot, rn) =
-        super::dropped_from(&a.robot, Kind::Robot, a.robot_tris, a.sim.seed, "robot")?;
+    super::start(
+        &a.sim,
+        &super::MeshFlags {
+            file: ("--robot", &a.robot),
+            tris: ("--robot-tris", a.robot_tris),
+            kind: Kind::Robot,
+        },
+        &super::MeshFlags {
+            file: ("--plant", &a.plant),
+            tris: ("--plant-tris", a.plant_tris),
+            kind: Kind::Plant,
+        },
+    )?;
+    let (robot, rn) = super::dropped_from(
+        &a.robot,
+        Kind::Robot,
+        a.robot_tris,
+        a.sim.seed,
+        "robot",
+        a.sim.subdivide,
+    )?;
     let (plant, pn) = super::mesh_from(&a.plant, Kind::Plant, a.plant_tris, a.sim.seed, "plant")?;
     super::run_sim("robot-in-plant", robot, plant, (rn, pn), &a.sim)
 }

@@ -593,6 +593,49 @@ pub fn cbvh(args: &[&str]) -> (bool, String, String) {
     )
 }
 
+/// Runs the binary `bin` with `args` for at most `secs` seconds:
+/// `Some((success, stdout, stderr))` if it ended by then, `None` if it was
+/// still running (it is then killed). For checks that a bad flag stops a
+/// command before any work, without running that work if it does not.
+#[cfg(feature = "app")]
+pub fn run_within(bin: &str, args: &[&str], secs: u64) -> Option<(bool, String, String)> {
+    use std::io::Read;
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(bin)
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run the binary");
+    let start = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("wait for the binary") {
+            break Some(status);
+        }
+        if start.elapsed().as_secs() >= secs {
+            child.kill().ok();
+            child.wait().ok();
+            break None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    let (mut out, mut err) = (String::new(), String::new());
+    child.stdout.take().map(|mut o| o.read_to_string(&mut out));
+    child.stderr.take().map(|mut e| e.read_to_string(&mut err));
+    status.map(|s| (s.success(), out, err))
+}
+
+/// `cbvh` with `args`, refused within `secs` seconds: the test fails if
+/// it succeeds or is still running then. Returns its stderr.
+#[cfg(feature = "app")]
+pub fn cbvh_refuses_within(args: &[&str], secs: u64) -> String {
+    match run_within(env!("CARGO_BIN_EXE_cbvh"), args, secs) {
+        Some((false, _, stderr)) => stderr,
+        Some((true, stdout, stderr)) => panic!("{args:?} was accepted: {stdout}{stderr}"),
+        None => panic!("{args:?} still ran after {secs} s: not refused before the work"),
+    }
+}
+
 /// What the out-of-core codecs' command-line tests share: a 100 k-triangle
 /// statue saved as `m.ply` in `d`; `cbvh build m.ply --codec CODEC
 /// --out-of-core --chunk-triangles 12000 -o OUT --json` reports an
