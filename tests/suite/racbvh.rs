@@ -634,3 +634,29 @@ fn threads_sharing_a_node_cache_agree_with_the_full_cache() {
         "{s:?}"
     );
 }
+
+/// The sims' `racbvh-10pct` on a codec file opens it with a small cache and
+/// asks for a tenth of what the tree decodes to: the measure must not
+/// depend on the cache it is taken through (it once read the 1 MiB cache's
+/// contents and gave a 150 M-triangle statue a 0.1 MiB budget).
+#[test]
+fn a_tenth_of_the_tree_is_measured_whatever_the_cache() {
+    use cbvh::codec::Codec;
+    let mesh = statue(3000);
+    let bvh = tree(&mesh, Layout::DepthFirst, 1);
+    let full = RacBvh::encode(&bvh, &mesh, &opts(256, Some(16))).unwrap();
+    let whole = decoded_bytes(&full);
+    let bytes = full.to_bytes();
+    for budget in [usize::MAX, whole / 2, 4096, 1000] {
+        let rac = RacBvh::from_bytes(&bytes, budget).unwrap();
+        assert_eq!(rac.decoded_bytes().unwrap(), whole, "budget {budget}");
+        let tenth = Codec::with_cache_budget_of(&rac, &|d| d / 10)
+            .expect("a cached codec")
+            .unwrap();
+        assert_eq!(
+            tenth.cache_stats().budget_bytes,
+            whole / 10,
+            "budget {budget}"
+        );
+    }
+}

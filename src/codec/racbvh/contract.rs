@@ -115,18 +115,16 @@ impl Codec for RacBvh {
         Some(&mut options.cache_budget_bytes)
     }
 
-    /// Touches every node once (so that a cache holding the whole tree
-    /// holds every cluster), then re-opens the same bytes with a cache of
-    /// `budget(bytes cached)`.
+    /// Measures what the whole tree decodes to ([`RacBvh::decoded_bytes`]:
+    /// every cluster decoded once, outside the cache, so a file opened with
+    /// a small cache measures the same as one whose cache holds it all),
+    /// then re-opens the same bytes with a cache of `budget(decoded)`.
     fn with_cache_budget_of(
         &self,
         budget: &dyn Fn(usize) -> usize,
     ) -> Option<Result<Self, RacError>> {
         let reopen = || {
-            for i in 0..self.node_count() as u32 {
-                self.try_bv(i)?;
-            }
-            let decoded = self.cache_stats().cached_bytes;
+            let decoded = self.decoded_bytes()?;
             RacBvh::from_bytes(&self.to_bytes(), budget(decoded))
         };
         Some(reopen())

@@ -13,7 +13,7 @@ use crate::build::LEAF_FLAG;
 use crate::codec::common::FormatError;
 use crate::codec::common::bits::{BitReader, unzigzag};
 use crate::codec::common::dict::{DictDecoder, SymbolDecoder};
-use crate::codec::common::page_cache::{Live, LiveToken};
+use crate::codec::common::page_cache::{Live, LiveToken, Page};
 use crate::codec::common::quant::QBox;
 
 /// In-core bytes per node of a decoded cluster (node + local-root ordinal).
@@ -290,6 +290,17 @@ impl RacBvh {
     /// measurements and [`verify`](Self::verify)). Returns its node count.
     pub fn decode_cluster_uncached(&self, c: u32) -> Result<usize, RacError> {
         Ok(self.decode(c)?.nodes.len())
+    }
+
+    /// What the whole tree decodes to, in the cache's measure: the bytes of
+    /// every cluster, each decoded once without touching the cache, so the
+    /// figure does not depend on the cache's budget.
+    pub fn decoded_bytes(&self) -> Result<usize, RacError> {
+        let mut total = 0;
+        for c in 0..self.meta.len() as u32 {
+            total += Page::bytes(&self.decode(c)?);
+        }
+        Ok(total)
     }
 
     fn decode(&self, c: u32) -> Result<Cluster, RacError> {
