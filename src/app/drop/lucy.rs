@@ -35,34 +35,19 @@ pub struct LucyArgs {
 /// Runs the drop test.
 pub fn run(mut a: LucyArgs) -> Result<(), String> {
     a.sim.width_fraction.get_or_insert(0.5);
-    super::start(
-        &a.sim,
-        &super::MeshFlags {
-            file: ("--statue", &a.statue),
-            tris: ("--statue-tris", a.statue_tris),
-            kind: Kind::Statue,
-        },
-        &super::MeshFlags {
-            file: ("--turbine", &a.turbine),
-            tris: ("--turbine-tris", a.turbine_tris),
-            kind: Kind::Turbine,
-        },
-    )?;
-    let (statue, sn) = super::dropped_from(
-        &a.statue,
-        Kind::Statue,
-        a.statue_tris,
-        a.sim.seed,
-        "statue",
-        a.sim.subdivide,
-    )?;
-    let (mut turbine, tn) = super::mesh_from(
-        &a.turbine,
-        Kind::Turbine,
-        a.turbine_tris,
-        a.sim.seed,
-        "turbine",
-    )?;
+    let statue = super::MeshFlags {
+        file: ("--statue", &a.statue),
+        tris: ("--statue-tris", a.statue_tris),
+        kind: Kind::Statue,
+    };
+    let turbine = super::MeshFlags {
+        file: ("--turbine", &a.turbine),
+        tris: ("--turbine-tris", a.turbine_tris),
+        kind: Kind::Turbine,
+    };
+    super::start(&a.sim, &statue, &turbine)?;
+    let (statue, sn) = super::dropped_from(&statue, a.sim.seed, a.sim.subdivide)?;
+    let (mut turbine, tn) = super::mesh_from(&turbine, a.sim.seed)?;
     if a.turbine.is_none() && a.turbine_axis == "x" {
         // The generator builds the rotor around y: turn it about z so the
         // axis lies along x and the rotor stands on its rim.

@@ -356,15 +356,8 @@ pub enum Dropped {
 /// The dropped mesh from a file (a mesh, or a codec file used as stored),
 /// or generated; a mesh's count is checked against `subdivide` as soon as
 /// it is known ([`check_subdivide`]), before anything else is made.
-pub fn dropped_from(
-    file: &Option<PathBuf>,
-    kind: Kind,
-    tris: usize,
-    seed: u64,
-    what: &str,
-    subdivide: u32,
-) -> Result<(Dropped, String), String> {
-    match file {
+pub fn dropped_from(m: &MeshFlags, seed: u64, subdivide: u32) -> Result<(Dropped, String), String> {
+    match m.file.1 {
         // Opened and verified once, out of core (1 MiB cache): nothing of
         // it is held but what verify reads.
         Some(p) if CodecKind::of_file(p).is_some() => {
@@ -387,23 +380,18 @@ pub fn dropped_from(
             Ok((Dropped::File(f), name))
         }
         _ => {
-            let (m, n) = mesh_from(file, kind, tris, seed, what)?;
-            check_subdivide(subdivide, m.triangle_count() as u64, &n)?;
-            Ok((Dropped::Mesh(m), n))
+            let (mesh, n) = mesh_from(m, seed)?;
+            check_subdivide(subdivide, mesh.triangle_count() as u64, &n)?;
+            Ok((Dropped::Mesh(mesh), n))
         }
     }
 }
 
 /// A mesh from a file (a mesh, or a cbvh codec file's stored mesh), or
 /// generated.
-pub fn mesh_from(
-    file: &Option<PathBuf>,
-    kind: Kind,
-    tris: usize,
-    seed: u64,
-    what: &str,
-) -> Result<(Mesh, String), String> {
-    match file {
+pub fn mesh_from(m: &MeshFlags, seed: u64) -> Result<(Mesh, String), String> {
+    let (kind, tris) = (m.kind, m.tris.1);
+    match m.file.1 {
         // A cbvh codec file (recognised by its magic): opened, verified, and
         // its stored mesh used; each shape is then built from it.
         Some(p) if CodecKind::of_file(p).is_some() => {
@@ -417,10 +405,10 @@ pub fn mesh_from(
             .map(|m| (m, p.display().to_string()))
             .map_err(|e| e.to_string()),
         None => {
-            let m = super::generate(kind, tris, seed, &format!("gen {what}"))
+            let mesh = super::generate(kind, tris, seed, &format!("gen {kind}"))
                 .map_err(|e| e.to_string())?;
             Ok((
-                m,
+                mesh,
                 format!("generated {kind} ({tris} requested, seed {seed})"),
             ))
         }

@@ -32,27 +32,18 @@ pub fn run(mut a: RobotArgs) -> Result<(), String> {
     // The robot is small next to a plant: a tenth of its width unless the
     // user chose a width.
     a.sim.width_fraction.get_or_insert(0.1);
-    super::start(
-        &a.sim,
-        &super::MeshFlags {
-            file: ("--robot", &a.robot),
-            tris: ("--robot-tris", a.robot_tris),
-            kind: Kind::Robot,
-        },
-        &super::MeshFlags {
-            file: ("--plant", &a.plant),
-            tris: ("--plant-tris", a.plant_tris),
-            kind: Kind::Plant,
-        },
-    )?;
-    let (robot, rn) = super::dropped_from(
-        &a.robot,
-        Kind::Robot,
-        a.robot_tris,
-        a.sim.seed,
-        "robot",
-        a.sim.subdivide,
-    )?;
-    let (plant, pn) = super::mesh_from(&a.plant, Kind::Plant, a.plant_tris, a.sim.seed, "plant")?;
+    let robot = super::MeshFlags {
+        file: ("--robot", &a.robot),
+        tris: ("--robot-tris", a.robot_tris),
+        kind: Kind::Robot,
+    };
+    let plant = super::MeshFlags {
+        file: ("--plant", &a.plant),
+        tris: ("--plant-tris", a.plant_tris),
+        kind: Kind::Plant,
+    };
+    super::start(&a.sim, &robot, &plant)?;
+    let (robot, rn) = super::dropped_from(&robot, a.sim.seed, a.sim.subdivide)?;
+    let (plant, pn) = super::mesh_from(&plant, a.sim.seed)?;
     super::run_sim("robot-in-plant", robot, plant, (rn, pn), &a.sim)
 }
