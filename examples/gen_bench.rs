@@ -59,7 +59,7 @@ fn signed_volume(m: &Mesh) -> f64 {
 }
 
 fn write_off(m: &Mesh, path: &str) -> std::io::Result<()> {
-    let mut w = cbvh::atomic::AtomicFile::create(std::path::Path::new(path))?;
+    let mut w = cbvh::files::AtomicFile::create(std::path::Path::new(path))?;
     writeln!(w, "OFF\n{} {} 0", m.vertices.len(), m.triangles.len())?;
     for v in &m.vertices {
         writeln!(w, "{} {} {}", v[0], v[1], v[2])?;

@@ -165,7 +165,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         t0.elapsed().as_secs_f64()
     );
     if let Some(path) = &args.json {
-        cbvh::atomic::atomic_write(
+        cbvh::files::atomic_write(
             path.as_ref(),
             serde_json::to_string_pretty(&reports)?.as_bytes(),
         )?;

@@ -35,7 +35,8 @@
 //! - `app` (feature `app`): the command-line front end of every binary
 //!   (the `cbvh` command and the drop tests), with their plots.
 //! - [`geom`]: the small geometry types (glam-based) shared by all of them.
-//! - [`atomic`]: atomic file saves, for every file the crate writes.
+//! - [`files`]: [`IoError`], the one I/O error (with the path), and atomic
+//!   file saves, for every file the crate writes.
 //! - `logger` (feature `sims`): a minimal stderr logger for the binaries
 //!   and examples (the library logs warnings through the `log` crate; an
 //!   application installs its own logger).
@@ -50,11 +51,11 @@
 
 #[cfg(feature = "app")]
 pub mod app;
-pub mod atomic;
 pub mod build;
 pub mod codec;
 pub mod contact;
 pub mod cursor;
+pub mod files;
 pub mod geom;
 mod hash;
 #[cfg(feature = "sims")]
@@ -73,4 +74,5 @@ pub mod sim;
 
 pub use build::{BuildOptions, CanonicalBvh, Layout};
 pub use cursor::{NodeCursor, TraversalStats};
+pub use files::IoError;
 pub use mesh::{Mesh, MeshError};

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use crate::atomic::AtomicFile;
+use crate::files::{AtomicFile, IoError};
 use crate::scene::{GenWriteError, Kind};
 
 use super::CliResult;
@@ -73,7 +73,7 @@ pub fn run(a: GenArgs) -> CliResult {
 /// progress bar over both.
 fn write_ply(a: &GenArgs, tris: usize) -> CliResult {
     let path = &a.output;
-    let io_err = |e: std::io::Error| format!("{}: {e}", path.display());
+    let io_err = IoError::at(path);
     let t0 = Instant::now();
     // Created first: an unwritable directory fails before any work.
     let mut out = AtomicFile::create(path).map_err(io_err)?;

@@ -68,7 +68,7 @@ pub(crate) fn json_object<'a, V: Into<serde_json::Value>>(
 /// given by `flag` (named in every error): the path names a file, not a
 /// directory; its directory exists (it is never created); a file can be
 /// made there (probed with the temporary file every save goes through,
-/// [`crate::atomic`], removed at once); and, unless `exts` is empty, its
+/// [`crate::files`], removed at once); and, unless `exts` is empty, its
 /// extension is one of `exts` (lower case; any case accepted). Nothing is
 /// left behind.
 pub fn check_output(flag: &str, path: &Path, exts: &[&str]) -> Result<(), String> {
@@ -103,7 +103,7 @@ pub fn check_output(flag: &str, path: &Path, exts: &[&str]) -> Result<(), String
         }));
     }
     // Dropped uncommitted: the temporary file is removed.
-    crate::atomic::AtomicFile::create(path).map_err(|e| fail(e.to_string()))?;
+    crate::files::AtomicFile::create(path).map_err(|e| fail(e.to_string()))?;
     Ok(())
 }
 
@@ -151,7 +151,7 @@ pub(crate) fn machine_memory() -> Option<u64> {
 
 /// What a `cbvh gen` or `cbvh build` of `output` killed half way left
 /// beside it: the output's temporary file (`.NAME.tmp-PID-N`, see
-/// [`crate::atomic`]) and an out-of-core build's directory
+/// [`crate::files`]) and an out-of-core build's directory
 /// (`.NAME.cbvh-build-PID`). Those whose process is gone are removed, and
 /// said so; those of a running process are named.
 pub fn clear_stale(output: &std::path::Path) {
@@ -164,7 +164,7 @@ pub fn clear_stale(output: &std::path::Path) {
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
     // The build's directory, and the output's temporary file
-    // (`crate::atomic`: `.NAME.tmp-PID-N`).
+    // (`crate::files`: `.NAME.tmp-PID-N`).
     let (dir_prefix, file_prefix) = (format!(".{name}.cbvh-build-"), format!(".{name}.tmp-"));
     let Ok(entries) = std::fs::read_dir(&dir) else {
         return;

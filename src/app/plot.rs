@@ -118,7 +118,7 @@ pub fn line_plot_png(
         root.present().map_err(|e| e.to_string())?;
     }
     let err = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
-    let mut file = crate::atomic::AtomicFile::create(path).map_err(|e| err(&e))?;
+    let mut file = crate::files::AtomicFile::create(path).map_err(|e| err(&e))?;
     let mut enc = png::Encoder::new(&mut file, width, height);
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);

@@ -47,6 +47,7 @@ use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
+use crate::files::IoError;
 use crate::mesh::{Mesh, MeshError};
 
 /// Triangles in the partition's sample, at most.
@@ -79,13 +80,8 @@ pub enum ChunkError {
     #[error(transparent)]
     Mesh(#[from] MeshError),
     /// A temporary file.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The operating system's error.
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Io(#[from] IoError),
     /// The temporary directory exists already.
     #[error(
         "{0}: the temporary directory exists already (left by a build that was killed? remove it)"
@@ -211,10 +207,8 @@ impl ChunkedMesh {
         let mut sample = Sample::default();
         let vertices = source(&mut |batch| {
             sample.add(batch);
-            w.triangles(batch).map_err(|source| MeshError::Io {
-                path: faces.clone(),
-                source,
-            })?;
+            w.triangles(batch)
+                .map_err(|source| MeshError::from(IoError::new(&faces, source)))?;
             progress("reading", sample.seen, 0);
             Ok(())
         })?;
@@ -289,10 +283,7 @@ impl ChunkedMesh {
         }
         // Pass 2: each triangle to its chunk's range.
         let file = dir.0.join("chunks.bin");
-        let io = |path: &Path| {
-            let path = path.to_path_buf();
-            move |source| ChunkError::Io { path, source }
-        };
+        let io = IoError::at;
         let mut out = File::create(&file).map_err(io(&file))?;
         out.set_len(total * TRI_BYTES as u64).map_err(io(&file))?;
         let cap = (GROUP_BUFFERS / chunks.len().max(1)).max(4096) / TRI_BYTES * TRI_BYTES;
@@ -378,10 +369,7 @@ impl ChunkedMesh {
         scratch: &mut ChunkScratch,
     ) -> Result<(Mesh, Vec<u32>), ChunkError> {
         let (first, n) = self.chunks[c];
-        let io = |source| ChunkError::Io {
-            path: self.file.clone(),
-            source,
-        };
+        let io = |source| ChunkError::Io(IoError::new(&self.file, source));
         let mut f = File::open(&self.file).map_err(io)?;
         f.seek(SeekFrom::Start(first * TRI_BYTES as u64))
             .map_err(io)?;
@@ -421,10 +409,7 @@ fn make_dir(dir: &Path) -> Result<TempDir, ChunkError> {
     }
     // Not create_dir_all: a build must not make the directories of a
     // mistyped output path and report success.
-    std::fs::create_dir(dir).map_err(|source| ChunkError::Io {
-        path: dir.to_path_buf(),
-        source,
-    })?;
+    std::fs::create_dir(dir).map_err(|source| ChunkError::Io(IoError::new(dir, source)))?;
     Ok(TempDir(dir.to_path_buf()))
 }
 
@@ -477,10 +462,7 @@ struct Writer {
 
 impl Writer {
     fn create(path: &Path) -> Result<Self, ChunkError> {
-        let f = File::create(path).map_err(|source| ChunkError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let f = File::create(path).map_err(|source| ChunkError::Io(IoError::new(path, source)))?;
         Ok(Self {
             out: BufWriter::with_capacity(1 << 20, f),
             path: path.to_path_buf(),
@@ -497,10 +479,9 @@ impl Writer {
     }
 
     fn finish(mut self) -> Result<(), ChunkError> {
-        self.out.flush().map_err(|source| ChunkError::Io {
-            path: self.path.clone(),
-            source,
-        })
+        self.out
+            .flush()
+            .map_err(|source| ChunkError::Io(IoError::new(&self.path, source)))
     }
 }
 
@@ -509,10 +490,7 @@ type Batches<'a> = &'a mut dyn FnMut(&[[u32; 3]]) -> Result<(), ChunkError>;
 
 /// Calls `f` with the triangles of `path`, in batches.
 fn read_triangles(path: &Path, f: Batches<'_>) -> Result<(), ChunkError> {
-    let io = |source| ChunkError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
+    let io = |source| ChunkError::Io(IoError::new(path, source));
     let mut r = BufReader::with_capacity(1 << 20, File::open(path).map_err(io)?);
     let mut bytes = vec![0u8; TRI_BYTES << 16];
     let mut batch = Vec::with_capacity(1 << 16);
@@ -795,7 +773,7 @@ mod tests {
         };
         assert!(matches!(
             ChunkedMesh::from_mesh(&mesh, &opts, &|_, _, _| {}),
-            Err(ChunkError::Io { .. })
+            Err(ChunkError::Io(_))
         ));
         assert!(!parent.exists());
     }

@@ -362,14 +362,8 @@ impl AnyOptions {
 #[derive(Debug, thiserror::Error)]
 pub enum CodecFileError {
     /// The file could not be read.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The operating system's error.
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Io(#[from] crate::files::IoError),
     /// The file starts with no codec magic.
     #[error(
         "{path}: not a cbvh codec file (no known magic); give a mesh (.off, .ply, .obj, .stl) \
@@ -465,7 +459,7 @@ impl AnyCodec {
         let p = || path.to_path_buf();
         let Some(kind) = CodecKind::of_file(path) else {
             // Distinguish an unreadable file from a foreign one.
-            std::fs::File::open(path).map_err(|source| CodecFileError::Io { path: p(), source })?;
+            std::fs::File::open(path).map_err(crate::files::IoError::at(path))?;
             return Err(CodecFileError::NotACodecFile { path: p() });
         };
         let codec = kind

@@ -11,6 +11,7 @@ use super::common::page_cache::CacheStats;
 use super::settings::{Settings, SettingsError};
 use crate::build::CanonicalBvh;
 use crate::contact::EdgeFlags;
+use crate::files::IoError;
 use crate::mesh::Mesh;
 use crate::query::RayCursor;
 
@@ -40,8 +41,9 @@ pub trait Codec: RayCursor + ByteSize + Send + Sync + Sized + 'static {
     /// Encoding settings.
     type Options: Clone + Default + std::fmt::Debug + Send + Sync;
 
-    /// What can go wrong encoding, opening, verifying or saving.
-    type Error: std::error::Error + Send + Sync + 'static;
+    /// What can go wrong encoding, opening, verifying or saving: a failed
+    /// read or write is an [`IoError`] naming the file.
+    type Error: std::error::Error + From<IoError> + Send + Sync + 'static;
 
     /// The codec's options from a front end's [`Settings`]: the common
     /// settings it uses and its own `CODEC.KEY=VALUE` keys (listed on its
@@ -101,8 +103,13 @@ pub trait Codec: RayCursor + ByteSize + Send + Sync + Sized + 'static {
     /// triangles, indices in range, checksums).
     fn verify(&self) -> Result<(), Self::Error>;
 
-    /// Writes the codec's self-contained file (atomically).
-    fn save(&self, path: &Path) -> Result<(), Self::Error>;
+    /// Writes the codec's self-contained file, atomically
+    /// ([`files::save`](crate::files::save)): by default the bytes of
+    /// [`Codec::to_bytes`]. A codec that keeps its file's bytes (the
+    /// memory-mapped ones) writes them without the copy.
+    fn save(&self, path: &Path) -> Result<(), Self::Error> {
+        Ok(crate::files::save(path, &self.to_bytes())?)
+    }
 
     /// The codec's file as bytes (what [`Codec::save`] writes).
     fn to_bytes(&self) -> Vec<u8>;
@@ -113,8 +120,13 @@ pub trait Codec: RayCursor + ByteSize + Send + Sync + Sized + 'static {
     fn from_bytes(bytes: &[u8], options: &OpenOptions) -> Result<Self, Self::Error>;
 
     /// Opens the codec's file, checking it as [`Codec::from_bytes`] does;
-    /// [`Codec::verify`] is not run, whatever `options.verify` says.
-    fn open(path: &Path, options: &OpenOptions) -> Result<Self, Self::Error>;
+    /// [`Codec::verify`] is not run, whatever `options.verify` says. By
+    /// default the whole file is read into memory and given to
+    /// [`Codec::from_bytes`]; the codecs that read on demand override it
+    /// to map the file instead.
+    fn open(path: &Path, options: &OpenOptions) -> Result<Self, Self::Error> {
+        Self::from_bytes(&crate::files::read(path)?, options)
+    }
 
     /// The codec's own header fields for `cbvh info` (the registry adds
     /// the codec's name, the triangle count and the mass).

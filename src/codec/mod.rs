@@ -27,7 +27,8 @@
 //! - [`common`]: machinery more than one codec uses (bit streams, the
 //!   dictionary coder, the conservative quantizer, owned-or-mapped storage,
 //!   packed arrays, little-endian readers, [`FormatError`](common::FormatError),
-//!   atomic saves, stored mass properties, file magic).
+//!   atomic saves (from [`crate::files`]), stored mass properties, file
+//!   magic).
 //!
 //! # A codec's folder
 //!
@@ -40,7 +41,7 @@
 //! | `encode.rs` | building the main type from a [`CanonicalBvh`](crate::build::CanonicalBvh) and its mesh |
 //! | `cursor.rs` | the [`NodeCursor`](crate::cursor::NodeCursor) and [`RayCursor`](crate::query::RayCursor) impls, and the node handle type |
 //! | `decode.rs` | only where the codec decodes stored records apart from the cursor: RACBVH's clusters, the o-HCCMesh file into an i-HCCMesh |
-//! | `file.rs` | its self-contained file: the layout, magic and version, `to_bytes`, `from_bytes`, `open` and `save` |
+//! | `file.rs` | its self-contained file: the layout, magic and version, `to_bytes` and `from_bytes` (the contract's default `save` and `open` write and read them; the memory-mapped codecs, RACBVH and the o-HCCMesh, also have their own `open`) |
 //! | `verify.rs` | `verify`, the second validation tier, where it is more than a few lines |
 //! | `error.rs` | its error type |
 //! | `contract.rs` | the thin `impl Codec`, delegating to the codec's own methods |
@@ -83,9 +84,13 @@
 //!    generic ray traversals, or overriding `closest_hit`, `any_hit` or
 //!    `closest_hits_within` with a traversal of its own that gives the
 //!    same hits, tested against the generic one), `file.rs` (its
-//!    self-contained file: magic, version, two-tier validation, atomic
-//!    save), `verify.rs`, `error.rs` (a `thiserror` enum with fields) and
-//!    `node.rs`.
+//!    self-contained file: magic, version, `to_bytes` and `from_bytes`
+//!    through the shared frame ([`Frame`]), two-tier validation; the
+//!    contract's default `save` writes it atomically and its default
+//!    `open` reads it, so a codec overrides them only to map its file),
+//!    `verify.rs`, `error.rs` (a `thiserror` enum with fields and an
+//!    `Io(#[from] IoError)` variant: [`IoError`](crate::IoError) is the
+//!    crate's one I/O error, with the path) and `node.rs`.
 //! 2. `impl Codec` in `codec/<name>/contract.rs`, thin: delegating to the
 //!    codec's own methods.
 //! 3. Its options from a front end's [`Settings`] (`Codec::options_from`

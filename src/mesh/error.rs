@@ -28,14 +28,8 @@ impl fmt::Display for Place {
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
     /// The file could not be opened, read or written.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The operating system's error.
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Io(#[from] crate::files::IoError),
     /// The extension names no supported format.
     #[error("{path}: unknown mesh extension {ext:?}; use one of .off, .ply, .obj, .stl")]
     UnknownExtension {

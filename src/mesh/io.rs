@@ -172,10 +172,7 @@ fn open(path: &Path) -> Result<(Format, File, u64), MeshError> {
 
 /// An I/O error on `path`.
 fn io_error(path: &Path, source: io::Error) -> MeshError {
-    MeshError::Io {
-        path: path.to_path_buf(),
-        source,
-    }
+    crate::files::IoError::new(path, source).into()
 }
 
 /// Reads the mesh file at `path` (the format by its extension): its
@@ -344,7 +341,7 @@ pub fn stream(path: impl AsRef<Path>, batches: TriangleBatches<'_>) -> Result<St
 }
 
 /// Writes `mesh` to `path`: binary little-endian PLY for `.ply`, OBJ for
-/// `.obj` (extension case-insensitive), atomically ([`crate::atomic`]).
+/// `.obj` (extension case-insensitive), atomically ([`crate::files`]).
 /// The mesh is written as it is, without validation.
 ///
 /// # Errors
@@ -365,7 +362,7 @@ pub fn save(mesh: &Mesh, path: impl AsRef<Path>) -> Result<(), MeshError> {
     let io_err = |source| io_error(path, source);
     // Atomic: a reader never sees half a mesh, and one that has the old
     // file mapped keeps its pages.
-    let mut out = crate::atomic::AtomicFile::create(path).map_err(io_err)?;
+    let mut out = crate::files::AtomicFile::create(path).map_err(io_err)?;
     match format {
         Format::Ply => ply::write(mesh, &mut out),
         _ => obj::write(mesh, &mut out),

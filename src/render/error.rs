@@ -31,13 +31,8 @@ pub enum RenderError {
         want: (u32, u32),
     },
     /// The output file could not be created or written.
-    #[error("cannot write {path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
+    #[error("cannot write {0}")]
+    Io(#[source] crate::files::IoError),
     /// The PNG encoder failed.
     #[cfg(feature = "image-files")]
     #[error("cannot encode {path} as PNG: {source}")]

@@ -289,7 +289,7 @@ pub enum GenWriteError {
 /// the writing.
 ///
 /// `out` gets the bytes in writes of about 64 KiB; give it a file through
-/// a [`std::io::BufWriter`] or [`crate::atomic::AtomicFile`], which `cbvh
+/// a [`std::io::BufWriter`] or [`crate::files::AtomicFile`], which `cbvh
 /// gen` uses so that a run that fails or is killed leaves nothing under
 /// the file's name.
 ///

@@ -8,6 +8,7 @@ use cbvh::build::{BuildOptions, CanonicalBvh, Layout, build};
 use cbvh::codec::hcc::template::{TEMPLATE_COUNT, TEMPLATES};
 use cbvh::codec::hcc::{HccBvh, HccError, HccOptions, MAX_LEAF_TRIANGLES};
 use cbvh::codec::plain::PlainBvh;
+use cbvh::codec::{Codec, OpenOptions};
 use cbvh::cursor::NodeCursor;
 use cbvh::geom::{Ray, triangle_from_arrays};
 use common::*;
@@ -387,8 +388,9 @@ fn files_round_trip_and_reject_damage() {
         assert_eq!(back.decoded_mesh(), h.decoded_mesh());
         check_structure(&back, &h.decoded_mesh());
         let dir = std::env::temp_dir().join(format!("cbvh-hcc-{}-{leaf}.hcc", std::process::id()));
-        h.save(&dir).unwrap();
-        assert_eq!(HccBvh::open(&dir).unwrap().to_bytes(), bytes);
+        Codec::save(&h, &dir).unwrap();
+        let opened = <HccBvh as Codec>::open(&dir, &OpenOptions::default()).unwrap();
+        assert_eq!(opened.to_bytes(), bytes);
         std::fs::remove_file(&dir).unwrap();
         for cut in [0, 7, 100, 247, 248, bytes.len() / 2, bytes.len() - 1] {
             assert!(

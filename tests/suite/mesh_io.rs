@@ -308,7 +308,7 @@ fn unknown_and_unwritable_extensions() {
 #[test]
 fn missing_file_is_io_error() {
     let err = load("/nonexistent/dir/mesh.off").unwrap_err();
-    assert!(matches!(err, MeshError::Io { .. }), "{err}");
+    assert!(matches!(err, MeshError::Io(_)), "{err}");
     assert!(err.to_string().contains("mesh.off"), "{err}");
 }
 

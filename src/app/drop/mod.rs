@@ -602,13 +602,13 @@ pub fn run_sim(
     });
     if let Some(path) = &args.json {
         let v = serde_json::json!({ "scene": scene_json, "runs": runs });
-        crate::atomic::atomic_write(
+        crate::files::save(
             path,
             serde_json::to_string_pretty(&v)
                 .map_err(|e| e.to_string())?
                 .as_bytes(),
         )
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+        .map_err(|e| e.to_string())?;
         eprintln!("wrote {}", path.display());
     }
     if args.render.is_some() && scene.dropped.triangles.is_empty() {

@@ -4,7 +4,6 @@
 //! compact variant is a type of its own.
 
 use crate::codec::common::container::Frame;
-use std::path::Path;
 
 use super::{ClBvh, ClBvhCompact, ClError, ClOptions, CompactOptions, LeafKind, file};
 use crate::build::CanonicalBvh;
@@ -81,10 +80,6 @@ impl Codec for ClBvh {
         ClBvh::verify(self)
     }
 
-    fn save(&self, path: &Path) -> Result<(), ClError> {
-        ClBvh::save(self, path)
-    }
-
     fn to_bytes(&self) -> Vec<u8> {
         ClBvh::to_bytes(self)
     }
@@ -97,11 +92,6 @@ impl Codec for ClBvh {
         Ok(t)
     }
 
-    /// Reads the whole file into memory (the options do not apply).
-    fn open(path: &Path, o: &OpenOptions) -> Result<Self, ClError> {
-        <Self as Codec>::from_bytes(&read(path)?, o)
-    }
-
     fn header_fields(&self) -> Vec<(&'static str, String)> {
         header_fields(self)
     }
@@ -110,13 +100,6 @@ impl Codec for ClBvh {
     fn build_fields(&self) -> Vec<(&'static str, serde_json::Value)> {
         build_fields(self)
     }
-}
-
-fn read(path: &Path) -> Result<Vec<u8>, ClError> {
-    std::fs::read(path).map_err(|e| ClError::Io {
-        path: path.display().to_string(),
-        message: e.to_string(),
-    })
 }
 
 impl Codec for ClBvhCompact {
@@ -156,10 +139,6 @@ impl Codec for ClBvhCompact {
         self.0.verify()
     }
 
-    fn save(&self, path: &Path) -> Result<(), ClError> {
-        self.0.save(path)
-    }
-
     fn to_bytes(&self) -> Vec<u8> {
         self.0.to_bytes()
     }
@@ -170,11 +149,6 @@ impl Codec for ClBvhCompact {
             return Err(wrong_kind(LeafKind::Compact));
         }
         Ok(ClBvhCompact(t))
-    }
-
-    /// Reads the whole file into memory (the options do not apply).
-    fn open(path: &Path, o: &OpenOptions) -> Result<Self, ClError> {
-        <Self as Codec>::from_bytes(&read(path)?, o)
     }
 
     fn header_fields(&self) -> Vec<(&'static str, String)> {

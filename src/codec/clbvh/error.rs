@@ -73,12 +73,7 @@ pub enum ClError {
         /// What was found.
         what: &'static str,
     },
-    /// Reading or writing the file failed.
-    #[error("{path}: {message}")]
-    Io {
-        /// The file.
-        path: String,
-        /// The operating system's message.
-        message: String,
-    },
+    /// Reading or writing a file failed.
+    #[error(transparent)]
+    Io(#[from] crate::files::IoError),
 }

@@ -1,5 +1,6 @@
-//! The CLBVH file: [`ClBvh::to_bytes`], [`ClBvh::from_bytes`],
-//! [`ClBvh::save`], [`ClBvh::open`]; [`ClBvh::verify`] is in `verify.rs`.
+//! The CLBVH file: [`ClBvh::to_bytes`] and [`ClBvh::from_bytes`] (the
+//! [`Codec`](crate::codec::Codec) contract's default `save` and `open`
+//! write and read them); [`ClBvh::verify`] is in `verify.rs`.
 //!
 //! # Layout
 //! All integers little-endian. A 288-byte header, then seven sections
@@ -26,15 +27,13 @@
 //! codec file ends with ([`edges`]), by
 //! triangle id, decoded by [`from_bytes`](ClBvh::from_bytes).
 
-use std::path::Path;
-
 use super::node::InnerNode;
 use super::{ClBvh, ClError, ClOptions, LeafKind};
 use crate::codec::common::container::{Frame, version};
 use crate::codec::common::edges;
 use crate::codec::common::huge::huge;
 use crate::codec::common::le::{u32_at, word_bytes, words};
-use crate::codec::common::{FormatError, MASS_BYTES, MassProps, atomic_write};
+use crate::codec::common::{FormatError, MASS_BYTES, MassProps};
 use crate::geom::Aabb;
 
 /// The file version this build writes and reads.
@@ -111,27 +110,6 @@ impl ClBvh {
         let refs: Vec<&[u8]> = sections.iter().map(Vec::as_slice).collect();
         FRAME.write(&mut out, &refs);
         out
-    }
-
-    /// Writes the file to `path` atomically (a temporary file beside it,
-    /// then renamed over it).
-    pub fn save(&self, path: &Path) -> Result<(), ClError> {
-        atomic_write(path, &self.to_bytes()).map_err(|e| ClError::Io {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })
-    }
-
-    /// Reads and verifies the file at `path` (see
-    /// [`from_bytes`](Self::from_bytes) and [`verify`](Self::verify)).
-    pub fn open(path: &Path) -> Result<ClBvh, ClError> {
-        let bytes = std::fs::read(path).map_err(|e| ClError::Io {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })?;
-        let t = Self::from_bytes(&bytes)?;
-        t.verify()?;
-        Ok(t)
     }
 
     /// Reads a file written by [`to_bytes`](Self::to_bytes): checks the

@@ -19,7 +19,7 @@
 //!   header checksum), written and checked.
 //! - [`FormatError`] (`error.rs`): bad magic, truncation, bad header
 //!   fields, checksum mismatches, values out of range, corrupted codes.
-//! - [`atomic_write`]: atomic file saves (from [`crate::atomic`]).
+//! - [`atomic_write`]: atomic file saves (from [`crate::files`]).
 //! - [`mass`]: the stored mass properties.
 //! - [`edges`]: the edge-flags section every codec file ends with (the
 //!   active edges of [`EdgeFlags`](crate::contact::EdgeFlags), computed
@@ -40,7 +40,7 @@ pub mod quant;
 pub mod static_dict;
 mod store;
 
-pub use crate::atomic::atomic_write;
+pub use crate::files::atomic_write;
 pub use error::FormatError;
 pub use mass::{MASS_BYTES, MassAccumulator, MassProps};
 pub use store::Store;

@@ -2,7 +2,6 @@
 //! methods.
 
 use crate::codec::common::container::Frame;
-use std::path::Path;
 
 use super::{HccBvh, HccError, HccOptions, file};
 use crate::build::CanonicalBvh;
@@ -56,10 +55,6 @@ impl Codec for HccBvh {
         HccBvh::verify(self)
     }
 
-    fn save(&self, path: &Path) -> Result<(), HccError> {
-        HccBvh::save(self, path)
-    }
-
     fn to_bytes(&self) -> Vec<u8> {
         HccBvh::to_bytes(self)
     }
@@ -67,11 +62,6 @@ impl Codec for HccBvh {
     /// Copies the bytes (the options do not apply).
     fn from_bytes(bytes: &[u8], _: &OpenOptions) -> Result<Self, HccError> {
         HccBvh::from_bytes(bytes)
-    }
-
-    /// Reads the whole file into memory (the options do not apply).
-    fn open(path: &Path, _: &OpenOptions) -> Result<Self, HccError> {
-        HccBvh::open(path)
     }
 
     fn header_fields(&self) -> Vec<(&'static str, String)> {

@@ -122,11 +122,6 @@ pub enum HccError {
         what: &'static str,
     },
     /// Reading or writing a file failed.
-    #[error("{path}: {message}")]
-    Io {
-        /// The file.
-        path: String,
-        /// The operating system's message.
-        message: String,
-    },
+    #[error(transparent)]
+    Io(#[from] crate::files::IoError),
 }

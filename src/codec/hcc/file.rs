@@ -1,6 +1,6 @@
-//! The i-HCCMesh file: [`HccBvh::to_bytes`], [`HccBvh::from_bytes`],
-//! [`HccBvh::save`] and [`HccBvh::open`] ([`HccBvh::verify`] is in
-//! `verify.rs`).
+//! The i-HCCMesh file: [`HccBvh::to_bytes`] and [`HccBvh::from_bytes`]
+//! (the [`Codec`](crate::codec::Codec) contract's default `save` and `open`
+//! write and read them); [`HccBvh::verify`] is in `verify.rs`.
 //!
 //! # Layout
 //! All integers little-endian; the frame (section table, checksums) is the
@@ -41,8 +41,6 @@
 //! [`verify`](HccBvh::verify) walks every low-level tree with checked
 //! reads and proves what queries rely on.
 
-use std::path::Path;
-
 use super::ids::{IdMap, VertexIds};
 use super::node::{HighNode, MAX_TREES, TreeHeader};
 use super::vertices::{Quantized, VertexTree, Vertices};
@@ -50,7 +48,7 @@ use super::{HccBvh, HccError, HccStats};
 use crate::codec::common::container::{self, Frame};
 use crate::codec::common::edges;
 use crate::codec::common::le::{f32x3_at, u32_at, word_bytes, words};
-use crate::codec::common::{FormatError, MASS_BYTES, MassProps, atomic_write};
+use crate::codec::common::{FormatError, MASS_BYTES, MassProps};
 
 /// The file version this build writes and reads.
 pub const VERSION: u32 = 3;
@@ -168,23 +166,6 @@ impl HccBvh {
         ];
         FRAME.write(&mut out, &sections);
         out
-    }
-
-    /// Writes the file to `path` atomically.
-    pub fn save(&self, path: &Path) -> Result<(), HccError> {
-        atomic_write(path, &self.to_bytes()).map_err(|e| HccError::Io {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })
-    }
-
-    /// Reads the file at `path` (see [`from_bytes`](Self::from_bytes)).
-    pub fn open(path: &Path) -> Result<HccBvh, HccError> {
-        let bytes = std::fs::read(path).map_err(|e| HccError::Io {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })?;
-        Self::from_bytes(&bytes)
     }
 
     /// Reads a file written by [`to_bytes`](Self::to_bytes): checks the

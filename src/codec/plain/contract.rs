@@ -2,7 +2,6 @@
 //! methods.
 
 use crate::codec::common::container::Frame;
-use std::path::Path;
 
 use super::{PlainBvh, PlainError, file};
 use crate::build::CanonicalBvh;
@@ -51,10 +50,6 @@ impl Codec for PlainBvh {
         PlainBvh::verify(self)
     }
 
-    fn save(&self, path: &Path) -> Result<(), PlainError> {
-        PlainBvh::save(self, path)
-    }
-
     fn to_bytes(&self) -> Vec<u8> {
         PlainBvh::to_bytes(self)
     }
@@ -62,11 +57,6 @@ impl Codec for PlainBvh {
     /// Copies the bytes (the options do not apply).
     fn from_bytes(bytes: &[u8], _: &OpenOptions) -> Result<Self, PlainError> {
         PlainBvh::from_bytes(bytes)
-    }
-
-    /// Reads the whole file into memory (the options do not apply).
-    fn open(path: &Path, _: &OpenOptions) -> Result<Self, PlainError> {
-        PlainBvh::open(path)
     }
 
     fn header_fields(&self) -> Vec<(&'static str, String)> {

@@ -1,6 +1,6 @@
-//! The plain BVH file: [`PlainBvh::to_bytes`], [`PlainBvh::from_bytes`],
-//! [`PlainBvh::save`], [`PlainBvh::open`]; [`PlainBvh::verify`] is in
-//! `verify.rs`.
+//! The plain BVH file: [`PlainBvh::to_bytes`] and [`PlainBvh::from_bytes`]
+//! (the [`Codec`](crate::codec::Codec) contract's default `save` and `open`
+//! write and read them); [`PlainBvh::verify`] is in `verify.rs`.
 //!
 //! # Layout
 //! All integers little-endian. A 216-byte header, then five sections back
@@ -32,15 +32,13 @@
 //! was not verified may make a query panic or loop; the CLI, the sims and
 //! [`crate::codec::AnyCodec::open`] verify by default.
 
-use std::path::Path;
-
 use super::node::PlainNode;
 use super::{PlainBvh, PlainError};
 use crate::codec::common::container::{self, Frame};
 use crate::codec::common::edges;
 use crate::codec::common::huge::huge;
 use crate::codec::common::le::{u32_at, words};
-use crate::codec::common::{FormatError, MASS_BYTES, MassProps, atomic_write};
+use crate::codec::common::{FormatError, MASS_BYTES, MassProps};
 
 /// The file version this build writes and reads.
 pub const VERSION: u32 = 2;
@@ -108,24 +106,6 @@ impl PlainBvh {
         let sections: [&[u8]; SECTIONS] = [&nodes, &verts, &tris, &ids, &flags];
         FRAME.write(&mut out, &sections);
         out
-    }
-
-    /// Writes the file to `path` atomically (a temporary file beside it,
-    /// then renamed over it).
-    pub fn save(&self, path: &Path) -> Result<(), PlainError> {
-        atomic_write(path, &self.to_bytes()).map_err(|e| PlainError::Io {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })
-    }
-
-    /// Reads the file at `path` (see [`from_bytes`](Self::from_bytes)).
-    pub fn open(path: &Path) -> Result<PlainBvh, PlainError> {
-        let bytes = std::fs::read(path).map_err(|e| PlainError::Io {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })?;
-        Self::from_bytes(&bytes)
     }
 
     /// Reads a file written by [`to_bytes`](Self::to_bytes): checks the

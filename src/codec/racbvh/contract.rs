@@ -57,10 +57,6 @@ impl Codec for RacBvh {
         RacBvh::verify(self)
     }
 
-    fn save(&self, path: &Path) -> Result<(), RacError> {
-        RacBvh::save(self, path)
-    }
-
     fn to_bytes(&self) -> Vec<u8> {
         RacBvh::to_bytes(self)
     }

@@ -53,8 +53,8 @@ pub enum RacError {
     #[error("out-of-core build: {0}")]
     OutOfCore(String),
     /// Reading or writing a file failed.
-    #[error("I/O error: {0}")]
-    Io(String),
+    #[error(transparent)]
+    Io(#[from] crate::files::IoError),
     /// A node index out of range.
     #[error("node {node} does not exist (the tree has {count} nodes)")]
     NoSuchNode {

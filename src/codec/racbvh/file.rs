@@ -52,6 +52,7 @@ use crate::codec::common::le::{f32x3_at, u32_at, u64_at};
 use crate::codec::common::packed::bits_for;
 use crate::codec::common::quant::Grid;
 use crate::codec::common::{FormatError, MASS_BYTES, MassProps, Store};
+use crate::files::IoError;
 
 /// The container version this build writes and reads.
 pub const VERSION: u32 = 4;
@@ -172,7 +173,7 @@ impl RacBvh {
     /// in place or truncated while the tree is alive; cbvh's own saves
     /// replace a file atomically, which is safe.
     pub fn open(path: &Path, cache_budget_bytes: usize) -> Result<RacBvh, RacError> {
-        let io = |e: std::io::Error| RacError::Io(format!("{}: {e}", path.display()));
+        let io = IoError::at(path);
         let file = std::fs::File::open(path).map_err(io)?;
         // SAFETY: memmap2 requires the mapped file not to change while
         // mapped; `open` documents that requirement. Every read of the map
@@ -180,14 +181,6 @@ impl RacBvh {
         // give errors, not undefined behaviour.
         let map = Arc::new(unsafe { memmap2::Mmap::map(&file) }.map_err(io)?);
         Self::parse(&map, &|r| Store::Mapped(map.clone(), r), cache_budget_bytes)
-    }
-
-    /// Writes the container to `path` atomically: to a temporary file
-    /// beside it, then renamed over it, so that a reader (or a process that
-    /// has the old file mapped) never sees a half-written file.
-    pub fn save(&self, path: &Path) -> Result<(), RacError> {
-        crate::codec::common::atomic_write(path, &self.to_bytes())
-            .map_err(|e| RacError::Io(format!("{}: {e}", path.display())))
     }
 
     fn parse(

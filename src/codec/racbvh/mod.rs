@@ -27,6 +27,7 @@
 //! chunks in memory at a time. The file is an ordinary RACBVH file.
 //!
 //! ```no_run
+//! use cbvh::codec::Codec;
 //! use cbvh::codec::racbvh::{RacBvh, RacOptions};
 //! # fn demo(bvh: &cbvh::CanonicalBvh, mesh: &cbvh::Mesh) -> Result<(), cbvh::codec::racbvh::RacError> {
 //! let rac = RacBvh::encode(bvh, mesh, &RacOptions::default())?;

@@ -74,7 +74,6 @@ use super::encode::{TreeSource, check_tree, clamp_into, code_cluster, node_boxes
 use super::file::{self, FRAME, SECTIONS};
 use super::mesh::VertexCoder;
 use super::{ClusterMeta, Header, RacBvh, RacError, RacOptions};
-use crate::atomic::AtomicFile;
 use crate::build::chunked::{ChunkNode, ChunkScratch, ChunkedMesh};
 use crate::build::{BuildOptions, CanonicalBvh, LEAF_FLAG, build};
 use crate::codec::common::edges::{self, ChunkedFlags};
@@ -82,6 +81,7 @@ use crate::codec::common::packed::{ForPieces, ForWriter};
 use crate::codec::common::quant::{Grid, QBox};
 use crate::codec::common::{MassAccumulator, mass::vertex_mean};
 use crate::contact::EdgeFlags;
+use crate::files::{AtomicFile, IoError};
 use crate::geom::Aabb;
 
 /// What the progress callback hears: a phase, work done, work in all;
@@ -433,10 +433,11 @@ fn without_triangles(
     let mut rac = RacBvh::encode(&bvh, &mesh, options)?;
     rac.header.compression_seconds = 0.0;
     let bytes = rac.to_bytes();
+    let path = out_file.path().to_path_buf();
     out_file
         .write_all(&bytes)
         .and_then(|()| out_file.commit())
-        .map_err(|e| RacError::Io(e.to_string()))?;
+        .map_err(io(&path))?;
     let parts = crate::codec::ByteSize::bytes_by_part(&rac);
     let part = |k: usize| parts.get(k).map_or(0, |p| p.1 as u64);
     Ok(StreamedBuild {
@@ -782,7 +783,6 @@ fn create(path: &Path) -> Result<BufWriter<File>, RacError> {
 }
 
 /// An I/O error on `path` as a [`RacError`].
-fn io(path: &Path) -> impl Fn(std::io::Error) -> RacError {
-    let path = path.display().to_string();
-    move |e| RacError::Io(format!("{path}: {e}"))
+fn io(path: &Path) -> impl Fn(std::io::Error) -> RacError + '_ {
+    move |e| IoError::new(path, e).into()
 }

@@ -634,7 +634,7 @@ fn read_binary_element<R: BufRead>(
                         bytes
                             .record(chunk as usize * size, &mut scratch, |r| {
                                 if p.role != Role::Indices {
-                                    return Ok(());
+                                    return Ok::<(), MeshError>(());
                                 }
                                 for c in r.chunks_exact(size) {
                                     if let Num::Int(index) = num_at(item, c, 0, big) {

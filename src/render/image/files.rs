@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use super::Image;
-use crate::atomic::AtomicFile;
+use crate::files::{AtomicFile, IoError};
 use crate::render::error::RenderError;
 
 impl Image {
@@ -44,20 +44,15 @@ fn frame_size(frames: &[Image]) -> Result<(u32, u32), RenderError> {
     Ok(want)
 }
 
-/// The image file, written atomically ([`crate::atomic`]).
+/// The image file, written atomically ([`crate::files`]).
 fn create(path: &Path) -> Result<AtomicFile, RenderError> {
-    AtomicFile::create(path).map_err(|source| RenderError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    AtomicFile::create(path).map_err(|e| RenderError::Io(IoError::new(path, e)))
 }
 
 /// Makes the written file visible under its name.
 fn commit(file: AtomicFile, path: &Path) -> Result<(), RenderError> {
-    file.commit().map_err(|source| RenderError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    file.commit()
+        .map_err(|e| RenderError::Io(IoError::new(path, e)))
 }
 
 /// Writes `frames` as a GIF looping forever at about `fps` frames per

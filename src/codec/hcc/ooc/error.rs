@@ -51,11 +51,6 @@ pub enum OocError {
     #[error("out-of-core build: {0}")]
     OutOfCore(String),
     /// Reading or writing a file failed.
-    #[error("{path}: {message}")]
-    Io {
-        /// The file.
-        path: String,
-        /// The operating system's message.
-        message: String,
-    },
+    #[error(transparent)]
+    Io(#[from] crate::files::IoError),
 }

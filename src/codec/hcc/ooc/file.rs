@@ -11,7 +11,8 @@ use super::paged::{self, Paged};
 use super::{HccOocBvh, Mode, OocError, decode};
 use crate::codec::common::container::{self, Frame};
 use crate::codec::common::le::{f32x3_at, u32_at};
-use crate::codec::common::{FormatError, MASS_BYTES, MassProps, Store, atomic_write, edges};
+use crate::codec::common::{FormatError, MASS_BYTES, MassProps, Store, edges};
+use crate::files::IoError;
 
 /// The file version this build writes and reads.
 pub const VERSION: u32 = 7;
@@ -235,10 +236,7 @@ impl HccOocBvh {
     /// place or truncated while it is open; cbvh's own saves replace a
     /// file atomically, which is safe.
     pub fn open_with_budget(path: &Path, budget: usize) -> Result<Self, OocError> {
-        let io = |e: std::io::Error| OocError::Io {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        };
+        let io = IoError::at(path);
         let file = std::fs::File::open(path).map_err(io)?;
         // SAFETY: memmap2 requires the mapped file not to change while
         // mapped; `open_with_budget` documents that requirement. Every read
@@ -266,9 +264,6 @@ impl HccOocBvh {
 
     /// Writes the o-HCCMesh file to `path` atomically.
     pub fn save(&self, path: &Path) -> Result<(), OocError> {
-        atomic_write(path, self.file_bytes()).map_err(|e| OocError::Io {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })
+        Ok(crate::files::save(path, self.file_bytes())?)
     }
 }

@@ -56,11 +56,11 @@ use super::encode::{
     OocSizes, StreamCoder, SymbolCounts, high_boxes, high_shape, stream_offset, tree_columns,
 };
 use super::file::{self, Header, SECTIONS};
-use crate::atomic::AtomicFile;
 use crate::build::chunked::{ChunkNode, ChunkScratch, ChunkedMesh};
 use crate::build::{BuildOptions, build};
 use crate::codec::common::edges::{self, ChunkedFlags};
 use crate::codec::common::{MassAccumulator, mass::vertex_mean};
+use crate::files::{AtomicFile, IoError};
 
 /// What the progress callback hears: a phase, work done, work in all;
 /// called from the builder's threads.
@@ -335,12 +335,8 @@ pub fn encode_streamed(
 }
 
 /// An I/O error on `path` as an [`OocError`].
-fn io(path: &Path) -> impl Fn(std::io::Error) -> OocError {
-    let path = path.display().to_string();
-    move |e| OocError::Io {
-        path: path.clone(),
-        message: e.to_string(),
-    }
+fn io(path: &Path) -> impl Fn(std::io::Error) -> OocError + '_ {
+    move |e| IoError::new(path, e).into()
 }
 
 /// The model's high-level tree: the tree over the chunks, each chunk's

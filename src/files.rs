@@ -1,6 +1,10 @@
-//! Atomic saves, for every file cbvh writes (codec files, meshes, images,
-//! reports, plots): the bytes go to a temporary file beside the target, are
-//! flushed to disk, and the temporary file is renamed over the target. A
+//! Reading and writing cbvh's files: [`IoError`], the one error every
+//! part of the crate reports a failed read or write with (the file's path
+//! and the operating system's error), and atomic saves for every file cbvh
+//! writes (codec files, meshes, images, reports, plots).
+//!
+//! An atomic save writes the bytes to a temporary file beside the target,
+//! flushes them to disk and renames the temporary file over the target. A
 //! reader never sees a half-written file, a process that has the old file
 //! memory-mapped keeps its (unlinked) old pages instead of dying with
 //! SIGBUS when the file is rewritten in place, and a writer that fails or
@@ -8,11 +12,71 @@
 //!
 //! [`atomic_write`] saves bytes already in memory; [`AtomicFile`] is a
 //! buffered [`Write`] for output produced as it goes (meshes, images),
-//! made visible by [`AtomicFile::commit`].
+//! made visible by [`AtomicFile::commit`]. [`save`] and [`read`] are
+//! [`atomic_write`] and [`std::fs::read`] reporting an [`IoError`].
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+
+/// A file could not be opened, read, written or renamed: the one I/O
+/// error of the crate. Every codec's error, [`MeshError`](crate::MeshError)
+/// and the rest wrap it, so that a message always names the file.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {source}", path.display())]
+pub struct IoError {
+    /// The file (or directory) the operation was on.
+    pub path: PathBuf,
+    /// The operating system's error.
+    #[source]
+    pub source: std::io::Error,
+}
+
+impl IoError {
+    /// `source` on `path`.
+    pub fn new(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Self {
+            path: path.into(),
+            source,
+        }
+    }
+
+    /// A closure turning an [`std::io::Error`] on `path` into an
+    /// [`IoError`] (for `map_err`).
+    pub fn at(path: &Path) -> impl Fn(std::io::Error) -> IoError + Copy + '_ {
+        move |source| IoError::new(path, source)
+    }
+}
+
+/// A copy with the same path, kind and message ([`std::io::Error`] is not
+/// `Clone`; the copy's error is built from the kind and the message).
+impl Clone for IoError {
+    fn clone(&self) -> Self {
+        Self::new(
+            &self.path,
+            std::io::Error::new(self.source.kind(), self.source.to_string()),
+        )
+    }
+}
+
+/// The same path, and an error of the same kind and message.
+impl PartialEq for IoError {
+    fn eq(&self, other: &Self) -> bool {
+        self.path == other.path
+            && self.source.kind() == other.source.kind()
+            && self.source.to_string() == other.source.to_string()
+    }
+}
+
+/// [`atomic_write`], reporting an [`IoError`] naming `path`.
+pub fn save(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
+    atomic_write(path, bytes).map_err(IoError::at(path))
+}
+
+/// The whole file at `path`, or an [`IoError`] naming it.
+pub fn read(path: &Path) -> Result<Vec<u8>, IoError> {
+    std::fs::read(path).map_err(IoError::at(path))
+}
 
 /// Writes `bytes` to `path` atomically (see the module docs). On error the
 /// temporary file is removed and `path` is untouched.
@@ -47,6 +111,11 @@ impl AtomicFile {
             tmp,
             path: path.to_path_buf(),
         })
+    }
+
+    /// The target: the name the file gets when committed.
+    pub fn path(&self) -> &Path {
+        &self.path
     }
 
     /// Flushes the bytes to disk and renames the file over the target. On
