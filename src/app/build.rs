@@ -33,16 +33,17 @@ pub struct BuildArgs {
     pub json: bool,
     /// Memory the build may use, in MiB (default: half the machine's).
     /// A model whose in-memory build would need more is built out of core
-    /// by `--codec hcc-ooc` and `--codec racbvh` and refused by the other
-    /// codecs, before any work. Out of core, the chunks are as large as this allows; without
+    /// by the codecs that can (marked so in `--codec`'s list) and refused
+    /// by the others, before any work. Out of core, the chunks are as large as this allows; without
     /// it, as large as 32 bytes a triangle of the model allow beside the
     /// vertices and flags the build holds (within half the machine's
     /// memory): about 40 bytes a triangle in all for a closed mesh, at any
     /// size.
     #[arg(long, value_name = "MIB")]
     pub memory_mib: Option<u64>,
-    /// Build out of core whatever the model's size (`--codec hcc-ooc` or
-    /// `racbvh`, from a mesh file, with `-o`).
+    /// Build out of core whatever the model's size (a codec that builds
+    /// out of core, marked so in `--codec`'s list; from a mesh file, with
+    /// `-o`).
     #[arg(long)]
     pub out_of_core: bool,
     /// Out of core: the most triangles a chunk holds, instead of what the
@@ -77,8 +78,13 @@ fn budget(a: &BuildArgs) -> u64 {
     )
 }
 
-/// The codecs that build out of core.
-const OUT_OF_CORE: [CodecKind; 2] = [CodecKind::HccOoc, CodecKind::Racbvh];
+/// The codecs that build out of core ([`CodecKind::builds_out_of_core`]).
+fn out_of_core_codecs() -> impl Iterator<Item = CodecKind> {
+    CodecKind::ALL
+        .iter()
+        .copied()
+        .filter(|k| k.builds_out_of_core())
+}
 
 /// How an out-of-core build goes: its codec, input, output, chunk size.
 struct OutOfCore {
@@ -99,7 +105,7 @@ fn gib(b: u64) -> String {
 fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> {
     let budget = budget(a);
     let ooc = match a.codec {
-        Structure::Codec(k) if OUT_OF_CORE.contains(&k) => Some(k),
+        Structure::Codec(k) if k.builds_out_of_core() => Some(k),
         _ => None,
     };
     let file = a
@@ -124,8 +130,9 @@ fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> 
         return Ok(None);
     }
     let Some(codec) = ooc else {
+        let names: Vec<_> = out_of_core_codecs().map(|k| k.name()).collect();
         let why = if a.out_of_core {
-            "--out-of-core builds --codec hcc-ooc or racbvh only".to_string()
+            format!("--out-of-core builds --codec {} only", names.join(" or "))
         } else {
             format!(
                 "{what} has about {} triangles: building it in memory needs about {}, over the \
@@ -135,9 +142,11 @@ fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> 
                 gib(budget)
             )
         };
+        let flags: Vec<_> = names.iter().map(|n| format!("--codec {n}")).collect();
         return Err(format!(
-            "{why}; of the codecs only hcc-ooc and racbvh build out of core \
-             (--codec hcc-ooc or --codec racbvh, with -o FILE)"
+            "{why}; of the codecs only {} build out of core ({}, with -o FILE)",
+            names.join(" and "),
+            flags.join(" or ")
         )
         .into());
     };
@@ -206,43 +215,8 @@ fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> 
     }))
 }
 
-/// What an out-of-core encoder made, for the report.
-struct Made {
-    chunks: usize,
-    largest_chunk: u64,
-    paired_edges: u64,
-    /// The codec's own figures (low-level trees, clusters).
-    extra: Vec<(&'static str, u64)>,
-    parts: Vec<(&'static str, f64)>,
-}
-
-impl From<crate::codec::racbvh::StreamedBuild> for Made {
-    fn from(m: crate::codec::racbvh::StreamedBuild) -> Self {
-        Made {
-            chunks: m.chunks,
-            largest_chunk: m.largest_chunk,
-            paired_edges: m.paired_edges,
-            extra: vec![("nodes", m.nodes), ("clusters", m.clusters)],
-            parts: m.parts(),
-        }
-    }
-}
-
-impl From<crate::codec::hcc::ooc::StreamedBuild> for Made {
-    fn from(m: crate::codec::hcc::ooc::StreamedBuild) -> Self {
-        Made {
-            chunks: m.chunks,
-            largest_chunk: m.largest_chunk,
-            paired_edges: m.paired_edges,
-            extra: vec![("trees", m.trees as u64)],
-            parts: m.sizes.parts(),
-        }
-    }
-}
-
-/// The out-of-core build (see [`crate::build::chunked`],
-/// [`crate::codec::hcc::ooc::encode_streamed`] and
-/// [`crate::codec::racbvh::encode_streamed`]).
+/// The out-of-core build (see [`crate::build::chunked`] and
+/// [`Codec::encode_streamed`](crate::codec::Codec::encode_streamed)).
 fn run_out_of_core(a: &BuildArgs, p: OutOfCore) -> CliResult {
     use crate::build::chunked::{ChunkOptions, ChunkedMesh};
     let options = a.settings.options(&[p.codec])?;
@@ -275,13 +249,9 @@ fn run_out_of_core(a: &BuildArgs, p: OutOfCore) -> CliResult {
     let t1 = Instant::now();
     let show = |phase: &str, done: u64, total: u64| bar.show(phase, done, total);
     let (mesh, out) = (&input, p.output.as_path());
-    let made: Made = if p.codec == CodecKind::Racbvh {
-        crate::codec::racbvh::encode_streamed(mesh, &build_options, &options.racbvh, out, &show)?
-            .into()
-    } else {
-        crate::codec::hcc::ooc::encode_streamed(mesh, &build_options, &options.hcc_ooc, out, &show)?
-            .into()
-    };
+    let made = options
+        .encode_streamed(p.codec, mesh, &build_options, out, &show)
+        .expect("plan() chose a codec that builds out of core")?;
     let build_s = t1.elapsed().as_secs_f64();
     let tris = input.triangle_count();
     let vertices = input.vertices.len();
@@ -333,7 +303,7 @@ fn run_out_of_core(a: &BuildArgs, p: OutOfCore) -> CliResult {
             "peak_rss_bytes_per_triangle": peak.map(|b| b as f64 / tris.max(1) as f64),
         });
         if let Some(o) = v.as_object_mut() {
-            for (k, n) in &made.extra {
+            for (k, n) in &made.counts {
                 o.insert(k.to_string(), (*n).into());
             }
         }
@@ -347,7 +317,7 @@ fn run_out_of_core(a: &BuildArgs, p: OutOfCore) -> CliResult {
             a.layout
         );
         let extra: String = made
-            .extra
+            .counts
             .iter()
             .map(|(k, n)| format!("{n} {k}, "))
             .collect();

@@ -329,8 +329,11 @@ impl Structure {
         use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
         let values = Structure::all().map(|s| {
             PossibleValue::new(s.name()).help(match s {
-                Structure::Codec(k) => k.summary(),
-                Structure::Parry => "parry3d's own TriMesh, for comparison",
+                Structure::Codec(k) if k.builds_out_of_core() => {
+                    format!("{} (builds out of core)", k.summary())
+                }
+                Structure::Codec(k) => k.summary().to_string(),
+                Structure::Parry => "parry3d's own TriMesh, for comparison".to_string(),
             })
         });
         PossibleValuesParser::new(values).map(|name| {

@@ -23,13 +23,14 @@ use super::ByteSize;
 use super::clbvh::{ClBvh, ClBvhCompact};
 use super::common::MassProps;
 use super::common::container::Frame;
-use super::contract::{Codec, OpenOptions};
+use super::contract::{Codec, OpenOptions, StreamedReport};
 use super::hcc::HccBvh;
 use super::hcc::ooc::HccOocBvh;
 use super::plain::PlainBvh;
 use super::racbvh::RacBvh;
 use super::settings::{Settings, SettingsError};
-use crate::build::CanonicalBvh;
+use crate::build::chunked::{ChunkedMesh, Progress};
+use crate::build::{BuildOptions, CanonicalBvh};
 use crate::contact::EdgeFlags;
 use crate::cursor::NodeCursor;
 use crate::mesh::Mesh;
@@ -273,6 +274,19 @@ impl CodecKind {
         self.visit(HasCache)
     }
 
+    /// Whether the codec builds out of core (see
+    /// [`Codec::BUILDS_OUT_OF_CORE`]).
+    pub fn builds_out_of_core(self) -> bool {
+        struct OutOfCore;
+        impl KindVisitor for OutOfCore {
+            type Output = bool;
+            fn visit<C: Registered>(self) -> bool {
+                C::BUILDS_OUT_OF_CORE
+            }
+        }
+        self.visit(OutOfCore)
+    }
+
     /// Whether the codec's encoding depends on its cache budget (see
     /// [`Codec::ENCODES_FOR_CACHE_BUDGET`]).
     pub fn encodes_for_cache_budget(self) -> bool {
@@ -336,6 +350,60 @@ impl AnyOptions {
             k.visit(Make(&mut options, settings))?;
         }
         Ok(options)
+    }
+
+    /// Codec `kind`'s options, as their `Debug` form (for reports: every
+    /// field, with no front end naming one).
+    pub fn describe(&self, kind: CodecKind) -> String {
+        struct Describe<'a>(&'a AnyOptions);
+        impl KindVisitor for Describe<'_> {
+            type Output = String;
+            fn visit<C: Registered>(self) -> String {
+                format!("{:?}", C::options(self.0))
+            }
+        }
+        kind.visit(Describe(self))
+    }
+
+    /// The out-of-core build of codec `kind` with these options
+    /// ([`Codec::encode_streamed`]): `input` built with `build_options`
+    /// and written to `out`. `None` for a codec that builds only in
+    /// memory ([`CodecKind::builds_out_of_core`]).
+    pub fn encode_streamed(
+        &self,
+        kind: CodecKind,
+        input: &ChunkedMesh,
+        build_options: &BuildOptions,
+        out: &Path,
+        progress: Progress<'_>,
+    ) -> Option<Result<StreamedReport, CodecError>> {
+        struct Stream<'a> {
+            options: &'a AnyOptions,
+            input: &'a ChunkedMesh,
+            build_options: &'a BuildOptions,
+            out: &'a Path,
+            progress: Progress<'a>,
+        }
+        impl KindVisitor for Stream<'_> {
+            type Output = Option<Result<StreamedReport, CodecError>>;
+            fn visit<C: Registered>(self) -> Self::Output {
+                let made = C::encode_streamed(
+                    self.input,
+                    self.build_options,
+                    C::options(self.options),
+                    self.out,
+                    self.progress,
+                )?;
+                Some(made.map_err(C::error))
+            }
+        }
+        kind.visit(Stream {
+            options: self,
+            input,
+            build_options,
+            out,
+            progress,
+        })
     }
 
     /// These options with every cached codec's cache budget set to `bytes`

@@ -9,7 +9,8 @@ use super::common::MassProps;
 use super::common::container::Frame;
 use super::common::page_cache::CacheStats;
 use super::settings::{Settings, SettingsError};
-use crate::build::CanonicalBvh;
+use crate::build::chunked::{ChunkedMesh, Progress};
+use crate::build::{BuildOptions, CanonicalBvh};
 use crate::contact::EdgeFlags;
 use crate::files::IoError;
 use crate::mesh::Mesh;
@@ -161,6 +162,28 @@ pub trait Codec: RayCursor + ByteSize + Send + Sync + Sized + 'static {
         let _ = options;
     }
 
+    /// Whether the codec builds out of core
+    /// ([`Codec::encode_streamed`] gives `Some`): a front end offers the
+    /// out-of-core build for these codecs and refuses it for the others
+    /// before any work. `false` by default.
+    const BUILDS_OUT_OF_CORE: bool = false;
+
+    /// Builds the codec's file from a model read into spatial chunks
+    /// ([`ChunkedMesh`]), holding a few chunks in memory at a time, and
+    /// writes it to `out` atomically; `progress` hears each phase. `None`
+    /// (the default) for a codec that builds only in memory; a codec that
+    /// overrides it sets [`Codec::BUILDS_OUT_OF_CORE`].
+    fn encode_streamed(
+        input: &ChunkedMesh,
+        build_options: &BuildOptions,
+        options: &Self::Options,
+        out: &Path,
+        progress: Progress<'_>,
+    ) -> Option<Result<StreamedReport, Self::Error>> {
+        let _ = (input, build_options, options, out, progress);
+        None
+    }
+
     /// For a codec with a cache: its counters (budget, bytes held,
     /// decodes, hits). `None` (the default) for a codec without one, or
     /// one that decoded everything up front (hcc-ooc pre-loaded).
@@ -179,6 +202,24 @@ pub trait Codec: RayCursor + ByteSize + Send + Sync + Sized + 'static {
         let _ = budget;
         None
     }
+}
+
+/// What an out-of-core build wrote ([`Codec::encode_streamed`]), in a
+/// form every codec shares, for a front end's report.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StreamedReport {
+    /// Chunks built.
+    pub chunks: usize,
+    /// The largest chunk's triangles.
+    pub largest_chunk: u64,
+    /// Edges shared by two chunks, paired after the chunks were built.
+    pub paired_edges: u64,
+    /// The codec's own counts (RACBVH's nodes and clusters, the
+    /// o-HCCMesh's low-level trees).
+    pub counts: Vec<(&'static str, u64)>,
+    /// The file's bytes by part, named as the codec's in-memory form
+    /// names them.
+    pub parts: Vec<(&'static str, f64)>,
 }
 
 /// How to open a codec file ([`AnyCodec::open`](super::AnyCodec::open)).

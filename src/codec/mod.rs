@@ -92,7 +92,10 @@
 //!    `Io(#[from] IoError)` variant: [`IoError`](crate::IoError) is the
 //!    crate's one I/O error, with the path) and `node.rs`.
 //! 2. `impl Codec` in `codec/<name>/contract.rs`, thin: delegating to the
-//!    codec's own methods.
+//!    codec's own methods. A codec that can build from a chunked model
+//!    (`stream.rs`) overrides `encode_streamed` and sets
+//!    `BUILDS_OUT_OF_CORE`; `cbvh build` then offers it out of core, by
+//!    the registry, with no line of its own.
 //! 3. Its options from a front end's [`Settings`] (`Codec::options_from`
 //!    and `Codec::SETTINGS`, next to its options type): the common settings
 //!    it uses (leaf size, vertex bits) and its own `CODEC.KEY=VALUE` keys,
@@ -122,7 +125,7 @@ pub mod settings;
 pub use any::{AnyCodec, AnyOptions, CodecError, CodecFileError, CodecKind, UnknownCodec};
 pub use common::container::Frame;
 pub use common::page_cache::CacheStats;
-pub use contract::{Codec, OpenOptions};
+pub use contract::{Codec, OpenOptions, StreamedReport};
 pub use settings::{Settings, SettingsError};
 
 /// Memory of a stored structure, by component.

@@ -401,7 +401,8 @@ fn cbvh_runs_the_drop_tests_as_subcommands() {
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     std::fs::remove_file(&json).ok();
     assert_eq!(v["runs"].as_array().unwrap().len(), 2, "{v}");
-    assert_eq!(v["scene"]["racbvh_cluster_nodes"], 512, "{v}");
+    let racbvh = v["scene"]["codec_options"]["racbvh"].as_str().unwrap();
+    assert!(racbvh.contains("cluster_nodes: 512"), "{v}");
     let (ok, _, err) = cbvh(&["robot-in-plant", "--steps", "0"]);
     assert!(!ok && err.contains("--steps must be at least 1"), "{err}");
 }

@@ -216,7 +216,7 @@ fn the_command_line_builds_out_of_core_and_a_killed_build_leaves_no_file() {
         plain.to_str().unwrap(),
     ]);
     assert!(
-        !ok && stderr.contains("only hcc-ooc and racbvh build out of core"),
+        !ok && stderr.contains("only racbvh and hcc-ooc build out of core"),
         "{stderr}"
     );
     assert!(!plain.exists());
@@ -341,5 +341,53 @@ fn a_drop_test_uses_an_out_of_core_file_as_stored() {
             y(&runs[2])
         );
     }
+    std::fs::remove_dir_all(&d).ok();
+}
+
+/// The registry's out-of-core hook: every codec that says it builds out
+/// of core writes a file of its own kind that verifies, through
+/// `AnyOptions::encode_streamed` (what `cbvh build --out-of-core` calls);
+/// every other codec declines, writing nothing. At least the two streamed
+/// encoders are there.
+#[test]
+fn the_registry_builds_out_of_core_exactly_the_codecs_that_say_so() {
+    use cbvh::codec::{AnyOptions, CodecKind};
+    let d = dir("registry");
+    let mesh = generate(Kind::Statue, 2000, 3, &mut |_, _| {}).unwrap();
+    let options = AnyOptions::default();
+    let mut built = Vec::new();
+    for &kind in CodecKind::ALL {
+        let out = d.join(format!("{kind}.bin"));
+        let made = through_chunks(&mesh, 300, 1, &out, |input, b| {
+            options.encode_streamed(kind, input, b, &out, &|_, _, _| {})
+        });
+        match made {
+            None => {
+                assert!(!kind.builds_out_of_core(), "{kind} declined");
+                assert!(!out.exists(), "{kind} wrote a file");
+            }
+            Some(r) => {
+                let r = r.unwrap_or_else(|e| panic!("{kind}: {e}"));
+                assert!(kind.builds_out_of_core(), "{kind} built but says it cannot");
+                assert!(r.chunks > 1 && r.largest_chunk <= 300, "{kind}: {r:?}");
+                let total: f64 = r.parts.iter().map(|p| p.1).sum();
+                let bytes = std::fs::metadata(&out).unwrap().len() as f64;
+                if kind == CodecKind::HccOoc {
+                    // The o-HCCMesh's parts sum to its file.
+                    assert_eq!(total, bytes, "{kind}");
+                }
+                assert!(total > 0.0 && total <= bytes, "{kind}: {total} of {bytes}");
+                let codec = AnyCodec::open(&out, &OpenOptions::default())
+                    .unwrap_or_else(|e| panic!("{kind}: {e}"));
+                assert_eq!(codec.kind(), kind);
+                assert_eq!(codec.triangle_count(), mesh.triangles.len());
+                built.push(kind);
+            }
+        }
+    }
+    assert!(
+        built.contains(&CodecKind::Racbvh) && built.contains(&CodecKind::HccOoc),
+        "{built:?}"
+    );
     std::fs::remove_dir_all(&d).ok();
 }

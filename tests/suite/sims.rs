@@ -49,7 +49,11 @@ fn lucy_on_turbine_runs_with_threads_and_cluster_size_and_writes_json() {
     );
     let v = report(ok, &stderr, &json);
     assert_eq!(v["scene"]["threads"], 1);
-    assert_eq!(v["scene"]["racbvh_cluster_nodes"], 256);
+    // Each codec's options as used, by its name (plain has none).
+    let options = v["scene"]["codec_options"].as_object().unwrap();
+    assert_eq!(options.keys().collect::<Vec<_>>(), ["plain", "racbvh"]);
+    let racbvh = options["racbvh"].as_str().unwrap();
+    assert!(racbvh.contains("cluster_nodes: 256"), "{racbvh}");
     let runs = v["runs"].as_array().unwrap();
     let shapes: Vec<&str> = runs.iter().map(|r| r["shape"].as_str().unwrap()).collect();
     // Bare cbvh names run in both contact modes by default.

@@ -331,15 +331,23 @@ pub fn run_specs(args: &SimArgs) -> Result<Vec<RunSpec>, String> {
 
 /// The options of the codecs the runs use, from the codec flags.
 fn options(args: &SimArgs, specs: &[RunSpec]) -> Result<crate::codec::AnyOptions, String> {
-    let mut kinds: Vec<CodecKind> = specs
+    args.codecs
+        .options(&codecs_of(specs))
+        .map_err(|e| e.to_string())
+}
+
+/// The codecs the runs `specs` use, each once, in registry order.
+fn codecs_of(specs: &[RunSpec]) -> Vec<CodecKind> {
+    CodecKind::ALL
         .iter()
-        .filter_map(|s| match s.kind {
-            ShapeKind::Cbvh(k) | ShapeKind::CbvhTenthCache(k) => Some(k),
-            ShapeKind::Parry | ShapeKind::ParryFixed => None,
+        .copied()
+        .filter(|&k| {
+            specs.iter().any(|s| match s.kind {
+                ShapeKind::Cbvh(c) | ShapeKind::CbvhTenthCache(c) => c == k,
+                ShapeKind::Parry | ShapeKind::ParryFixed => false,
+            })
         })
-        .collect();
-    kinds.dedup();
-    args.codecs.options(&kinds).map_err(|e| e.to_string())
+        .collect()
 }
 
 /// The dropped mesh of a drop test: a mesh, or a cbvh codec file used as
@@ -555,6 +563,11 @@ pub fn run_sim(
         scene.base.triangle_count(),
         scene.steps
     );
+    // Each codec's options as used, for the report (none named here).
+    let codec_options: serde_json::Map<String, serde_json::Value> = codecs_of(&specs)
+        .into_iter()
+        .map(|k| (k.name().to_string(), scene.codec_options.describe(k).into()))
+        .collect();
     let mut runs: Vec<RunReport> = Vec::new();
     for spec in specs {
         let pb = bar(&spec.name(), scene.steps as u64);
@@ -595,7 +608,7 @@ pub fn run_sim(
         "base_bounds": [blo, bhi],
         "steps": scene.steps,
         "dt": scene.dt,
-        "racbvh_cluster_nodes": scene.codec_options.racbvh.cluster_nodes,
+        "codec_options": serde_json::Value::Object(codec_options),
         "leaf_size": leaf_size,
         "threads": threads,
         "machine": machine(),

@@ -4,9 +4,10 @@ use crate::codec::common::container::Frame;
 use std::path::Path;
 
 use super::{RacBvh, RacError, RacOptions, file};
-use crate::build::CanonicalBvh;
+use crate::build::chunked::{ChunkedMesh, Progress};
+use crate::build::{BuildOptions, CanonicalBvh};
 use crate::codec::common::MassProps;
-use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError};
+use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError, StreamedReport};
 use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 
@@ -70,6 +71,22 @@ impl Codec for RacBvh {
     /// cache of `options.cache_budget_bytes`.
     fn open(path: &Path, options: &OpenOptions) -> Result<Self, RacError> {
         RacBvh::open(path, options.cache_budget_bytes)
+    }
+
+    const BUILDS_OUT_OF_CORE: bool = true;
+
+    /// [`racbvh::encode_streamed`](super::encode_streamed).
+    fn encode_streamed(
+        input: &ChunkedMesh,
+        build_options: &BuildOptions,
+        options: &RacOptions,
+        out: &Path,
+        progress: Progress<'_>,
+    ) -> Option<Result<StreamedReport, RacError>> {
+        Some(
+            super::encode_streamed(input, build_options, options, out, progress)
+                .map(|made| made.report()),
+        )
     }
 
     fn header_fields(&self) -> Vec<(&'static str, String)> {

@@ -76,6 +76,7 @@ use super::mesh::VertexCoder;
 use super::{ClusterMeta, Header, RacBvh, RacError, RacOptions};
 use crate::build::chunked::{ChunkNode, ChunkScratch, ChunkedMesh};
 use crate::build::{BuildOptions, CanonicalBvh, LEAF_FLAG, build};
+use crate::codec::StreamedReport;
 use crate::codec::common::edges::{self, ChunkedFlags};
 use crate::codec::common::packed::{ForPieces, ForWriter};
 use crate::codec::common::quant::{Grid, QBox};
@@ -84,9 +85,7 @@ use crate::contact::EdgeFlags;
 use crate::files::{AtomicFile, IoError};
 use crate::geom::Aabb;
 
-/// What the progress callback hears: a phase, work done, work in all;
-/// called from the builder's threads.
-pub type Progress<'a> = &'a (dyn Fn(&str, u64, u64) + Sync);
+pub use crate::build::chunked::Progress;
 
 /// What [`encode_streamed`] made.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -118,6 +117,18 @@ pub struct StreamedBuild {
 }
 
 impl StreamedBuild {
+    /// The codec-neutral report (the contract's
+    /// [`encode_streamed`](crate::codec::Codec::encode_streamed)).
+    pub fn report(&self) -> StreamedReport {
+        StreamedReport {
+            chunks: self.chunks,
+            largest_chunk: self.largest_chunk,
+            paired_edges: self.paired_edges,
+            counts: vec![("nodes", self.nodes), ("clusters", self.clusters)],
+            parts: self.parts(),
+        }
+    }
+
     /// The file's bytes by part, named as the in-memory tree names them.
     pub fn parts(&self) -> Vec<(&'static str, f64)> {
         vec![

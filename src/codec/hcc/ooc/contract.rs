@@ -6,11 +6,12 @@ use std::path::Path;
 
 use super::super::HccBvh;
 use super::{HccOocBvh, Mode, OocError, OocOptions, file};
-use crate::build::CanonicalBvh;
+use crate::build::chunked::{ChunkedMesh, Progress};
+use crate::build::{BuildOptions, CanonicalBvh};
 #[cfg(feature = "serde")]
 use crate::codec::ByteSize;
 use crate::codec::common::MassProps;
-use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError};
+use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError, StreamedReport};
 use crate::contact::EdgeFlags;
 use crate::cursor::NodeCursor;
 use crate::mesh::Mesh;
@@ -87,6 +88,22 @@ impl Codec for HccOocBvh {
     /// demand into a cache of that many bytes.
     fn open(path: &Path, options: &OpenOptions) -> Result<Self, OocError> {
         HccOocBvh::open_with_budget(path, options.cache_budget_bytes)
+    }
+
+    const BUILDS_OUT_OF_CORE: bool = true;
+
+    /// [`ooc::encode_streamed`](super::encode_streamed).
+    fn encode_streamed(
+        input: &ChunkedMesh,
+        build_options: &BuildOptions,
+        options: &OocOptions,
+        out: &Path,
+        progress: Progress<'_>,
+    ) -> Option<Result<StreamedReport, OocError>> {
+        Some(
+            super::encode_streamed(input, build_options, options, out, progress)
+                .map(|made| made.report()),
+        )
     }
 
     fn header_fields(&self) -> Vec<(&'static str, String)> {

@@ -58,13 +58,12 @@ use super::encode::{
 use super::file::{self, Header, SECTIONS};
 use crate::build::chunked::{ChunkNode, ChunkScratch, ChunkedMesh};
 use crate::build::{BuildOptions, build};
+use crate::codec::StreamedReport;
 use crate::codec::common::edges::{self, ChunkedFlags};
 use crate::codec::common::{MassAccumulator, mass::vertex_mean};
 use crate::files::{AtomicFile, IoError};
 
-/// What the progress callback hears: a phase, work done, work in all;
-/// called from the builder's threads.
-pub type Progress<'a> = &'a (dyn Fn(&str, u64, u64) + Sync);
+pub use crate::build::chunked::Progress;
 
 /// What one chunk left after pass 1.
 struct Chunk {
@@ -90,6 +89,20 @@ pub struct StreamedBuild {
     pub trees: usize,
     /// Edges shared by two chunks, paired after the chunks were built.
     pub paired_edges: u64,
+}
+
+impl StreamedBuild {
+    /// The codec-neutral report (the contract's
+    /// [`encode_streamed`](crate::codec::Codec::encode_streamed)).
+    pub fn report(&self) -> StreamedReport {
+        StreamedReport {
+            chunks: self.chunks,
+            largest_chunk: self.largest_chunk,
+            paired_edges: self.paired_edges,
+            counts: vec![("trees", self.trees as u64)],
+            parts: self.sizes.parts(),
+        }
+    }
 }
 
 /// Builds the o-HCCMesh of `input` chunk by chunk (see the module docs)
