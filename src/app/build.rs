@@ -38,8 +38,8 @@ pub struct BuildArgs {
     /// it, as large as 32 bytes a triangle of the model allow beside the
     /// vertices and flags the build holds (within half the machine's
     /// memory): about 40 bytes a triangle in all for a closed mesh, at any
-    /// size.
-    #[arg(long, value_name = "MIB")]
+    /// size. At least 1.
+    #[arg(long, value_name = "MIB", value_parser = clap::value_parser!(u64).range(1..))]
     pub memory_mib: Option<u64>,
     /// Build out of core whatever the model's size (a codec that builds
     /// out of core, marked so in `--codec`'s list; from a mesh file, with
@@ -96,8 +96,24 @@ struct OutOfCore {
     estimated: (u64, u64),
 }
 
+/// `b` bytes in GiB, or MiB below one GiB.
 fn gib(b: u64) -> String {
-    format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
+    if b < 1 << 30 {
+        format!("{:.1} MiB", b as f64 / (1u64 << 20) as f64)
+    } else {
+        format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64)
+    }
+}
+
+/// The in-memory build's plan (none), unless `--chunk-triangles` asks for
+/// chunks that will not be made: then an error saying `why`.
+fn in_memory(a: &BuildArgs, why: &str) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> {
+    match a.chunk_triangles {
+        Some(n) => {
+            Err(format!("--chunk-triangles {n} sizes an out-of-core build's chunks: {why}").into())
+        }
+        None => Ok(None),
+    }
 }
 
 /// Whether (and how) `a` builds out of core; an error for a model too
@@ -122,17 +138,25 @@ fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> 
                 .unwrap_or_else(|| crate::scene::default_tris(kind)) as u64;
             ((t / 2, t), format!("the generated {kind}"))
         }
-        (None, None) => return Ok(None),
+        (None, None) => return in_memory(a, "a codec file is not rebuilt in chunks"),
     };
     let need = estimated.1.saturating_mul(IN_MEMORY_BYTES_A_TRIANGLE);
     let big = need > budget;
     if !a.out_of_core && !big {
-        return Ok(None);
+        return in_memory(
+            a,
+            &format!(
+                "{what} builds in memory (about {} of the {} budget); add --out-of-core to build \
+                 it in chunks",
+                gib(need),
+                gib(budget)
+            ),
+        );
     }
     let Some(codec) = ooc else {
         let names: Vec<_> = out_of_core_codecs().map(|k| k.name()).collect();
         let why = if a.out_of_core {
-            format!("--out-of-core builds --codec {} only", names.join(" or "))
+            format!("--codec {} does not build out of core", a.codec)
         } else {
             format!(
                 "{what} has about {} triangles: building it in memory needs about {}, over the \
