@@ -221,4 +221,21 @@ mod tests {
         only_one_file_in(&dir);
         std::fs::remove_dir_all(&dir).ok();
     }
+
+    #[test]
+    fn io_errors_name_the_file_and_copy_equal() {
+        let dir = std::env::temp_dir().join(format!("cbvh-ioerror-{}", std::process::id()));
+        let missing = dir.join("no/such/x.bin");
+        let e = read(&missing).unwrap_err();
+        assert_eq!(e.path, missing);
+        assert_eq!(e.source.kind(), std::io::ErrorKind::NotFound);
+        let shown = e.to_string();
+        assert!(shown.starts_with(&format!("{}: ", missing.display())), "{shown}");
+        assert_eq!(e.clone(), e);
+        assert_eq!(e.clone().to_string(), shown);
+        let w = save(&missing, b"x").unwrap_err();
+        assert_eq!(w.path, missing);
+        assert_ne!(w, IoError::new(dir.join("other"), std::io::ErrorKind::NotFound.into()));
+        assert!(!missing.exists());
+    }
 }
