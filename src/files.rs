@@ -230,12 +230,18 @@ mod tests {
         assert_eq!(e.path, missing);
         assert_eq!(e.source.kind(), std::io::ErrorKind::NotFound);
         let shown = e.to_string();
-        assert!(shown.starts_with(&format!("{}: ", missing.display())), "{shown}");
+        assert!(
+            shown.starts_with(&format!("{}: ", missing.display())),
+            "{shown}"
+        );
         assert_eq!(e.clone(), e);
         assert_eq!(e.clone().to_string(), shown);
         let w = save(&missing, b"x").unwrap_err();
         assert_eq!(w.path, missing);
-        assert_ne!(w, IoError::new(dir.join("other"), std::io::ErrorKind::NotFound.into()));
+        assert_ne!(
+            w,
+            IoError::new(dir.join("other"), std::io::ErrorKind::NotFound.into())
+        );
         assert!(!missing.exists());
     }
 }

@@ -659,4 +659,21 @@ fn a_tenth_of_the_tree_is_measured_whatever_the_cache() {
             "budget {budget}"
         );
     }
+    // A memory-mapped file: the tenth shares the map (the file may even be
+    // gone from its directory) and decodes every node as the encoder's
+    // tree does.
+    let path = std::env::temp_dir().join(format!("cbvh-rac-tenth-{}.rac", std::process::id()));
+    Codec::save(&full, &path).unwrap();
+    let mapped = RacBvh::open(&path, 1 << 20).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    let tenth = Codec::with_cache_budget_of(&mapped, &|d| d / 10)
+        .expect("a cached codec")
+        .unwrap();
+    assert_eq!(tenth.cache_stats().budget_bytes, whole / 10);
+    tenth.verify().unwrap();
+    assert_eq!(tenth.to_bytes(), bytes);
+    for i in 0..full.node_count() as u32 {
+        assert_eq!(tenth.bv(i), full.bv(i), "node {i}");
+    }
+    assert_eq!(tenth.decoded_mesh(), full.decoded_mesh());
 }

@@ -136,10 +136,9 @@ impl Codec for RacBvh {
         &self,
         budget: &dyn Fn(usize) -> usize,
     ) -> Option<Result<Self, RacError>> {
-        let reopen = || {
-            let decoded = self.decoded_bytes()?;
-            RacBvh::from_bytes(&self.to_bytes(), budget(decoded))
-        };
-        Some(reopen())
+        Some(
+            self.decoded_bytes()
+                .map(|decoded| self.with_cache_budget(budget(decoded))),
+        )
     }
 }

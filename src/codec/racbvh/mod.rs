@@ -519,6 +519,26 @@ impl RacBvh {
         }
     }
 
+    /// The same tree over the same bytes with an empty cache of `budget`
+    /// bytes: a memory-mapped file stays mapped (shared, not copied), and
+    /// the mesh check already done is kept.
+    pub fn with_cache_budget(&self, budget: usize) -> RacBvh {
+        let mut t = Self::assemble(
+            self.header,
+            self.data.clone(),
+            self.meta.clone(),
+            self.mesh.clone(),
+            self.mesh_hash,
+            self.mass,
+            budget,
+        );
+        t.edges = self.edges.clone();
+        if let Some(checked) = self.mesh_ok.get() {
+            t.mesh_ok.set(checked.clone()).ok();
+        }
+        t
+    }
+
     /// Number of nodes.
     pub fn node_count(&self) -> usize {
         self.header.node_count as usize

@@ -10,7 +10,7 @@ use crate::build::chunked::{ChunkedMesh, Progress};
 use crate::build::{BuildOptions, CanonicalBvh};
 #[cfg(feature = "serde")]
 use crate::codec::ByteSize;
-use crate::codec::common::MassProps;
+use crate::codec::common::{MassProps, Store};
 use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError, StreamedReport};
 use crate::contact::EdgeFlags;
 use crate::cursor::NodeCursor;
@@ -194,6 +194,11 @@ impl Codec for HccOocBvh {
         budget: &dyn Fn(usize) -> usize,
     ) -> Option<Result<Self, OocError>> {
         let b = budget(self.decoded_bytes());
-        Some(HccOocBvh::from_bytes_with_budget(self.file_bytes(), b))
+        // The same bytes: a mapped file stays mapped (shared), not copied.
+        let file = match &self.mode {
+            Mode::Whole { file, .. } => Store::Owned(file.clone()),
+            Mode::Paged(p) => p.file().clone(),
+        };
+        Some(HccOocBvh::with_budget(file, b))
     }
 }

@@ -249,7 +249,7 @@ impl HccOocBvh {
 
     /// Pre-loaded or paged, by the header's estimate of the i-HCCMesh's
     /// size against `budget`.
-    fn with_budget(file: Store, budget: usize) -> Result<Self, OocError> {
+    pub(super) fn with_budget(file: Store, budget: usize) -> Result<Self, OocError> {
         let (h, _) = parse_with(&file, false)?;
         let mode = if paged::decoded_estimate(&h) <= budget {
             Mode::Whole {
