@@ -8,7 +8,7 @@ use crate::common;
 use std::collections::BTreeSet;
 use std::ops::ControlFlow;
 
-use cbvh::build::{BuildOptions, CanonicalBvh, Layout, build};
+use cbvh::build::Layout;
 use cbvh::codec::clbvh::{ClBvh, ClError, ClNode, ClOptions, LeafKind, NodeKind};
 use cbvh::codec::plain::PlainBvh;
 use cbvh::codec::{ByteSize, Codec};
@@ -18,15 +18,6 @@ use cbvh::{Mesh, TraversalStats, query};
 use common::*;
 use glam::Vec3A;
 use proptest::prelude::*;
-
-fn tree(mesh: &Mesh, layout: Layout, leaf: usize) -> CanonicalBvh {
-    let opts = BuildOptions {
-        layout,
-        max_leaf_triangles: leaf,
-        ..Default::default()
-    };
-    build(mesh, &opts, &|_, _| {}).expect("build")
-}
 
 /// Every variant: fast and compact with and without multi-leaf nodes, at
 /// leaf sizes 1, 4 and 10.

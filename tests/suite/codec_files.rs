@@ -649,7 +649,7 @@ fn cli_checks_counts_outputs_and_chunks_before_any_work() {
             .unwrap()
             .to_string()
     };
-    for args in [
+    let mut refused: Vec<Vec<String>> = vec![
         vec!["gen", "statue", "--tris", "3000000", "-o", &inside("s.ply")],
         vec![
             "build",
@@ -669,35 +669,35 @@ fn cli_checks_counts_outputs_and_chunks_before_any_work() {
             "-o",
             &inside("s.png"),
         ],
-    ] {
-        let e = cbvh_refuses_within(&args, 20);
-        assert!(
-            e.contains("--output") && e.contains("does not exist"),
-            "{args:?}: {e}"
-        );
-        assert!(!missing.exists(), "{args:?} made {}", missing.display());
-    }
-    // Out of core, which used to make the output's directories and report
-    // success.
+    ]
+    .into_iter()
+    .map(|a| a.into_iter().map(String::from).collect())
+    .collect();
+    // Out of core (every codec that builds so), which used to make the
+    // output's directories and report success.
     cbvh::mesh::save(&statue(100_000), &ply).unwrap();
-    for codec in ["hcc-ooc", "racbvh"] {
+    for codec in CodecKind::ALL.iter().filter(|k| k.builds_out_of_core()) {
         let args = [
             "build",
             &ply,
             "--codec",
-            codec,
+            codec.name(),
             "--out-of-core",
             "--chunk-triangles",
             "12000",
             "-o",
             &inside("s.cbvh"),
         ];
+        refused.push(args.into_iter().map(String::from).collect());
+    }
+    for args in &refused {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let e = cbvh_refuses_within(&args, 20);
         assert!(
             e.contains("--output") && e.contains("does not exist"),
-            "{codec}: {e}"
+            "{args:?}: {e}"
         );
-        assert!(!missing.exists(), "{codec} made {}", missing.display());
+        assert!(!missing.exists(), "{args:?} made {}", missing.display());
     }
     // --chunk-triangles: at least 1, numbered by u32, and a chunk that fits
     // the memory budget.
@@ -727,5 +727,24 @@ fn cli_checks_counts_outputs_and_chunks_before_any_work() {
         assert!(e.contains(want), "{extra:?}: {e}");
         assert!(!std::path::Path::new(&out).exists());
     }
+    // A build that is not chunked: --chunk-triangles is refused, not
+    // ignored.
+    let args = [
+        "build",
+        &ply,
+        "--codec",
+        "racbvh",
+        "--chunk-triangles",
+        "500",
+        "-o",
+        &out,
+    ];
+    let e = cbvh_refuses_within(&args, 20);
+    assert!(
+        e.contains("--chunk-triangles 500 sizes an out-of-core build's chunks")
+            && e.contains("add --out-of-core"),
+        "{e}"
+    );
+    assert!(!std::path::Path::new(&out).exists());
     std::fs::remove_dir_all(&d).ok();
 }

@@ -20,7 +20,7 @@ use crate::common;
 
 use std::path::PathBuf;
 
-use cbvh::build::{BuildOptions, CanonicalBvh, Layout, build};
+use cbvh::build::{CanonicalBvh, Layout};
 use cbvh::codec::common::MassProps;
 use cbvh::codec::{AnyCodec, ByteSize, Codec, CodecFileError, OpenOptions};
 use cbvh::contact::EdgeFlags;
@@ -70,15 +70,6 @@ fn triangle_multiset(m: &Mesh) -> Vec<[[u32; 3]; 3]> {
         .collect();
     v.sort_unstable();
     v
-}
-
-fn tree(mesh: &Mesh, layout: Layout, leaf: usize) -> CanonicalBvh {
-    let opts = BuildOptions {
-        layout,
-        max_leaf_triangles: leaf,
-        ..Default::default()
-    };
-    build(mesh, &opts, &|_, _| {}).expect("build")
 }
 
 fn encode<C: Codec>(bvh: &CanonicalBvh, mesh: &Mesh, o: &C::Options) -> C {
@@ -324,53 +315,10 @@ pub fn edge_flags_round_trip<C: Codec>(v: &Variants<C>) {
     }
 }
 
-/// Meshes at the edges of what a builder and a codec take.
+/// Meshes at the edges of what a builder and a codec take, and one large
+/// enough for many clusters or blocks.
 fn edge_meshes() -> Vec<(&'static str, Mesh)> {
-    let mut out: Vec<(&'static str, Mesh)> = Vec::new();
-    let [one, same, point, huge]: [Mesh; 4] = edge_case_meshes().try_into().unwrap();
-    out.push(("one triangle", one));
-    out.push(("40 identical triangles", same));
-    out.push(("all corners one point", point));
-    out.push(("coordinates of 1e9", huge));
-    // A flat grid, every z = 0.
-    let mut vertices = Vec::new();
-    let mut triangles = Vec::new();
-    for y in 0..8u32 {
-        for x in 0..8u32 {
-            vertices.push([x as f32, y as f32, 0.0]);
-        }
-    }
-    for y in 0..7u32 {
-        for x in 0..7u32 {
-            let i = y * 8 + x;
-            triangles.push([i, i + 1, i + 8]);
-            triangles.push([i + 1, i + 9, i + 8]);
-        }
-    }
-    out.push(("flat, z = 0", Mesh::new(vertices, triangles)));
-    // Every corner on one line (zero-area triangles).
-    let line: Vec<[f32; 3]> = (0..30).map(|i| [i as f32 * 0.5, i as f32, 2.0]).collect();
-    let tris = (0..28u32).map(|i| [i, i + 1, i + 2]).collect();
-    out.push(("collinear", Mesh::new(line, tris)));
-    // Far from the origin: a soup offset by 1e6.
-    let mut far = soup(3, 200, 5.0);
-    for v in &mut far.vertices {
-        for c in v.iter_mut() {
-            *c += 1e6;
-        }
-    }
-    out.push(("offset 1e6", far));
-    // Duplicates: the same triangles twice, under other ids.
-    let mut dup = soup(4, 60, 3.0);
-    let twice: Vec<[u32; 3]> = dup
-        .triangles
-        .iter()
-        .chain(&dup.triangles)
-        .copied()
-        .collect();
-    dup.triangles = twice;
-    out.push(("duplicate triangles", dup));
-    // Large enough for many clusters or blocks.
+    let mut out = common::edge_meshes();
     out.push(("3000-triangle soup", soup(5, 3000, 20.0)));
     out
 }

@@ -4,7 +4,7 @@
 use crate::common;
 
 use cbvh::Mesh;
-use cbvh::build::{BuildOptions, CanonicalBvh, Layout, build};
+use cbvh::build::{CanonicalBvh, Layout};
 use cbvh::codec::hcc::template::{TEMPLATE_COUNT, TEMPLATES};
 use cbvh::codec::hcc::{HccBvh, HccError, HccOptions, MAX_LEAF_TRIANGLES};
 use cbvh::codec::plain::PlainBvh;
@@ -15,17 +15,8 @@ use common::*;
 use glam::Vec3A;
 use proptest::prelude::*;
 
-fn tree(mesh: &Mesh, leaf: usize, layout: Layout) -> CanonicalBvh {
-    let opts = BuildOptions {
-        max_leaf_triangles: leaf,
-        layout,
-        ..Default::default()
-    };
-    build(mesh, &opts, &|_, _| {}).expect("build")
-}
-
 fn hcc(mesh: &Mesh, leaf: usize) -> (CanonicalBvh, HccBvh) {
-    let t = tree(mesh, leaf, Layout::DepthFirst);
+    let t = tree(mesh, Layout::DepthFirst, leaf);
     let h = HccBvh::encode(&t, mesh).expect("encode");
     (t, h)
 }
@@ -188,7 +179,7 @@ proptest! {
         let (_, a) = hcc(&ma, 1);
         let (_, b) = hcc(&mb, 3);
         check_bvtt(&a, &a.decoded_mesh(), &b, &b.decoded_mesh(), seed);
-        let p = PlainBvh::new(&tree(&mb, 1, Layout::DepthFirst), &mb);
+        let p = PlainBvh::new(&tree(&mb, Layout::DepthFirst, 1), &mb);
         check_bvtt(&a, &a.decoded_mesh(), &p, &mb, seed);
     }
 }
@@ -353,14 +344,14 @@ fn a_child_that_is_a_single_triangle() {
 #[test]
 fn leaves_too_large_are_errors() {
     let mesh = soup(3, 200, 1.0);
-    let t = tree(&mesh, MAX_LEAF_TRIANGLES + 1, Layout::DepthFirst);
+    let t = tree(&mesh, Layout::DepthFirst, MAX_LEAF_TRIANGLES + 1);
     assert!(matches!(
         HccBvh::encode(&t, &mesh),
         Err(HccError::LeafSize { .. })
     ));
     let other = soup(4, 10, 1.0);
     assert!(matches!(
-        HccBvh::encode(&tree(&mesh, 1, Layout::DepthFirst), &other),
+        HccBvh::encode(&tree(&mesh, Layout::DepthFirst, 1), &other),
         Err(HccError::MeshMismatch { .. })
     ));
 }
@@ -369,7 +360,7 @@ fn leaves_too_large_are_errors() {
 fn every_layout_encodes_the_same_answers() {
     let mesh = soup(9, 700, 5.0);
     for layout in Layout::ALL {
-        let t = tree(&mesh, 1, layout);
+        let t = tree(&mesh, layout, 1);
         let h = HccBvh::encode(&t, &mesh).unwrap();
         check_round_trip(&t, &h, &mesh);
     }
@@ -452,7 +443,7 @@ fn quantized_vertices_stay_within_half_a_step() {
     use cbvh::codec::ByteSize;
     let mesh = cbvh::scene::generate(cbvh::scene::Kind::Turbine, 4000, 3, &mut |_, _| {}).unwrap();
     for (bits, leaf) in [(16, 1), (10, 8), (24, 4)] {
-        let t = tree(&mesh, leaf, Layout::DepthFirst);
+        let t = tree(&mesh, Layout::DepthFirst, leaf);
         let o = HccOptions {
             vertex_bits: Some(bits),
             ..Default::default()
@@ -484,7 +475,7 @@ fn quantized_vertices_stay_within_half_a_step() {
         assert_eq!(back.decoded_mesh(), d);
         assert_eq!(back.vertex_error(), err);
     }
-    let t = tree(&mesh, 1, Layout::DepthFirst);
+    let t = tree(&mesh, Layout::DepthFirst, 1);
     let too_many = HccOptions {
         vertex_bits: Some(25),
         ..Default::default()
@@ -501,7 +492,7 @@ fn tree_order_numbers_triangles_as_stored_without_maps() {
     let mesh = cbvh::scene::generate(cbvh::scene::Kind::Statue, 3000, 7, &mut |_, _| {}).unwrap();
     let n = mesh.triangles.len();
     for (bits, leaf) in [(None, 1), (Some(16), 8), (Some(12), 1), (None, 4)] {
-        let t = tree(&mesh, leaf, Layout::CacheEfficient);
+        let t = tree(&mesh, Layout::CacheEfficient, leaf);
         let kept = HccOptions {
             vertex_bits: bits,
             vertex_ids: false,
@@ -604,7 +595,7 @@ fn own_traversal_equals_the_generic_one_bit_for_bit() {
             (4, HccOptions::default()),
             (4, HccOptions::tree_order(Some(12))),
         ] {
-            let t = tree(mesh, leaf, Layout::DepthFirst);
+            let t = tree(mesh, Layout::DepthFirst, leaf);
             let h = HccBvh::encode_with(&t, mesh, &options).expect("encode");
             let mut s = cbvh::TraversalStats::default();
             let mut hits = 0;

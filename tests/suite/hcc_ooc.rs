@@ -6,7 +6,7 @@
 use crate::common;
 
 use cbvh::Mesh;
-use cbvh::build::{BuildOptions, CanonicalBvh, Layout, build};
+use cbvh::build::Layout;
 use cbvh::codec::hcc::HccBvh;
 use cbvh::codec::hcc::ooc::{HccOocBvh, OocError, OocOptions};
 use cbvh::codec::{AnyCodec, AnyOptions, Codec, CodecKind, OpenOptions};
@@ -14,15 +14,6 @@ use cbvh::cursor::NodeCursor;
 use cbvh::scene::{Kind, generate};
 use common::*;
 use xxhash_rust::xxh3::xxh3_64;
-
-fn tree(mesh: &Mesh, layout: Layout, leaf: usize) -> CanonicalBvh {
-    let opts = BuildOptions {
-        layout,
-        max_leaf_triangles: leaf,
-        ..Default::default()
-    };
-    build(mesh, &opts, &|_, _| {}).expect("build")
-}
 
 fn mesh_of(kind: Kind, tris: usize) -> Mesh {
     generate(kind, tris, 1, &mut |_, _| {}).expect("generate")
@@ -102,53 +93,9 @@ fn o_to_i_decode_equals_the_directly_built_i_hccmesh() {
     }
 }
 
-/// The shared suite's edge meshes beyond `edge_case_meshes`: a flat grid,
-/// collinear corners, coordinates far from the origin, duplicates.
-fn more_edge_meshes() -> Vec<(&'static str, Mesh)> {
-    let mut out: Vec<(&'static str, Mesh)> = Vec::new();
-    let mut vertices = Vec::new();
-    let mut triangles = Vec::new();
-    for y in 0..8u32 {
-        for x in 0..8u32 {
-            vertices.push([x as f32, y as f32, 0.0]);
-        }
-    }
-    for y in 0..7u32 {
-        for x in 0..7u32 {
-            let i = y * 8 + x;
-            triangles.push([i, i + 1, i + 8]);
-            triangles.push([i + 1, i + 9, i + 8]);
-        }
-    }
-    out.push(("flat", Mesh::new(vertices, triangles)));
-    let line: Vec<[f32; 3]> = (0..30).map(|i| [i as f32 * 0.5, i as f32, 2.0]).collect();
-    let tris = (0..28u32).map(|i| [i, i + 1, i + 2]).collect();
-    out.push(("collinear", Mesh::new(line, tris)));
-    let mut far = soup(3, 200, 5.0);
-    for v in &mut far.vertices {
-        for c in v.iter_mut() {
-            *c += 1e6;
-        }
-    }
-    out.push(("offset 1e6", far));
-    let mut dup = soup(4, 60, 3.0);
-    let twice: Vec<[u32; 3]> = dup
-        .triangles
-        .iter()
-        .chain(&dup.triangles)
-        .copied()
-        .collect();
-    dup.triangles = twice;
-    out.push(("duplicates", dup));
-    for (i, m) in edge_case_meshes().into_iter().enumerate() {
-        out.push((["one", "same", "point", "huge"][i], m));
-    }
-    out
-}
-
 #[test]
 fn edge_meshes_round_trip_in_every_option_and_leaf_size() {
-    for (name, mesh) in more_edge_meshes() {
+    for (name, mesh) in edge_meshes() {
         for (layout, leaf) in [(Layout::VanEmdeBoas, 1), (Layout::DepthFirst, 4)] {
             for o in options() {
                 eprintln!("{name}, {layout:?}, leaves of {leaf}, {o:?}");

@@ -11,10 +11,9 @@ use crate::common;
 use cbvh::Mesh;
 use cbvh::build::chunked::{ChunkError, ChunkOptions, ChunkedMesh};
 use cbvh::build::{BuildOptions, build};
-use cbvh::codec::common::edges;
 use cbvh::codec::hcc::HccBvh;
 use cbvh::codec::hcc::ooc::{HccOocBvh, OocError, OocOptions, StreamedBuild, encode_streamed};
-use cbvh::codec::{AnyCodec, Codec, OpenOptions};
+use cbvh::codec::{AnyCodec, OpenOptions};
 use cbvh::scene::{Kind, generate};
 use common::*;
 
@@ -72,41 +71,10 @@ fn streamed_files_answer_like_brute_force_and_hold_the_in_memory_triangles() {
             // The same triangles as the in-memory build's (one grid).
             let bvh = build(&mesh, &BuildOptions::default(), &|_, _| {}).unwrap();
             let direct = HccBvh::encode_with(&bvh, &mesh, &o.hcc()).unwrap();
-            assert_eq!(
-                triangle_set(&dm),
-                triangle_set(&direct.decoded_mesh()),
-                "{name} chunk {chunk}"
-            );
             assert_eq!(hcc.vertex_error(), direct.vertex_error());
-            // The edge flags the whole mesh gives, counters included.
-            let want = edges::of_cursor(&ooc);
-            let got = ooc.edge_flags();
-            assert_eq!(got.as_slice(), want.as_slice(), "{name} chunk {chunk}");
-            assert_eq!(
-                (got.boundary_edges, got.flat_edges, got.misoriented_edges),
-                (want.boundary_edges, want.flat_edges, want.misoriented_edges),
-                "{name} chunk {chunk}"
-            );
-            // Mass within rounding of the in-memory file's.
-            let (a, b) = (ooc.mass(), direct.mass());
-            assert!(
-                (a.mass - b.mass).abs() <= 1e-4 * b.mass.abs().max(1e-9),
-                "{name}: {a:?} vs {b:?}"
-            );
-            // (Identical centroids cannot be split.)
-            if chunk == 1 && n > 1 && !matches!(name, "same" | "flat") {
-                assert!(r.chunks > 1, "{name}: {} chunks", r.chunks);
-            }
-            // Out of core, through the registry, with a small cache.
-            let paged = AnyCodec::open(
-                &out,
-                &OpenOptions {
-                    cache_budget_bytes: 4096,
-                    ..Default::default()
-                },
-            )
-            .unwrap();
-            assert_eq!(paged.triangle_count(), mesh.triangles.len());
+            let what = format!("{name} chunk {chunk}");
+            let same = matches!(name, "same" | "flat");
+            check_streamed_like_direct(&what, &ooc, &direct, &out, &mesh, chunk, r.chunks, same);
         }
     }
     std::fs::remove_dir_all(&d).ok();

@@ -5,7 +5,7 @@
 
 use crate::common;
 
-use cbvh::build::{BuildOptions, CanonicalBvh, Layout, build};
+use cbvh::build::{CanonicalBvh, Layout};
 use cbvh::codec::common::FormatError;
 use cbvh::codec::racbvh::{RacBvh, RacError, RacOptions};
 use cbvh::codec::{AnyOptions, ByteSize};
@@ -13,15 +13,6 @@ use cbvh::cursor::NodeCursor;
 use cbvh::scene::{Kind, generate};
 use cbvh::{Mesh, TraversalStats, query};
 use common::*;
-
-fn tree(mesh: &Mesh, layout: Layout, leaf: usize) -> CanonicalBvh {
-    let opts = BuildOptions {
-        layout,
-        max_leaf_triangles: leaf,
-        ..Default::default()
-    };
-    build(mesh, &opts, &|_, _| {}).expect("build")
-}
 
 fn opts(cluster_nodes: u32, vertex_bits: Option<u32>) -> RacOptions {
     RacOptions {

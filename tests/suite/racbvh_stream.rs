@@ -12,9 +12,7 @@ use crate::common;
 
 use cbvh::Mesh;
 use cbvh::build::{BuildOptions, build};
-use cbvh::codec::common::edges;
 use cbvh::codec::racbvh::{RacBvh, RacError, RacOptions, StreamedBuild, encode_streamed};
-use cbvh::codec::{AnyCodec, OpenOptions};
 use cbvh::scene::{Kind, generate};
 use common::*;
 
@@ -107,41 +105,9 @@ fn streamed_racbvh_files_verify_answer_like_brute_force_and_hold_the_in_memory_t
             // The same triangles as the in-memory build's (one grid).
             let bvh = build(&mesh, &BuildOptions::default(), &|_, _| {}).unwrap();
             let direct = RacBvh::encode(&bvh, &mesh, &o).unwrap();
-            assert_eq!(
-                triangle_set(&dm),
-                triangle_set(&direct.decoded_mesh()),
-                "{what}"
-            );
-            // The edge flags the whole mesh gives, counters included.
-            let want = edges::of_cursor(&rac);
-            let got = rac.edge_flags();
-            assert_eq!(got.as_slice(), want.as_slice(), "{what}");
-            assert_eq!(
-                (got.boundary_edges, got.flat_edges, got.misoriented_edges),
-                (want.boundary_edges, want.flat_edges, want.misoriented_edges),
-                "{what}"
-            );
-            // Mass within rounding of the in-memory file's.
-            let (a, b) = (rac.mass(), direct.mass());
-            assert!(
-                (a.mass - b.mass).abs() <= 1e-4 * b.mass.abs().max(1e-9),
-                "{what}: {a:?} vs {b:?}"
-            );
-            // (Identical centroids cannot be split.)
-            if chunk == 1 && n > 1 && !matches!(name, "same" | "flat") {
-                assert!(r.chunks > 1, "{what}: {} chunks", r.chunks);
-            }
-            // Out of core, through the registry, with a small cache (the
-            // node cache's path).
-            let paged = AnyCodec::open(
-                &out,
-                &OpenOptions {
-                    cache_budget_bytes: 4096,
-                    ..Default::default()
-                },
-            )
-            .unwrap();
-            assert_eq!(paged.triangle_count(), mesh.triangles.len());
+            let same = matches!(name, "same" | "flat");
+            check_streamed_like_direct(&what, &rac, &direct, &out, &mesh, chunk, r.chunks, same);
+            // The node cache's path.
             let small = RacBvh::open(&out, 4096).unwrap();
             check_queries(&small, &dm, chunk + 1);
         }

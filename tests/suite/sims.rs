@@ -16,6 +16,21 @@ fn run(bin: &str, args: &[&str]) -> (bool, String) {
     )
 }
 
+/// `lucy-on-turbine` on a small scene (1000-triangle meshes, one step)
+/// with `extra` flags.
+fn small_lucy(extra: &[&str]) -> (bool, String) {
+    let small = [
+        "--statue-tris",
+        "1000",
+        "--turbine-tris",
+        "1000",
+        "--steps",
+        "1",
+    ];
+    let args: Vec<&str> = small.iter().chain(extra).copied().collect();
+    run(env!("CARGO_BIN_EXE_lucy-on-turbine"), &args)
+}
+
 /// The JSON report a sim wrote to `json` after it succeeded (`ok`, else
 /// the test fails with its `stderr`); the file is removed.
 fn report(ok: bool, stderr: &str, json: &std::path::Path) -> serde_json::Value {
@@ -158,21 +173,12 @@ fn contact_modes_follow_the_flag_and_the_shape_names() {
     // Both modes for `plain` already include `plain-pairs`: named again, it
     // runs once.
     let json = temp("modes_dedup.json");
-    let (ok, stderr) = run(
-        env!("CARGO_BIN_EXE_lucy-on-turbine"),
-        &[
-            "--statue-tris",
-            "1000",
-            "--turbine-tris",
-            "1000",
-            "--steps",
-            "1",
-            "--shapes",
-            "plain,plain-pairs",
-            "--json",
-            json.to_str().unwrap(),
-        ],
-    );
+    let (ok, stderr) = small_lucy(&[
+        "--shapes",
+        "plain,plain-pairs",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
     let v = report(ok, &stderr, &json);
     let names: Vec<&str> = v["runs"]
         .as_array()
@@ -209,21 +215,7 @@ fn sims_reject_bad_flags_with_a_message() {
             "{stderr}"
         );
     }
-    let (ok, stderr) = run(
-        env!("CARGO_BIN_EXE_lucy-on-turbine"),
-        &[
-            "--statue-tris",
-            "1000",
-            "--turbine-tris",
-            "1000",
-            "--steps",
-            "1",
-            "--shapes",
-            "racbvh",
-            "--cluster-nodes",
-            "100",
-        ],
-    );
+    let (ok, stderr) = small_lucy(&["--shapes", "racbvh", "--cluster-nodes", "100"]);
     assert!(!ok);
     assert!(stderr.contains("power of two"), "{stderr}");
 }

@@ -35,6 +35,17 @@ impl Rng {
     }
 }
 
+/// The canonical tree of `mesh` in `layout` with up to `leaf` triangles a
+/// leaf (the builder's defaults otherwise).
+pub fn tree(mesh: &Mesh, layout: cbvh::Layout, leaf: usize) -> cbvh::CanonicalBvh {
+    let opts = cbvh::BuildOptions {
+        layout,
+        max_leaf_triangles: leaf,
+        ..Default::default()
+    };
+    cbvh::build::build(mesh, &opts, &|_, _| {}).expect("build")
+}
+
 /// A random triangle soup of `n` triangles in a box of size `extent`, with
 /// some tiny and some degenerate triangles.
 pub fn soup(seed: u64, n: usize, extent: f32) -> Mesh {
@@ -740,4 +751,108 @@ pub fn triangle_set(m: &Mesh) -> Vec<[[u32; 3]; 3]> {
         .collect();
     v.sort_unstable();
     v
+}
+
+/// What a file built out of core (`streamed`, at `out`, from `mesh` in
+/// `chunks` chunks of at most `chunk` triangles) must share with the
+/// in-memory build of the same mesh (`direct`): the same triangles (one
+/// grid), the edge flags its own triangles give (counters included), the
+/// mass within rounding, more than one chunk for one triangle a chunk
+/// (unless the centroids coincide), and opening out of core through the
+/// registry with a small cache. `what` names the case in failures.
+#[allow(clippy::too_many_arguments)]
+pub fn check_streamed_like_direct<S: cbvh::codec::Codec, D: cbvh::codec::Codec>(
+    what: &str,
+    streamed: &S,
+    direct: &D,
+    out: &std::path::Path,
+    mesh: &Mesh,
+    chunk: u64,
+    chunks: usize,
+    same_centroids: bool,
+) {
+    use cbvh::codec::common::edges;
+    use cbvh::codec::{AnyCodec, OpenOptions};
+    let dm = streamed.decoded_mesh();
+    assert_eq!(
+        triangle_set(&dm),
+        triangle_set(&direct.decoded_mesh()),
+        "{what}"
+    );
+    let want = edges::of_cursor(streamed);
+    let got = streamed.edge_flags();
+    assert_eq!(got.as_slice(), want.as_slice(), "{what}");
+    assert_eq!(
+        (got.boundary_edges, got.flat_edges, got.misoriented_edges),
+        (want.boundary_edges, want.flat_edges, want.misoriented_edges),
+        "{what}"
+    );
+    let (a, b) = (streamed.mass(), direct.mass());
+    assert!(
+        (a.mass - b.mass).abs() <= 1e-4 * b.mass.abs().max(1e-9),
+        "{what}: {a:?} vs {b:?}"
+    );
+    if chunk == 1 && mesh.triangles.len() > 1 && !same_centroids {
+        assert!(chunks > 1, "{what}: {chunks} chunks");
+    }
+    let paged = AnyCodec::open(
+        out,
+        &OpenOptions {
+            cache_budget_bytes: 4096,
+            ..Default::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("{what}: {e}"));
+    assert_eq!(paged.triangle_count(), mesh.triangles.len(), "{what}");
+}
+
+/// Meshes at the edges of what a builder and a codec take:
+/// [`edge_case_meshes`], a flat grid, collinear corners, coordinates far
+/// from the origin, duplicate triangles.
+pub fn edge_meshes() -> Vec<(&'static str, Mesh)> {
+    let mut out: Vec<(&'static str, Mesh)> = Vec::new();
+    let [one, same, point, huge]: [Mesh; 4] = edge_case_meshes().try_into().unwrap();
+    out.push(("one triangle", one));
+    out.push(("40 identical triangles", same));
+    out.push(("all corners one point", point));
+    out.push(("coordinates of 1e9", huge));
+    // A flat grid, every z = 0.
+    let mut vertices = Vec::new();
+    let mut triangles = Vec::new();
+    for y in 0..8u32 {
+        for x in 0..8u32 {
+            vertices.push([x as f32, y as f32, 0.0]);
+        }
+    }
+    for y in 0..7u32 {
+        for x in 0..7u32 {
+            let i = y * 8 + x;
+            triangles.push([i, i + 1, i + 8]);
+            triangles.push([i + 1, i + 9, i + 8]);
+        }
+    }
+    out.push(("flat, z = 0", Mesh::new(vertices, triangles)));
+    // Every corner on one line (zero-area triangles).
+    let line: Vec<[f32; 3]> = (0..30).map(|i| [i as f32 * 0.5, i as f32, 2.0]).collect();
+    let tris = (0..28u32).map(|i| [i, i + 1, i + 2]).collect();
+    out.push(("collinear", Mesh::new(line, tris)));
+    // Far from the origin: a soup offset by 1e6.
+    let mut far = soup(3, 200, 5.0);
+    for v in &mut far.vertices {
+        for c in v.iter_mut() {
+            *c += 1e6;
+        }
+    }
+    out.push(("offset 1e6", far));
+    // Duplicates: the same triangles twice, under other ids.
+    let mut dup = soup(4, 60, 3.0);
+    let twice: Vec<[u32; 3]> = dup
+        .triangles
+        .iter()
+        .chain(&dup.triangles)
+        .copied()
+        .collect();
+    dup.triangles = twice;
+    out.push(("duplicate triangles", dup));
+    out
 }
