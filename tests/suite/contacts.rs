@@ -700,29 +700,7 @@ fn grid(n: u32, w: f32) -> Mesh {
 /// A closed box mesh (12 triangles, outward) with half extents `h`,
 /// centred at the origin.
 fn box_mesh(h: [f32; 3]) -> Mesh {
-    let mut v = Vec::new();
-    for i in 0..8u32 {
-        v.push([
-            if i & 1 == 0 { -h[0] } else { h[0] },
-            if i & 2 == 0 { -h[1] } else { h[1] },
-            if i & 4 == 0 { -h[2] } else { h[2] },
-        ]);
-    }
-    let t = vec![
-        [0, 2, 1],
-        [1, 2, 3],
-        [4, 5, 6],
-        [5, 7, 6],
-        [0, 1, 4],
-        [1, 5, 4],
-        [2, 6, 3],
-        [3, 6, 7],
-        [0, 4, 2],
-        [2, 4, 6],
-        [1, 3, 5],
-        [3, 7, 5],
-    ];
-    Mesh::new(v, t)
+    Mesh::cuboid([-h[0], -h[1], -h[2]], h)
 }
 
 /// Drops `body` (a collider builder for a dynamic body) flat from 0.05

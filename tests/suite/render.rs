@@ -39,30 +39,7 @@ fn plain(mesh: &Mesh, layout: Layout, leaf: usize) -> CursorTarget<PlainBvh> {
 
 /// An axis-aligned box as a closed mesh, outward counter-clockwise.
 fn cube(min: [f32; 3], max: [f32; 3]) -> Mesh {
-    let v: Vec<[f32; 3]> = (0..8)
-        .map(|i| {
-            [
-                if i & 1 == 0 { min[0] } else { max[0] },
-                if i & 2 == 0 { min[1] } else { max[1] },
-                if i & 4 == 0 { min[2] } else { max[2] },
-            ]
-        })
-        .collect();
-    let t = vec![
-        [0, 2, 1],
-        [1, 2, 3],
-        [4, 5, 6],
-        [5, 7, 6],
-        [0, 1, 4],
-        [1, 5, 4],
-        [2, 6, 3],
-        [3, 6, 7],
-        [0, 4, 2],
-        [2, 4, 6],
-        [1, 3, 5],
-        [3, 7, 5],
-    ];
-    Mesh::new(v, t)
+    Mesh::cuboid(min, max)
 }
 
 fn small() -> RenderOptions {
