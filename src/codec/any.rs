@@ -28,7 +28,7 @@ use super::hcc::HccBvh;
 use super::hcc::ooc::HccOocBvh;
 use super::plain::PlainBvh;
 use super::racbvh::RacBvh;
-use super::settings::{Settings, SettingsError};
+use super::settings::{CodecOptions, Settings, SettingsError};
 use crate::build::chunked::{ChunkedMesh, Progress};
 use crate::build::{BuildOptions, CanonicalBvh};
 use crate::contact::EdgeFlags;
@@ -236,13 +236,13 @@ impl CodecKind {
         CodecKind::of_magic(&head)
     }
 
-    /// The keys of the codec's own settings ([`Codec::SETTINGS`]).
+    /// The keys of the codec's own settings ([`CodecOptions::SETTINGS`]).
     pub fn settings(self) -> &'static [&'static str] {
         struct Keys;
         impl KindVisitor for Keys {
             type Output = &'static [&'static str];
             fn visit<C: Registered>(self) -> &'static [&'static str] {
-                C::SETTINGS
+                <C::Options as CodecOptions>::SETTINGS
             }
         }
         self.visit(Keys)

@@ -8,7 +8,7 @@ use super::any::CodecKind;
 use super::common::MassProps;
 use super::common::container::Frame;
 use super::common::page_cache::CacheStats;
-use super::settings::{Settings, SettingsError};
+use super::settings::{CodecOptions, Settings, SettingsError};
 use crate::build::chunked::{ChunkedMesh, Progress};
 use crate::build::{BuildOptions, CanonicalBvh};
 use crate::contact::EdgeFlags;
@@ -39,21 +39,23 @@ pub trait Codec: RayCursor + ByteSize + Send + Sync + Sized + 'static {
     /// reads a file's sections with without knowing the codec.
     const FRAME: Frame;
 
-    /// Encoding settings.
-    type Options: Clone + Default + std::fmt::Debug + Send + Sync;
+    /// Encoding settings, made from a front end's [`Settings`] by
+    /// [`CodecOptions`].
+    type Options: CodecOptions + Clone + Default + std::fmt::Debug + Send + Sync;
 
     /// What can go wrong encoding, opening, verifying or saving: a failed
     /// read or write is an [`IoError`] naming the file.
     type Error: std::error::Error + From<IoError> + Send + Sync + 'static;
 
-    /// The codec's options from a front end's [`Settings`]: the common
-    /// settings it uses and its own `CODEC.KEY=VALUE` keys (listed on its
-    /// options type). An unknown key, a bad value or options the codec
-    /// would reject are errors naming them, before any work.
-    fn options_from(settings: &Settings) -> Result<Self::Options, SettingsError>;
-
-    /// The keys of the codec's own settings (for help texts).
-    const SETTINGS: &'static [&'static str];
+    /// The codec's options from a front end's [`Settings`]: a setting
+    /// under the codec's name whose key is not among its options'
+    /// [`CodecOptions::SETTINGS`] is refused, then the options type makes
+    /// itself ([`CodecOptions::from_settings`]). Errors name the setting,
+    /// before any work.
+    fn options_from(settings: &Settings) -> Result<Self::Options, SettingsError> {
+        settings.only(Self::KIND.name(), <Self::Options as CodecOptions>::SETTINGS)?;
+        Self::Options::from_settings(settings)
+    }
 
     /// Encodes `bvh`, built over `mesh`. A value that does not fit the
     /// codec's layout is an error, never a truncation.

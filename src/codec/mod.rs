@@ -37,7 +37,7 @@
 //!
 //! | file | what it holds |
 //! |---|---|
-//! | `mod.rs` | the module docs (the paper's choices and ours), the options type (with `from_settings` and `SETTINGS`; plain has none), the main type's struct definition with its accessors and figures (stats, [`ByteSize`]), and the re-exports that make the public paths (`codec::plain::PlainBvh`, …) |
+//! | `mod.rs` | the module docs (the paper's choices and ours), the options type with its [`CodecOptions`] impl (`SETTINGS`, `from_settings`; plain's options are `()`), the main type's struct definition with its accessors and figures (stats, [`ByteSize`]), and the re-exports that make the public paths (`codec::plain::PlainBvh`, …) |
 //! | `encode.rs` | building the main type from a [`CanonicalBvh`](crate::build::CanonicalBvh) and its mesh |
 //! | `cursor.rs` | the [`NodeCursor`](crate::cursor::NodeCursor) and [`RayCursor`](crate::query::RayCursor) impls, and the node handle type |
 //! | `decode.rs` | only where the codec decodes stored records apart from the cursor: RACBVH's clusters, the o-HCCMesh file into an i-HCCMesh |
@@ -96,11 +96,13 @@
 //!    (`stream.rs`) overrides `encode_streamed` and sets
 //!    `BUILDS_OUT_OF_CORE`; `cbvh build` then offers it out of core, by
 //!    the registry, with no line of its own.
-//! 3. Its options from a front end's [`Settings`] (`Codec::options_from`
-//!    and `Codec::SETTINGS`, next to its options type): the common settings
-//!    it uses (leaf size, vertex bits) and its own `CODEC.KEY=VALUE` keys,
-//!    checked there. `cbvh build`, the drop tests and their `--set` then
-//!    take them; no front-end file names a codec's options.
+//! 3. Its options from a front end's [`Settings`]: `impl CodecOptions`
+//!    for its options type, next to it (`SETTINGS`, the keys of its own
+//!    `CODEC.KEY=VALUE` settings, and `from_settings`, which reads them and
+//!    the common settings it uses, leaf size and vertex bits, and checks
+//!    them). The contract refuses any other key under the codec's name
+//!    (`Codec::options_from`). `cbvh build`, the drop tests and their
+//!    `--set` then take them; no front-end file names a codec's options.
 //! 4. One entry in the `registry!` invocation in [`any`] (variant, type,
 //!    options field, name, summary) and one arm in
 //!    [`with_codec!`](crate::with_codec); the compiler points at the arm if
@@ -126,7 +128,7 @@ pub use any::{AnyCodec, AnyOptions, CodecError, CodecFileError, CodecKind, Unkno
 pub use common::container::Frame;
 pub use common::page_cache::CacheStats;
 pub use contract::{Codec, OpenOptions, StreamedReport};
-pub use settings::{Settings, SettingsError};
+pub use settings::{CodecOptions, Settings, SettingsError};
 
 /// Memory of a stored structure, by component.
 pub trait ByteSize {

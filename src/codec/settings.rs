@@ -102,6 +102,31 @@ pub enum SettingsError {
     },
 }
 
+/// A codec's options type as front ends make it
+/// ([`Codec::Options`](super::Codec::Options) requires it): the keys of the
+/// codec's own settings, and how those and the common settings the codec
+/// uses become its options. The contract refuses a setting under the
+/// codec's name with another key before calling `from_settings`
+/// ([`Codec::options_from`](super::Codec::options_from)).
+pub trait CodecOptions: Sized {
+    /// The keys of the codec's own `CODEC.KEY=VALUE` settings (for help
+    /// texts, and the only keys the contract lets through).
+    const SETTINGS: &'static [&'static str];
+
+    /// The options from `settings`: a bad value, or options the codec
+    /// would reject, is an error naming them, before any work.
+    fn from_settings(settings: &Settings) -> Result<Self, SettingsError>;
+}
+
+/// The options of a codec with nothing to choose (plain): no keys.
+impl CodecOptions for () {
+    const SETTINGS: &'static [&'static str] = &[];
+
+    fn from_settings(_: &Settings) -> Result<(), SettingsError> {
+        Ok(())
+    }
+}
+
 impl Settings {
     /// The common settings, and no codec's own.
     pub fn new(leaf_size: usize, vertex_bits: Option<u32>) -> Self {
@@ -283,6 +308,16 @@ mod tests {
                 .unwrap_err()
                 .to_string();
             assert!(e.contains(want), "{spec}: {e}");
+        }
+        // Every codec refuses a key it does not have (the contract checks
+        // the keys before the options type reads them).
+        for k in CodecKind::ALL {
+            let mut s = Settings::default();
+            s.set(&format!("{k}.no-such-key=1")).unwrap();
+            let e = AnyOptions::from_settings(&s, &[*k])
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("no-such-key"), "{k}: {e}");
         }
         let e = AnyOptions::from_settings(&Settings::new(1, Some(30)), CodecKind::ALL)
             .unwrap_err()

@@ -8,7 +8,7 @@ use crate::codec::common::container::Frame;
 use super::{ClBvh, ClBvhCompact, ClError, ClOptions, CompactOptions, LeafKind, file};
 use crate::build::CanonicalBvh;
 use crate::codec::common::{FormatError, MassProps};
-use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError};
+use crate::codec::{Codec, CodecKind, OpenOptions};
 use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 
@@ -42,12 +42,6 @@ impl Codec for ClBvh {
     /// [`ClBvhCompact`]).
     type Options = ClOptions;
     type Error = ClError;
-
-    const SETTINGS: &'static [&'static str] = ClOptions::SETTINGS;
-
-    fn options_from(settings: &Settings) -> Result<ClOptions, SettingsError> {
-        ClOptions::from_settings(settings)
-    }
 
     fn encode(bvh: &CanonicalBvh, mesh: &Mesh, options: &ClOptions) -> Result<Self, ClError> {
         ClBvh::encode(
@@ -108,12 +102,6 @@ impl Codec for ClBvhCompact {
     const FRAME: Frame = file::FRAME;
     type Options = CompactOptions;
     type Error = ClError;
-
-    const SETTINGS: &'static [&'static str] = ClOptions::SETTINGS;
-
-    fn options_from(settings: &Settings) -> Result<CompactOptions, SettingsError> {
-        CompactOptions::from_settings(settings)
-    }
 
     fn encode(bvh: &CanonicalBvh, mesh: &Mesh, o: &CompactOptions) -> Result<Self, ClError> {
         ClBvhCompact::encode(bvh, mesh, o)

@@ -94,7 +94,7 @@ use glam::Vec3A;
 
 use crate::codec::ByteSize;
 use crate::codec::common::MassProps;
-use crate::codec::settings::{Settings, SettingsError};
+use crate::codec::settings::{CodecOptions, Settings, SettingsError};
 use crate::contact::EdgeFlags;
 use crate::geom::Aabb;
 use crate::mesh::Mesh;
@@ -150,23 +150,6 @@ impl Default for ClOptions {
 pub const COMPACT_LEAF_SIZE: usize = 6;
 
 impl ClOptions {
-    /// The keys of [`ClOptions::from_settings`] (and of
-    /// [`CompactOptions::from_settings`]).
-    pub const SETTINGS: &'static [&'static str] = &["leaf-size", "multi-leaf"];
-
-    /// The options from a front end's settings ([`crate::codec::settings`]):
-    /// `clbvh.leaf-size` (`M`, 1 to [`MAX_LEAF_SIZE`]; unset: 4, or the
-    /// common leaf size if larger) and `clbvh.multi-leaf` (`false`: the
-    /// uncompressed 8-wide reference).
-    pub fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
-        let (leaf_size, multi_leaf) = leaf_settings(s, "clbvh", Self::default().leaf_size)?;
-        Ok(Self {
-            leaf_size,
-            multi_leaf,
-            ..Self::default()
-        })
-    }
-
     /// These settings with `M` raised, if need be, to hold the leaves of a
     /// canonical tree built with up to `leaf` triangles a leaf (the encoder
     /// rejects a tree whose leaves exceed `M`).
@@ -312,16 +295,6 @@ pub struct CompactOptions {
 }
 
 impl CompactOptions {
-    /// As [`ClOptions::from_settings`], with the keys under
-    /// `clbvh-compact` and `M` 6 by default.
-    pub fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
-        let (leaf_size, multi_leaf) = leaf_settings(s, "clbvh-compact", Self::default().leaf_size)?;
-        Ok(Self {
-            leaf_size,
-            multi_leaf,
-        })
-    }
-
     /// As [`ClOptions::holding`].
     pub fn holding(self, leaf: usize) -> Self {
         Self {
@@ -352,6 +325,40 @@ impl crate::codec::ByteSize for ClBvhCompact {
     }
 }
 
+/// The keys of both variants' own settings.
+const LEAF_SETTINGS: &[&str] = &["leaf-size", "multi-leaf"];
+
+impl CodecOptions for ClOptions {
+    const SETTINGS: &'static [&'static str] = LEAF_SETTINGS;
+
+    /// The options from a front end's settings ([`crate::codec::settings`]):
+    /// `clbvh.leaf-size` (`M`, 1 to [`MAX_LEAF_SIZE`]; unset: 4, or the
+    /// common leaf size if larger) and `clbvh.multi-leaf` (`false`: the
+    /// uncompressed 8-wide reference).
+    fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
+        let (leaf_size, multi_leaf) = leaf_settings(s, "clbvh", Self::default().leaf_size)?;
+        Ok(Self {
+            leaf_size,
+            multi_leaf,
+            ..Self::default()
+        })
+    }
+}
+
+impl CodecOptions for CompactOptions {
+    const SETTINGS: &'static [&'static str] = LEAF_SETTINGS;
+
+    /// As [`ClOptions`]' settings, with the keys under `clbvh-compact` and
+    /// `M` 6 by default.
+    fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
+        let (leaf_size, multi_leaf) = leaf_settings(s, "clbvh-compact", Self::default().leaf_size)?;
+        Ok(Self {
+            leaf_size,
+            multi_leaf,
+        })
+    }
+}
+
 /// `M` and whether to make multi-leaf nodes, from `codec`'s `leaf-size`
 /// and `multi-leaf` settings: `M` is the setting if given, else
 /// `default_m` raised to the common leaf size (the encoder rejects a
@@ -361,8 +368,7 @@ fn leaf_settings(
     codec: &str,
     default_m: usize,
 ) -> Result<(usize, bool), SettingsError> {
-    const KEYS: &[&str] = ClOptions::SETTINGS;
-    s.only(codec, KEYS)?;
+    const KEYS: &[&str] = LEAF_SETTINGS;
     let m = s.get(codec, KEYS[0])?.unwrap_or(default_m.max(s.leaf_size));
     if !(1..=MAX_LEAF_SIZE).contains(&m) {
         return Err(SettingsError::Invalid {

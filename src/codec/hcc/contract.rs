@@ -6,7 +6,7 @@ use crate::codec::common::container::Frame;
 use super::{HccBvh, HccError, HccOptions, file};
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
-use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError};
+use crate::codec::{Codec, CodecKind, OpenOptions};
 use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 // The build figures' byte and triangle counts.
@@ -21,12 +21,6 @@ impl Codec for HccBvh {
     /// one triangle a leaf (the paper's form) or multi-triangle leaves.
     type Options = HccOptions;
     type Error = HccError;
-
-    const SETTINGS: &'static [&'static str] = HccOptions::SETTINGS;
-
-    fn options_from(settings: &Settings) -> Result<HccOptions, SettingsError> {
-        HccOptions::from_settings(settings)
-    }
 
     fn encode(bvh: &CanonicalBvh, mesh: &Mesh, options: &HccOptions) -> Result<Self, HccError> {
         HccBvh::encode_with(bvh, mesh, options)

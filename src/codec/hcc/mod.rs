@@ -141,7 +141,7 @@ pub use node::HccNode;
 
 use crate::codec::ByteSize;
 use crate::codec::common::MassProps;
-use crate::codec::settings::{Settings, SettingsError};
+use crate::codec::settings::{CodecOptions, Settings, SettingsError};
 use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 use ids::{IdMap, VertexIds};
@@ -258,27 +258,6 @@ impl Default for HccOptions {
 }
 
 impl HccOptions {
-    /// The keys of [`HccOptions::from_settings`].
-    pub const SETTINGS: &'static [&'static str] = &["vertex-ids", "triangle-ids", "tree-order"];
-
-    /// The options from a front end's settings ([`crate::codec::settings`]):
-    /// `hcc.vertex-ids`, `hcc.triangle-ids` (`true`/`false`), `hcc.tree-order`
-    /// (`true`: neither id map, as [`HccOptions::tree_order`]), and the
-    /// common `vertex_bits` (`f32` by default; 1 to 24).
-    pub fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
-        const KEYS: &[&str] = HccOptions::SETTINGS;
-        s.only("hcc", KEYS)?;
-        let d = Self::default();
-        let tree_order = s.get::<bool>("hcc", KEYS[2])?.unwrap_or(false);
-        let o = Self {
-            vertex_bits: s.vertex_bits_or(d.vertex_bits),
-            vertex_ids: s.get("hcc", KEYS[0])?.unwrap_or(d.vertex_ids) && !tree_order,
-            triangle_ids: s.get("hcc", KEYS[1])?.unwrap_or(d.triangle_ids) && !tree_order,
-        };
-        check_vertex_bits("hcc", o.vertex_bits)?;
-        Ok(o)
-    }
-
     /// Everything in the tree's order: neither triangle nor vertex ids
     /// kept (the smallest form). The decoded mesh is the input's triangles
     /// in storage order, over the low-level trees' vertex arrays one after
@@ -289,6 +268,27 @@ impl HccOptions {
             vertex_ids: false,
             triangle_ids: false,
         }
+    }
+}
+
+impl CodecOptions for HccOptions {
+    const SETTINGS: &'static [&'static str] = &["vertex-ids", "triangle-ids", "tree-order"];
+
+    /// The options from a front end's settings ([`crate::codec::settings`]):
+    /// `hcc.vertex-ids`, `hcc.triangle-ids` (`true`/`false`), `hcc.tree-order`
+    /// (`true`: neither id map, as [`HccOptions::tree_order`]), and the
+    /// common `vertex_bits` (`f32` by default; 1 to 24).
+    fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
+        const KEYS: &[&str] = <HccOptions as CodecOptions>::SETTINGS;
+        let d = Self::default();
+        let tree_order = s.get::<bool>("hcc", KEYS[2])?.unwrap_or(false);
+        let o = Self {
+            vertex_bits: s.vertex_bits_or(d.vertex_bits),
+            vertex_ids: s.get("hcc", KEYS[0])?.unwrap_or(d.vertex_ids) && !tree_order,
+            triangle_ids: s.get("hcc", KEYS[1])?.unwrap_or(d.triangle_ids) && !tree_order,
+        };
+        check_vertex_bits("hcc", o.vertex_bits)?;
+        Ok(o)
     }
 }
 

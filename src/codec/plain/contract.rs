@@ -6,7 +6,7 @@ use crate::codec::common::container::Frame;
 use super::{PlainBvh, PlainError, file};
 use crate::build::CanonicalBvh;
 use crate::codec::common::MassProps;
-use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError};
+use crate::codec::{Codec, CodecKind, OpenOptions};
 use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 
@@ -14,17 +14,10 @@ impl Codec for PlainBvh {
     const KIND: CodecKind = CodecKind::Plain;
     const MAGIC: [u8; 8] = file::MAGIC;
     const FRAME: Frame = file::FRAME;
-    /// The plain codec has nothing to choose.
+    /// The plain codec has nothing to choose: no settings of its own, and
+    /// `f32` vertices whatever `vertex_bits` says.
     type Options = ();
     type Error = PlainError;
-
-    const SETTINGS: &'static [&'static str] = &[];
-
-    /// No settings of its own; it keeps `f32` vertices whatever
-    /// `vertex_bits` says.
-    fn options_from(settings: &Settings) -> Result<(), SettingsError> {
-        settings.only("plain", &[])
-    }
 
     fn encode(bvh: &CanonicalBvh, mesh: &Mesh, _: &()) -> Result<Self, PlainError> {
         PlainBvh::encode(bvh, mesh)

@@ -7,7 +7,7 @@ use super::{RacBvh, RacError, RacOptions, file};
 use crate::build::chunked::{ChunkedMesh, Progress};
 use crate::build::{BuildOptions, CanonicalBvh};
 use crate::codec::common::MassProps;
-use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError, StreamedReport};
+use crate::codec::{Codec, CodecKind, OpenOptions, StreamedReport};
 use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 
@@ -17,12 +17,6 @@ impl Codec for RacBvh {
     const FRAME: Frame = file::FRAME;
     type Options = RacOptions;
     type Error = RacError;
-
-    const SETTINGS: &'static [&'static str] = RacOptions::SETTINGS;
-
-    fn options_from(settings: &Settings) -> Result<RacOptions, SettingsError> {
-        RacOptions::from_settings(settings)
-    }
 
     fn encode(bvh: &CanonicalBvh, mesh: &Mesh, options: &RacOptions) -> Result<Self, RacError> {
         RacBvh::encode(bvh, mesh, options)

@@ -254,7 +254,7 @@ pub use stream::{StreamedBuild, encode_streamed};
 
 use crate::codec::common::Store;
 use crate::codec::common::quant::{Grid, QBox};
-use crate::codec::settings::{Settings, SettingsError};
+use crate::codec::settings::{CodecOptions, Settings, SettingsError};
 use crate::contact::EdgeFlags;
 use context::*;
 
@@ -419,31 +419,6 @@ impl RacOptions {
         c
     }
 
-    /// The keys of [`RacOptions::from_settings`].
-    pub const SETTINGS: &'static [&'static str] = &["cluster-nodes", "bits", "tri-delta-threshold"];
-
-    /// The options from a front end's settings ([`crate::codec::settings`]):
-    /// `racbvh.cluster-nodes`, `racbvh.bits`, `racbvh.tri-delta-threshold`,
-    /// and the common `vertex_bits` (16 by default, 0 for `f32`). Checked
-    /// as [`RacOptions::validate`] checks them.
-    pub fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
-        const KEYS: &[&str] = RacOptions::SETTINGS;
-        s.only("racbvh", KEYS)?;
-        let d = Self::default();
-        let o = Self {
-            cluster_nodes: s.get("racbvh", KEYS[0])?.unwrap_or(d.cluster_nodes),
-            bits: s.get("racbvh", KEYS[1])?.unwrap_or(d.bits),
-            tri_delta_threshold: s.get("racbvh", KEYS[2])?.unwrap_or(d.tri_delta_threshold),
-            vertex_bits: s.vertex_bits_or(d.vertex_bits),
-            ..d
-        };
-        o.validate().map_err(|e| SettingsError::Invalid {
-            codec: "racbvh".into(),
-            reason: e.to_string(),
-        })?;
-        Ok(o)
-    }
-
     /// Checks every field.
     pub fn validate(&self) -> Result<(), RacError> {
         let c = self.cluster_nodes;
@@ -464,6 +439,31 @@ impl RacOptions {
             self.tri_delta_threshold,
             "1..=4096",
         )
+    }
+}
+
+impl CodecOptions for RacOptions {
+    const SETTINGS: &'static [&'static str] = &["cluster-nodes", "bits", "tri-delta-threshold"];
+
+    /// The options from a front end's settings ([`crate::codec::settings`]):
+    /// `racbvh.cluster-nodes`, `racbvh.bits`, `racbvh.tri-delta-threshold`,
+    /// and the common `vertex_bits` (16 by default, 0 for `f32`). Checked
+    /// as [`RacOptions::validate`] checks them.
+    fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
+        const KEYS: &[&str] = <RacOptions as CodecOptions>::SETTINGS;
+        let d = Self::default();
+        let o = Self {
+            cluster_nodes: s.get("racbvh", KEYS[0])?.unwrap_or(d.cluster_nodes),
+            bits: s.get("racbvh", KEYS[1])?.unwrap_or(d.bits),
+            tri_delta_threshold: s.get("racbvh", KEYS[2])?.unwrap_or(d.tri_delta_threshold),
+            vertex_bits: s.vertex_bits_or(d.vertex_bits),
+            ..d
+        };
+        o.validate().map_err(|e| SettingsError::Invalid {
+            codec: "racbvh".into(),
+            reason: e.to_string(),
+        })?;
+        Ok(o)
     }
 }
 

@@ -11,7 +11,7 @@ use crate::build::{BuildOptions, CanonicalBvh};
 #[cfg(feature = "serde")]
 use crate::codec::ByteSize;
 use crate::codec::common::{MassProps, Store};
-use crate::codec::{Codec, CodecKind, OpenOptions, Settings, SettingsError, StreamedReport};
+use crate::codec::{Codec, CodecKind, OpenOptions, StreamedReport};
 use crate::contact::EdgeFlags;
 use crate::cursor::NodeCursor;
 use crate::mesh::Mesh;
@@ -23,12 +23,6 @@ impl Codec for HccOocBvh {
     /// Grid bits and which id maps to keep (default: 16 bits, tree order).
     type Options = OocOptions;
     type Error = OocError;
-
-    const SETTINGS: &'static [&'static str] = OocOptions::SETTINGS;
-
-    fn options_from(settings: &Settings) -> Result<OocOptions, SettingsError> {
-        OocOptions::from_settings(settings)
-    }
 
     fn encode(bvh: &CanonicalBvh, mesh: &Mesh, options: &OocOptions) -> Result<Self, OocError> {
         HccOocBvh::encode_with(bvh, mesh, options)

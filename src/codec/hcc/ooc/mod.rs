@@ -217,7 +217,7 @@ pub use stream::{Progress, StreamedBuild, encode_streamed};
 use super::{HccBvh, HccOptions};
 use crate::codec::ByteSize;
 use crate::codec::common::page_cache::CacheStats;
-use crate::codec::settings::{Settings, SettingsError};
+use crate::codec::settings::{CodecOptions, Settings, SettingsError};
 use crate::contact::EdgeFlags;
 use paged::Paged;
 
@@ -251,16 +251,25 @@ impl Default for OocOptions {
 }
 
 impl OocOptions {
-    /// The keys of [`OocOptions::from_settings`].
-    pub const SETTINGS: &'static [&'static str] = &["vertex-ids", "triangle-ids"];
+    /// The i-HCCMesh options this o-HCCMesh codes.
+    pub fn hcc(&self) -> HccOptions {
+        HccOptions {
+            vertex_bits: Some(self.vertex_bits),
+            vertex_ids: self.vertex_ids,
+            triangle_ids: self.triangle_ids,
+        }
+    }
+}
+
+impl CodecOptions for OocOptions {
+    const SETTINGS: &'static [&'static str] = &["vertex-ids", "triangle-ids"];
 
     /// The options from a front end's settings ([`crate::codec::settings`]):
     /// `hcc-ooc.vertex-ids`, `hcc-ooc.triangle-ids` (`true`/`false`, both off
     /// by default: the paper's tree order), and the common `vertex_bits`
     /// (1 to 24; it always quantizes, so unset or 0 gives 16).
-    pub fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
-        const KEYS: &[&str] = OocOptions::SETTINGS;
-        s.only("hcc-ooc", KEYS)?;
+    fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
+        const KEYS: &[&str] = <OocOptions as CodecOptions>::SETTINGS;
         let d = Self::default();
         let vertex_bits = s
             .vertex_bits_or(Some(d.vertex_bits))
@@ -272,15 +281,6 @@ impl OocOptions {
             triangle_ids: s.get("hcc-ooc", KEYS[1])?.unwrap_or(d.triangle_ids),
             ..d
         })
-    }
-
-    /// The i-HCCMesh options this o-HCCMesh codes.
-    pub fn hcc(&self) -> HccOptions {
-        HccOptions {
-            vertex_bits: Some(self.vertex_bits),
-            vertex_ids: self.vertex_ids,
-            triangle_ids: self.triangle_ids,
-        }
     }
 }
 
