@@ -806,6 +806,50 @@ pub fn check_streamed_like_direct<S: cbvh::codec::Codec, D: cbvh::codec::Codec>(
     assert_eq!(paged.triangle_count(), mesh.triangles.len(), "{what}");
 }
 
+/// The models both out-of-core codecs' streamed builds are checked on: a
+/// statue, a robot and a turbine, a soup, and [`edge_case_meshes`] (named
+/// one, same, flat and huge).
+pub fn streamed_meshes() -> Vec<(&'static str, Mesh)> {
+    use cbvh::scene::{Kind, generate};
+    let g = |k, n| generate(k, n, 1, &mut |_, _| {}).unwrap();
+    let mut v = vec![
+        ("statue", g(Kind::Statue, 3000)),
+        ("robot", g(Kind::Robot, 4000)),
+        ("turbine", g(Kind::Turbine, 3000)),
+        ("soup", soup(7, 500, 2.0)),
+    ];
+    for (k, m) in edge_case_meshes().into_iter().enumerate() {
+        v.push((["one", "same", "flat", "huge"][k], m));
+    }
+    v
+}
+
+/// Runs `f` in a rayon pool of `threads` workers.
+pub fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
+/// The bytes `run(threads)` writes are the same run in pools of 1, 2 and
+/// 3 threads.
+pub fn check_same_bytes_in_1_2_3_threads(run: impl Fn(usize) -> Vec<u8> + Sync) {
+    let one = in_pool(1, || run(1));
+    assert_eq!(one, in_pool(2, || run(2)));
+    assert_eq!(one, in_pool(3, || run(3)));
+}
+
+/// The directory `d` is empty: a refused build left no temporary file.
+pub fn assert_no_file_left(d: &std::path::Path) {
+    assert_eq!(
+        std::fs::read_dir(d).unwrap().count(),
+        0,
+        "no temporary file"
+    );
+}
+
 /// Meshes at the edges of what a builder and a codec take:
 /// [`edge_case_meshes`], a flat grid, collinear corners, coordinates far
 /// from the origin, duplicate triangles.
