@@ -647,6 +647,24 @@ pub fn cbvh_refuses_within(args: &[&str], secs: u64) -> String {
     }
 }
 
+/// `cbvh build MODEL --codec CODEC --out-of-core --chunk-triangles 12000
+/// -o OUT`'s arguments: the out-of-core build the command-line tests ask
+/// for.
+#[cfg(feature = "app")]
+pub fn out_of_core_build<'a>(model: &'a str, codec: &'a str, out: &'a str) -> [&'a str; 9] {
+    [
+        "build",
+        model,
+        "--codec",
+        codec,
+        "--out-of-core",
+        "--chunk-triangles",
+        "12000",
+        "-o",
+        out,
+    ]
+}
+
 /// What the out-of-core codecs' command-line tests share: a 100 k-triangle
 /// statue saved as `m.ply` in `d`; `cbvh build m.ply --codec CODEC
 /// --out-of-core --chunk-triangles 12000 -o OUT --json` reports an
@@ -664,18 +682,7 @@ pub fn cli_builds_out_of_core(
     let ply = d.join("m.ply");
     cbvh::mesh::save(&mesh, &ply).unwrap();
     let (p, out) = (ply.to_str().unwrap(), out.to_str().unwrap());
-    let (ok, stdout, stderr) = cbvh(&[
-        "build",
-        p,
-        "--codec",
-        codec,
-        "--out-of-core",
-        "--chunk-triangles",
-        "12000",
-        "-o",
-        out,
-        "--json",
-    ]);
+    let (ok, stdout, stderr) = cbvh(&[&out_of_core_build(p, codec, out)[..], &["--json"]].concat());
     assert!(ok, "{stderr}");
     let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     assert_eq!(v["out_of_core"], true);
