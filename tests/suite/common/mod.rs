@@ -202,6 +202,55 @@ pub fn test_rays(mesh: &Mesh, seed: u64, n: usize) -> Vec<Ray> {
         .collect()
 }
 
+/// A camera's coherent fan of 24 × 24 rays from in front of `mesh`'s box
+/// through its middle plane.
+pub fn camera_rays(mesh: &Mesh) -> Vec<Ray> {
+    let (lo, hi) = mesh.bounds().unwrap();
+    let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
+    let eye = (lo + hi) * 0.5 + Vec3A::new(0.1, 0.2, 2.5) * (hi - lo).length().max(1e-3);
+    let mut rays = Vec::with_capacity(24 * 24);
+    for y in 0..24 {
+        for x in 0..24 {
+            let p = lo + (hi - lo) * Vec3A::new(x as f32 / 23.0, y as f32 / 23.0, 0.5);
+            rays.push(Ray::new(eye, (p - eye).normalize_or(Vec3A::Z)));
+        }
+    }
+    rays
+}
+
+/// A codec's own ray traversal (`query::closest_hit` and
+/// `query::any_hit`) against the generic one over its cursor, for every
+/// ray up to every limit in `t_maxes`: the same closest hit, bit for bit,
+/// and the same any hit. Returns how many (ray, limit) pairs hit; `what`
+/// names the case in failures.
+pub fn check_own_traversal_is_generic<C: RayCursor>(
+    c: &C,
+    rays: &[Ray],
+    t_maxes: [f32; 3],
+    what: &str,
+) -> usize {
+    let mut s = TraversalStats::default();
+    let mut hits = 0;
+    for ray in rays {
+        for t_max in t_maxes {
+            let own = query::closest_hit(c, ray, t_max, &mut s);
+            let generic = query::ray::closest_hit_generic(c, ray, t_max, &mut s);
+            assert_eq!(
+                hit_bits(own),
+                hit_bits(generic),
+                "{what}, {ray:?}, t_max {t_max}"
+            );
+            hits += usize::from(own.is_some());
+            assert_eq!(
+                query::any_hit(c, ray, t_max, &mut s),
+                query::ray::any_hit_generic(c, ray, t_max, &mut s),
+                "{what}, {ray:?}, t_max {t_max}"
+            );
+        }
+    }
+    hits
+}
+
 /// Closest hit, any hit, overlap and closest point equal brute force.
 pub fn check_queries<C: RayCursor>(c: &C, mesh: &Mesh, seed: u64) {
     let mut stats = TraversalStats::default();
