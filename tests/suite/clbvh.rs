@@ -506,16 +506,9 @@ fn own_traversal_equals_the_generic_one_bit_for_bit() {
         let bvh = tree(mesh, Layout::DepthFirst, 1);
         let (lo, hi) = mesh.bounds().unwrap();
         let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
-        let eye = (lo + hi) * 0.5 + Vec3A::new(0.1, 0.2, 2.5) * (hi - lo).length().max(1e-3);
         let mut rays = test_rays(mesh, m as u64, 400);
         rays.extend(vertex_rays(mesh, m as u64, 300));
-        // A camera: a coherent fan through the box.
-        for y in 0..24 {
-            for x in 0..24 {
-                let p = lo + (hi - lo) * Vec3A::new(x as f32 / 23.0, y as f32 / 23.0, 0.5);
-                rays.push(cbvh::geom::Ray::new(eye, (p - eye).normalize_or(Vec3A::Z)));
-            }
-        }
+        rays.extend(camera_rays(mesh));
         for opts in [
             ClOptions::default(),
             ClOptions::compact(),
@@ -529,25 +522,9 @@ fn own_traversal_equals_the_generic_one_bit_for_bit() {
             },
         ] {
             let cl = ClBvh::encode(&bvh, mesh, &opts).unwrap();
-            let mut s = TraversalStats::default();
-            let mut hits = 0;
-            for ray in &rays {
-                for t_max in [f32::INFINITY, 0.9 * (hi - lo).length(), 1e-3] {
-                    let own = query::closest_hit(&cl, ray, t_max, &mut s);
-                    let generic = query::ray::closest_hit_generic(&cl, ray, t_max, &mut s);
-                    assert_eq!(
-                        hit_bits(own),
-                        hit_bits(generic),
-                        "mesh {m}, {opts:?}, {ray:?}, t_max {t_max}"
-                    );
-                    hits += usize::from(own.is_some());
-                    assert_eq!(
-                        query::any_hit(&cl, ray, t_max, &mut s),
-                        query::ray::any_hit_generic(&cl, ray, t_max, &mut s),
-                        "mesh {m}, {opts:?}, {ray:?}, t_max {t_max}"
-                    );
-                }
-            }
+            let t_maxes = [f32::INFINITY, 0.9 * (hi - lo).length(), 1e-3];
+            let what = format!("mesh {m}, {opts:?}");
+            let hits = check_own_traversal_is_generic(&cl, &rays, t_maxes, &what);
             assert!(hits > rays.len() / 4, "mesh {m}: only {hits} hits");
         }
     }

@@ -57,6 +57,14 @@ fn codec_hits(c: &AnyCodec, mesh: &Mesh) -> Vec<Option<(u32, u32)>> {
     cbvh::with_codec!(c, |c| hits(c, mesh))
 }
 
+/// `cbvh render FILE -o PNG` at 64 × 48, then `extra`: (success, stdout,
+/// stderr).
+fn render_small(file: &str, png: &std::path::Path, extra: &[&str]) -> (bool, String, String) {
+    let size = ["--width", "64", "--height", "48"];
+    let args = ["render", file, "-o", png.to_str().unwrap()];
+    cbvh(&[&args[..], &size, extra].concat())
+}
+
 #[test]
 fn every_codec_file_opens_by_content_into_a_shape_without_the_mesh() {
     let mesh = statue(3000);
@@ -165,16 +173,7 @@ fn cli_and_sims_use_codec_files_with_no_mesh_anywhere() {
             assert!(out.contains(want), "{want:?} not in {out}");
         }
         let png = temp(&format!("cli-{codec}.png"));
-        let (ok, out, err) = cbvh(&[
-            "render",
-            f,
-            "-o",
-            png.to_str().unwrap(),
-            "--width",
-            "64",
-            "--height",
-            "48",
-        ]);
+        let (ok, out, err) = render_small(f, &png, &[]);
         assert!(ok, "{err}");
         assert!(out.contains(&format!("codec             {codec}")), "{out}");
         assert!(std::fs::metadata(&png).unwrap().len() > 100);
@@ -256,18 +255,7 @@ fn cli_render_reports_the_decode_cache_of_an_out_of_core_file() {
     let png = temp("cli-render-cache.png");
     // The render's output with `extra` arguments after the common ones.
     let render = |extra: &[&str]| {
-        let mut args = vec![
-            "render",
-            f,
-            "-o",
-            png.to_str().unwrap(),
-            "--width",
-            "64",
-            "--height",
-            "48",
-        ];
-        args.extend_from_slice(extra);
-        let (ok, out, err) = cbvh(&args);
+        let (ok, out, err) = render_small(f, &png, extra);
         assert!(ok, "{err}");
         out
     };
@@ -676,18 +664,9 @@ fn cli_checks_counts_outputs_and_chunks_before_any_work() {
     // Out of core (every codec that builds so), which used to make the
     // output's directories and report success.
     cbvh::mesh::save(&statue(100_000), &ply).unwrap();
+    let cbvh_out = inside("s.cbvh");
     for codec in CodecKind::ALL.iter().filter(|k| k.builds_out_of_core()) {
-        let args = [
-            "build",
-            &ply,
-            "--codec",
-            codec.name(),
-            "--out-of-core",
-            "--chunk-triangles",
-            "12000",
-            "-o",
-            &inside("s.cbvh"),
-        ];
+        let args = out_of_core_build(&ply, codec.name(), &cbvh_out);
         refused.push(args.into_iter().map(String::from).collect());
     }
     for args in &refused {

@@ -432,11 +432,7 @@ fn patches_do_not_depend_on_the_thread_count() {
     let c2 = CbvhShape::plain(&turbine, &BuildOptions::default()).unwrap();
     let pos12 = Pose::from_translation(Vector::new(0.1, -1.1, 0.05));
     let run = |threads| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        crate::common::in_pool(threads, || {
             let s = cbvh_cbvh::patches(
                 &pos12,
                 &c1,

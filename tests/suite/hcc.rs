@@ -10,7 +10,7 @@ use cbvh::codec::hcc::{HccBvh, HccError, HccOptions, MAX_LEAF_TRIANGLES};
 use cbvh::codec::plain::PlainBvh;
 use cbvh::codec::{Codec, OpenOptions};
 use cbvh::cursor::NodeCursor;
-use cbvh::geom::{Ray, triangle_from_arrays};
+use cbvh::geom::triangle_from_arrays;
 use common::*;
 use glam::Vec3A;
 use proptest::prelude::*;
@@ -567,7 +567,6 @@ fn tree_order_numbers_triangles_as_stored_without_maps() {
 /// far-from-origin meshes.
 #[test]
 fn own_traversal_equals_the_generic_one_bit_for_bit() {
-    use cbvh::query;
     let statue =
         cbvh::scene::generate(cbvh::scene::Kind::Statue, 6000, 3, &mut |_, _| {}).expect("statue");
     let meshes = [
@@ -579,16 +578,9 @@ fn own_traversal_equals_the_generic_one_bit_for_bit() {
     ];
     for (m, mesh) in meshes.iter().enumerate() {
         let (lo, hi) = mesh.bounds().unwrap();
-        let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
-        let size = (hi - lo).length().max(1e-3);
-        let eye = (lo + hi) * 0.5 + Vec3A::new(0.1, 0.2, 2.5) * size;
+        let size = (Vec3A::from(hi) - Vec3A::from(lo)).length().max(1e-3);
         let mut rays = test_rays(mesh, m as u64, 600);
-        for y in 0..24 {
-            for x in 0..24 {
-                let p = lo + (hi - lo) * Vec3A::new(x as f32 / 23.0, y as f32 / 23.0, 0.5);
-                rays.push(Ray::new(eye, (p - eye).normalize_or(Vec3A::Z)));
-            }
-        }
+        rays.extend(camera_rays(mesh));
         for (leaf, options) in [
             (1, HccOptions::default()),
             (1, HccOptions::tree_order(Some(16))),
@@ -597,25 +589,9 @@ fn own_traversal_equals_the_generic_one_bit_for_bit() {
         ] {
             let t = tree(mesh, Layout::DepthFirst, leaf);
             let h = HccBvh::encode_with(&t, mesh, &options).expect("encode");
-            let mut s = cbvh::TraversalStats::default();
-            let mut hits = 0;
-            for ray in &rays {
-                for t_max in [f32::INFINITY, 0.9 * size, 1e-3] {
-                    let own = query::closest_hit(&h, ray, t_max, &mut s);
-                    let generic = query::ray::closest_hit_generic(&h, ray, t_max, &mut s);
-                    assert_eq!(
-                        hit_bits(own),
-                        hit_bits(generic),
-                        "mesh {m}, leaf {leaf}, {options:?}, {ray:?}, t_max {t_max}"
-                    );
-                    hits += usize::from(own.is_some());
-                    assert_eq!(
-                        query::any_hit(&h, ray, t_max, &mut s),
-                        query::ray::any_hit_generic(&h, ray, t_max, &mut s),
-                        "mesh {m}, leaf {leaf}, {options:?}, {ray:?}, t_max {t_max}"
-                    );
-                }
-            }
+            let t_maxes = [f32::INFINITY, 0.9 * size, 1e-3];
+            let what = format!("mesh {m}, leaf {leaf}, {options:?}");
+            let hits = check_own_traversal_is_generic(&h, &rays, t_maxes, &what);
             // The collinear grid has no area: only rays along its line
             // and through its points hit it.
             let enough = if m == 3 { 1 } else { rays.len() / 4 };

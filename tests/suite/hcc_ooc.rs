@@ -43,6 +43,32 @@ fn options() -> Vec<OocOptions> {
     ]
 }
 
+/// The leaves and id maps the damage and out-of-core tests run: one
+/// triangle a leaf without and with both id maps, and up to 8 a leaf.
+fn leaves_and_maps() -> [(usize, OocOptions); 3] {
+    let maps = OocOptions {
+        triangle_ids: true,
+        vertex_ids: true,
+        ..OocOptions::default()
+    };
+    [
+        (1, OocOptions::default()),
+        (1, maps),
+        (8, OocOptions::default()),
+    ]
+}
+
+/// The o-HCCMesh file of `mesh`'s depth-first tree with up to `leaf`
+/// triangles a leaf, through the i-HCCMesh built with `o`.
+fn ooc_bytes(mesh: &Mesh, leaf: usize, o: &OocOptions) -> Vec<u8> {
+    let bvh = tree(mesh, Layout::DepthFirst, leaf);
+    let (bytes, _) = HccBvh::encode_with(&bvh, mesh, &o.hcc())
+        .unwrap()
+        .to_ooc()
+        .unwrap();
+    bytes
+}
+
 /// o → i equals the direct i-HCCMesh: file bytes and figures.
 fn check_same(mesh: &Mesh, layout: Layout, leaf: usize, o: &OocOptions) {
     let bvh = tree(mesh, layout, leaf);
@@ -167,23 +193,8 @@ fn reframe(b: &mut [u8]) {
 #[test]
 fn damaged_and_forged_files_give_errors_not_panics() {
     let mesh = mesh_of(Kind::Statue, 3_000);
-    for (leaf, o) in [
-        (1, OocOptions::default()),
-        (
-            1,
-            OocOptions {
-                triangle_ids: true,
-                vertex_ids: true,
-                ..OocOptions::default()
-            },
-        ),
-        (8, OocOptions::default()),
-    ] {
-        let bvh = tree(&mesh, Layout::DepthFirst, leaf);
-        let (bytes, _) = HccBvh::encode_with(&bvh, &mesh, &o.hcc())
-            .unwrap()
-            .to_ooc()
-            .unwrap();
+    for (leaf, o) in leaves_and_maps() {
+        let bytes = ooc_bytes(&mesh, leaf, &o);
         let n = bytes.len();
         // Truncations: always an error.
         for len in (0..n).step_by(n / 97 + 1).chain([n - 1]) {
@@ -287,18 +298,7 @@ fn walk<C: NodeCursor>(c: &C) -> Vec<Walked> {
 #[test]
 fn out_of_core_answers_as_pre_loaded() {
     let mesh = mesh_of(Kind::Statue, 20_000);
-    for (leaf, o) in [
-        (1, OocOptions::default()),
-        (
-            1,
-            OocOptions {
-                triangle_ids: true,
-                vertex_ids: true,
-                ..OocOptions::default()
-            },
-        ),
-        (8, OocOptions::default()),
-    ] {
+    for (leaf, o) in leaves_and_maps() {
         let bvh = tree(&mesh, Layout::DepthFirst, leaf);
         let whole = HccOocBvh::encode_with(&bvh, &mesh, &o).unwrap();
         assert!(!whole.is_paged() && whole.cache_stats().is_none());
@@ -399,23 +399,18 @@ fn the_registry_opens_hcc_ooc_out_of_core() {
     };
     let opened = AnyCodec::open(&path, &small).unwrap();
     std::fs::remove_file(&path).ok();
-    assert!(
-        opened
-            .header_fields()
+    let out_of_core = |c: &AnyCodec| {
+        c.header_fields()
             .iter()
             .any(|(k, v)| *k == "mode" && v.starts_with("out of core"))
-    );
+    };
+    assert!(out_of_core(&opened));
     assert_eq!(opened.decoded_mesh(), codec.decoded_mesh());
     let tenth = codec
         .with_cache_budget_of(&|d| d / 10)
         .expect("a cached codec")
         .unwrap();
-    assert!(
-        tenth
-            .header_fields()
-            .iter()
-            .any(|(k, v)| *k == "mode" && v.starts_with("out of core"))
-    );
+    assert!(out_of_core(&tenth));
     assert_eq!(tenth.decoded_mesh(), codec.decoded_mesh());
     assert!(
         AnyOptions::default()
@@ -432,11 +427,7 @@ fn the_registry_opens_hcc_ooc_out_of_core() {
 #[test]
 fn out_of_core_verify_finds_damaged_trees() {
     let mesh = mesh_of(Kind::Statue, 5_000);
-    let bvh = tree(&mesh, Layout::DepthFirst, 1);
-    let (bytes, _) = HccBvh::encode_with(&bvh, &mesh, &OocOptions::default().hcc())
-        .unwrap()
-        .to_ooc()
-        .unwrap();
+    let bytes = ooc_bytes(&mesh, 1, &OocOptions::default());
     // The streams section, from the section table.
     let (streams, len) = section(&bytes, 3);
     let mut flipped = bytes.clone();
@@ -467,11 +458,7 @@ fn out_of_core_verify_finds_damaged_trees() {
 #[test]
 fn forged_high_level_boxes_and_tree_tables_give_errors_not_panics() {
     let mesh = mesh_of(Kind::Statue, 20_000);
-    let bvh = tree(&mesh, Layout::DepthFirst, 1);
-    let (bytes, _) = HccBvh::encode_with(&bvh, &mesh, &OocOptions::default().hcc())
-        .unwrap()
-        .to_ooc()
-        .unwrap();
+    let bytes = ooc_bytes(&mesh, 1, &OocOptions::default());
     // Tree starts, high-level boxes, tree firsts, from the section table.
     for k in [2, 6, 7] {
         let (at, len) = section(&bytes, k);
@@ -503,11 +490,7 @@ fn forged_high_level_boxes_and_tree_tables_give_errors_not_panics() {
 fn more_trees_than_handles_number_is_refused() {
     use cbvh::codec::hcc::node::MAX_TREES;
     let mesh = mesh_of(Kind::Statue, 2_000);
-    let bvh = tree(&mesh, Layout::DepthFirst, 1);
-    let (mut bytes, _) = HccBvh::encode_with(&bvh, &mesh, &OocOptions::default().hcc())
-        .unwrap()
-        .to_ooc()
-        .unwrap();
+    let mut bytes = ooc_bytes(&mesh, 1, &OocOptions::default());
     // The header's counts start at byte 16: high-level nodes, then trees.
     bytes[20..24].copy_from_slice(&(MAX_TREES as u32 + 1).to_le_bytes());
     reframe(&mut bytes);

@@ -34,25 +34,11 @@ fn streamed(
     })
 }
 
-fn meshes() -> Vec<(&'static str, Mesh)> {
-    let g = |k, n| generate(k, n, 1, &mut |_, _| {}).unwrap();
-    let mut v = vec![
-        ("statue", g(Kind::Statue, 3000)),
-        ("robot", g(Kind::Robot, 4000)),
-        ("turbine", g(Kind::Turbine, 3000)),
-        ("soup", soup(7, 500, 2.0)),
-    ];
-    for (k, m) in edge_case_meshes().into_iter().enumerate() {
-        v.push((["one", "same", "flat", "huge"][k], m));
-    }
-    v
-}
-
 #[test]
 fn streamed_files_answer_like_brute_force_and_hold_the_in_memory_triangles() {
     let d = dir("answers");
     let o = OocOptions::default();
-    for (name, mesh) in meshes() {
+    for (name, mesh) in streamed_meshes() {
         let n = mesh.triangles.len() as u64;
         // One triangle a chunk, chunk boundaries through the middle, one
         // chunk.
@@ -84,19 +70,11 @@ fn streamed_files_answer_like_brute_force_and_hold_the_in_memory_triangles() {
 fn streamed_bytes_do_not_depend_on_threads() {
     let d = dir("threads");
     let mesh = generate(Kind::Statue, 6000, 4, &mut |_, _| {}).unwrap();
-    let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
+    check_same_bytes_in_1_2_3_threads(|threads| {
         let out = d.join(format!("t{threads}.hco"));
-        pool.install(|| streamed(&mesh, 700, 1, &OocOptions::default(), &out))
-            .unwrap();
+        streamed(&mesh, 700, 1, &OocOptions::default(), &out).unwrap();
         std::fs::read(&out).unwrap()
-    };
-    let one = run(1);
-    assert_eq!(one, run(2));
-    assert_eq!(one, run(3));
+    });
     std::fs::remove_dir_all(&d).ok();
 }
 
@@ -112,11 +90,7 @@ fn id_maps_are_refused_and_leave_nothing() {
     let e = streamed(&mesh, 100, 1, &o, &out).unwrap_err();
     assert!(e.to_string().contains("triangle-ids"), "{e}");
     assert!(!out.exists());
-    assert_eq!(
-        std::fs::read_dir(&d).unwrap().count(),
-        0,
-        "no temporary file"
-    );
+    assert_no_file_left(&d);
     std::fs::remove_dir_all(&d).ok();
 }
 

@@ -133,6 +133,11 @@ fn ply_binary(big: bool) -> Vec<u8> {
     out
 }
 
+/// Where a binary PLY's data starts: just after its `end_header` line.
+fn body_start(ply: &[u8]) -> usize {
+    ply.windows(11).position(|w| w == b"end_header\n").unwrap() + 11
+}
+
 /// Two triangles of the unit square sharing the diagonal; one corner is
 /// written as -0 to check that it still welds with 0.
 const STL_ASCII: &str = "solid square
@@ -470,11 +475,7 @@ fn index_out_of_range_names_face_index_and_count() {
 
     // Binary: the face record's byte offset is reported.
     let mut bytes = ply_binary(false);
-    let header = bytes
-        .windows(11)
-        .position(|w| w == b"end_header\n")
-        .unwrap()
-        + 11;
+    let header = body_start(&bytes);
     let face1 = header + 5 * 28 + 2 + 4 * 4;
     bytes[face1 + 2 + 4..face1 + 2 + 8].copy_from_slice(&99u32.to_le_bytes());
     let err = load_bytes(&bytes, Format::Ply, Path::new("bad.ply")).unwrap_err();
@@ -547,11 +548,7 @@ fn non_finite_names_vertex() {
     );
 
     let mut bytes = ply_binary(true);
-    let header = bytes
-        .windows(11)
-        .position(|w| w == b"end_header\n")
-        .unwrap()
-        + 11;
+    let header = body_start(&bytes);
     let v3 = header + 3 * 28;
     bytes[v3 + 8..v3 + 16].copy_from_slice(&f64::INFINITY.to_be_bytes());
     let err = load_bytes(&bytes, Format::Ply, Path::new("x.ply")).unwrap_err();

@@ -11,12 +11,7 @@ use common::*;
 use proptest::prelude::*;
 
 fn plain(mesh: &Mesh, layout: Layout, leaf: usize) -> PlainBvh {
-    let opts = BuildOptions {
-        layout,
-        max_leaf_triangles: leaf,
-        ..Default::default()
-    };
-    let bvh = build(mesh, &opts, &|_, _| {}).expect("build");
+    let bvh = tree(mesh, layout, leaf);
     assert_eq!(bvh.layout, layout);
     // A binary tree, every inner node with two children: one node fewer
     // inner nodes than leaves. Every leaf holds 1 to `leaf` triangles (the

@@ -33,8 +33,8 @@ fn streamed(
     })
 }
 
+/// [`streamed_meshes`], and two whose chunks are degenerate.
 fn meshes() -> Vec<(&'static str, Mesh)> {
-    let g = |k, n| generate(k, n, 1, &mut |_, _| {}).unwrap();
     // Every chunk flat (z = 0), and chunks along a line (below).
     let (mut plane, mut line) = (Vec::new(), Vec::new());
     for i in 0..30 {
@@ -57,17 +57,9 @@ fn meshes() -> Vec<(&'static str, Mesh)> {
         line.extend([[x, -1.0, -1.0], [x, 2.0, -1.0], [x, -1.0, 2.0]]);
     }
     let lt = (0..300u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
-    let mut v = vec![
-        ("statue", g(Kind::Statue, 3000)),
-        ("robot", g(Kind::Robot, 4000)),
-        ("turbine", g(Kind::Turbine, 3000)),
-        ("soup", soup(7, 500, 2.0)),
-        ("plane", Mesh::new(plane, pt)),
-        ("line", Mesh::new(line, lt)),
-    ];
-    for (k, m) in edge_case_meshes().into_iter().enumerate() {
-        v.push((["one", "same", "flat", "huge"][k], m));
-    }
+    let mut v = streamed_meshes();
+    v.push(("plane", Mesh::new(plane, pt)));
+    v.push(("line", Mesh::new(line, lt)));
     v
 }
 
@@ -123,18 +115,11 @@ fn streamed_racbvh_bytes_do_not_depend_on_threads() {
         cluster_nodes: 256,
         ..Default::default()
     };
-    let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
+    check_same_bytes_in_1_2_3_threads(|threads| {
         let out = d.join(format!("t{threads}.rac"));
-        pool.install(|| streamed(&mesh, 700, 1, &o, &out)).unwrap();
+        streamed(&mesh, 700, 1, &o, &out).unwrap();
         std::fs::read(&out).unwrap()
-    };
-    let one = run(1);
-    assert_eq!(one, run(2));
-    assert_eq!(one, run(3));
+    });
     std::fs::remove_dir_all(&d).ok();
 }
 
@@ -162,11 +147,7 @@ fn a_model_without_triangles_and_bad_options_are_handled_and_leave_nothing() {
     let e = streamed(&mesh, 100, 0, &RacOptions::default(), &out).unwrap_err();
     assert!(e.to_string().contains("chunk 0"), "{e}");
     assert!(!out.exists());
-    assert_eq!(
-        std::fs::read_dir(&d).unwrap().count(),
-        0,
-        "no temporary file"
-    );
+    assert_no_file_left(&d);
     std::fs::remove_dir_all(&d).ok();
 }
 

@@ -1,7 +1,7 @@
 //! The ray tracer: same image whatever the tree, close to parry's, shadows
 //! darken, threads do not change the image, and the CLI's errors.
 
-use crate::common::cbvh;
+use crate::common::{cbvh, in_pool, tree};
 use std::path::PathBuf;
 
 use cbvh::build::{BuildOptions, Layout, build};
@@ -26,15 +26,7 @@ fn robot() -> Mesh {
 }
 
 fn plain(mesh: &Mesh, layout: Layout, leaf: usize) -> CursorTarget<PlainBvh> {
-    let opts = BuildOptions {
-        layout,
-        max_leaf_triangles: leaf,
-        ..Default::default()
-    };
-    CursorTarget::new(PlainBvh::new(
-        &build(mesh, &opts, &|_, _| {}).expect("build"),
-        mesh,
-    ))
+    CursorTarget::new(PlainBvh::new(&tree(mesh, layout, leaf), mesh))
 }
 
 /// An axis-aligned box as a closed mesh, outward counter-clockwise.
@@ -59,14 +51,14 @@ fn two_poses() -> [Pose; 2] {
 }
 
 /// A scene of a statue and a rotated robot, over whatever targets.
-fn scene_of<'a>(targets: [&'a dyn RayTarget; 2], normals: [&'a VertexNormals; 2]) -> Scene<'a> {
+fn scene_of<'a, T: RayTarget>(targets: &'a [T; 2], normals: &'a [VertexNormals; 2]) -> Scene<'a> {
     let poses = two_poses();
     Scene::new(
         (0..2)
             .map(|i| Instance {
-                target: targets[i],
+                target: &targets[i],
                 pose: poses[i],
-                normals: Some(normals[i]),
+                normals: Some(&normals[i]),
                 material: Material::PALETTE[i],
             })
             .collect(),
@@ -81,6 +73,14 @@ struct Reference {
     normals: [VertexNormals; 2],
     plain: [CursorTarget<PlainBvh>; 2],
     opts: RenderOptions,
+}
+
+impl Reference {
+    /// The two-instance scene over `targets` (the statue's, the robot's)
+    /// with the reference normals.
+    fn scene<'a, T: RayTarget>(&'a self, targets: &'a [T; 2]) -> Scene<'a> {
+        scene_of(targets, &self.normals)
+    }
 }
 
 fn reference() -> Reference {
@@ -111,24 +111,15 @@ fn every_layout_and_leaf_size_renders_the_same_image() {
         plain(&s, Layout::DepthFirst, 1),
         plain(&r, Layout::DepthFirst, 1),
     ];
-    let (base, base_stats) = render(
-        &scene_of([&base_t[0], &base_t[1]], [&normals[0], &normals[1]]),
-        &opts,
-        &|_, _| {},
-    )
-    .expect("render");
+    let (base, base_stats) =
+        render(&scene_of(&base_t, &normals), &opts, &|_, _| {}).expect("render");
     // The scene is really in the picture, with shadows and reflections.
     assert!(base.fraction_differing(&empty_render(&opts)) > 0.15);
     assert!(base_stats.rays.shadow > 0 && base_stats.rays.reflection > 0);
     for layout in Layout::ALL {
         for leaf in [1, 4] {
             let t = [plain(&s, layout, leaf), plain(&r, layout, leaf)];
-            let (img, stats) = render(
-                &scene_of([&t[0], &t[1]], [&normals[0], &normals[1]]),
-                &opts,
-                &|_, _| {},
-            )
-            .expect("render");
+            let (img, stats) = render(&scene_of(&t, &normals), &opts, &|_, _| {}).expect("render");
             assert_eq!(img.fraction_differing(&base), 0.0, "{layout} leaf {leaf}");
             assert_eq!(img, base, "{layout} leaf {leaf}");
             assert_eq!(
@@ -150,17 +141,13 @@ fn every_layout_and_leaf_size_renders_the_same_image() {
 /// (lossy).
 #[test]
 fn racbvh_renders_the_plain_image_exactly_when_lossless_and_nearly_when_lossy() {
-    let Reference {
-        meshes: [s, r],
-        normals,
-        plain: p,
-        opts,
-    } = reference();
+    let reference = reference();
+    let opts = &reference.opts;
     // One camera for all: the automatic view frames the scene's bounds, and
     // RACBVH's root box is its quantization grid, a few ulps larger.
-    let plain_scene = scene_of([&p[0], &p[1]], [&normals[0], &normals[1]]);
-    let view = View::auto(&plain_scene, &opts);
-    let (base, _) = render_view(&plain_scene, &view, &opts, &|_, _| {}).expect("render");
+    let plain_scene = reference.scene(&reference.plain);
+    let view = View::auto(&plain_scene, opts);
+    let (base, _) = render_view(&plain_scene, &view, opts, &|_, _| {}).expect("render");
     let rac = |m: &Mesh, vertex_bits: Option<u32>, budget: usize| {
         let tree = build(m, &BuildOptions::default(), &|_, _| {}).expect("build");
         let o = RacOptions {
@@ -176,14 +163,11 @@ fn racbvh_renders_the_plain_image_exactly_when_lossless_and_nearly_when_lossy() 
         (None, 40_000, 0.0),
         (Some(16), usize::MAX, 0.005),
     ] {
-        let t = [rac(&s, vertex_bits, budget), rac(&r, vertex_bits, budget)];
-        let (img, _) = render_view(
-            &scene_of([&t[0], &t[1]], [&normals[0], &normals[1]]),
-            &view,
-            &opts,
-            &|_, _| {},
-        )
-        .expect("render");
+        let t = reference
+            .meshes
+            .each_ref()
+            .map(|m| rac(m, vertex_bits, budget));
+        let (img, _) = render_view(&reference.scene(&t), &view, opts, &|_, _| {}).expect("render");
         let differ = img.fraction_differing(&base);
         eprintln!("racbvh {vertex_bits:?} bits, budget {budget}: {differ}");
         assert!(differ <= bound, "{vertex_bits:?} {budget}: {differ}");
@@ -197,32 +181,18 @@ fn racbvh_renders_the_plain_image_exactly_when_lossless_and_nearly_when_lossy() 
 /// Möller–Trumbore's triangle tests disagree at a silhouette; bound 0.5 %.
 #[test]
 fn parry_image_matches_plain_but_for_a_few_silhouette_pixels() {
-    let Reference {
-        meshes: [s, r],
-        normals,
-        plain: p,
-        opts,
-    } = reference();
-    let q = [
-        cbvh::parry::parry_trimesh(&s).unwrap(),
-        cbvh::parry::parry_trimesh(&r).unwrap(),
-    ];
-    let (a, sa) = render(
-        &scene_of([&p[0], &p[1]], [&normals[0], &normals[1]]),
-        &opts,
-        &|_, _| {},
-    )
-    .unwrap();
-    let (b, sb) = render(
-        &scene_of([&q[0], &q[1]], [&normals[0], &normals[1]]),
-        &opts,
-        &|_, _| {},
-    )
-    .unwrap();
+    let reference = reference();
+    let opts = &reference.opts;
+    let q = reference
+        .meshes
+        .each_ref()
+        .map(|m| cbvh::parry::parry_trimesh(m).unwrap());
+    let (a, sa) = render(&reference.scene(&reference.plain), opts, &|_, _| {}).unwrap();
+    let (b, sb) = render(&reference.scene(&q), opts, &|_, _| {}).unwrap();
     let diff = a.fraction_differing(&b);
     eprintln!("parry vs plain: {:.4} % of pixels differ", diff * 100.0);
     assert!(diff <= 0.005, "{diff}");
-    assert!(a.fraction_differing(&empty_render(&opts)) > 0.15);
+    assert!(a.fraction_differing(&empty_render(opts)) > 0.15);
     assert_eq!(sa.rays.primary, sb.rays.primary);
     // parry does not count traversal steps; plain does.
     assert!(sa.rays.traversal.nodes_visited > 0);
@@ -232,12 +202,12 @@ fn parry_image_matches_plain_but_for_a_few_silhouette_pixels() {
 #[test]
 fn scene_packets_give_the_single_ray_hits_over_posed_instances() {
     let (s, r) = (statue(), robot());
-    let (ps, pr) = (
+    let t = [
         plain(&s, Layout::DepthFirst, 1),
         plain(&r, Layout::VanEmdeBoas, 2),
-    );
-    let (ns, nr) = (VertexNormals::from_mesh(&s), VertexNormals::from_mesh(&r));
-    let scene = scene_of([&ps, &pr], [&ns, &nr]);
+    ];
+    let normals = [VertexNormals::from_mesh(&s), VertexNormals::from_mesh(&r)];
+    let scene = scene_of(&t, &normals);
     let b = scene.bounds();
     let mut stats = TraversalStats::default();
     let (mut hits, mut by_instance) = (0, [0; 2]);
@@ -397,15 +367,9 @@ fn multithreaded_image_equals_single_threaded() {
         plain(&s, Layout::VanEmdeBoas, 1),
         plain(&r, Layout::CacheEfficient, 2),
     ];
-    let scene = scene_of([&t[0], &t[1]], [&normals[0], &normals[1]]);
+    let scene = scene_of(&t, &normals);
     let opts = RenderOptions { tile: 5, ..small() };
-    let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| render(&scene, &opts, &|_, _| {}).unwrap())
-    };
+    let run = |threads: usize| in_pool(threads, || render(&scene, &opts, &|_, _| {}).unwrap());
     let (one, s1) = run(1);
     assert_eq!(s1.threads, 1);
     for threads in [2, 3] {

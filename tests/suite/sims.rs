@@ -16,19 +16,38 @@ fn run(bin: &str, args: &[&str]) -> (bool, String) {
     )
 }
 
+const LUCY: &str = env!("CARGO_BIN_EXE_lucy-on-turbine");
+const ROBOT: &str = env!("CARGO_BIN_EXE_robot-in-plant");
+
+/// `lucy-on-turbine`'s meshes in the small runs: 1000 triangles each.
+const SMALL_LUCY: [&str; 4] = ["--statue-tris", "1000", "--turbine-tris", "1000"];
+
+/// `robot-in-plant`'s meshes in the small runs: a 1000-triangle robot in
+/// a 2000-triangle plant.
+const SMALL_ROBOT: [&str; 4] = ["--robot-tris", "1000", "--plant-tris", "2000"];
+
+/// The flags `base`, then `extra`.
+fn with<'a>(base: &[&'a str], extra: &[&'a str]) -> Vec<&'a str> {
+    base.iter().chain(extra).copied().collect()
+}
+
+/// `lucy-on-turbine` with `tris`-triangle meshes (statue and turbine) for
+/// `steps` steps, then `extra` flags.
+fn lucy(tris: &str, steps: &str, extra: &[&str]) -> (bool, String) {
+    let meshes = ["--statue-tris", tris, "--turbine-tris", tris];
+    run(LUCY, &[&meshes[..], &["--steps", steps], extra].concat())
+}
+
 /// `lucy-on-turbine` on a small scene (1000-triangle meshes, one step)
 /// with `extra` flags.
 fn small_lucy(extra: &[&str]) -> (bool, String) {
-    let small = [
-        "--statue-tris",
-        "1000",
-        "--turbine-tris",
-        "1000",
-        "--steps",
-        "1",
-    ];
-    let args: Vec<&str> = small.iter().chain(extra).copied().collect();
-    run(env!("CARGO_BIN_EXE_lucy-on-turbine"), &args)
+    lucy("1000", "1", extra)
+}
+
+/// `robot-in-plant`'s flags for the small scene ([`SMALL_ROBOT`]) run for
+/// one step, then `extra`.
+fn small_robot<'a>(extra: &[&'a str]) -> Vec<&'a str> {
+    [&SMALL_ROBOT[..], &["--steps", "1"], extra].concat()
 }
 
 /// The JSON report a sim wrote to `json` after it succeeded (`ok`, else
@@ -43,15 +62,10 @@ fn report(ok: bool, stderr: &str, json: &std::path::Path) -> serde_json::Value {
 #[test]
 fn lucy_on_turbine_runs_with_threads_and_cluster_size_and_writes_json() {
     let json = temp("lucy.json");
-    let (ok, stderr) = run(
-        env!("CARGO_BIN_EXE_lucy-on-turbine"),
+    let (ok, stderr) = lucy(
+        "3000",
+        "40",
         &[
-            "--statue-tris",
-            "3000",
-            "--turbine-tris",
-            "3000",
-            "--steps",
-            "40",
             "--shapes",
             "plain,racbvh",
             "--threads",
@@ -133,15 +147,10 @@ fn lucy_on_turbine_runs_with_threads_and_cluster_size_and_writes_json() {
 #[test]
 fn contact_modes_follow_the_flag_and_the_shape_names() {
     let json = temp("modes.json");
-    let (ok, stderr) = run(
-        env!("CARGO_BIN_EXE_lucy-on-turbine"),
+    let (ok, stderr) = lucy(
+        "1000",
+        "2",
         &[
-            "--statue-tris",
-            "1000",
-            "--turbine-tris",
-            "1000",
-            "--steps",
-            "2",
             "--contacts",
             "patches",
             "--shapes",
@@ -187,28 +196,20 @@ fn contact_modes_follow_the_flag_and_the_shape_names() {
         .map(|r| r["shape"].as_str().unwrap())
         .collect();
     assert_eq!(names, ["plain", "plain-pairs"]);
-    let (ok, stderr) = run(
-        env!("CARGO_BIN_EXE_lucy-on-turbine"),
-        &["--steps", "1", "--shapes", "parry-pairs"],
-    );
+    let (ok, stderr) = run(LUCY, &["--steps", "1", "--shapes", "parry-pairs"]);
     assert!(!ok);
     assert!(stderr.contains("no contact modes"), "{stderr}");
 }
 
 #[test]
 fn sims_reject_bad_flags_with_a_message() {
-    let (ok, stderr) = run(
-        env!("CARGO_BIN_EXE_robot-in-plant"),
-        &["--threads", "0", "--steps", "1"],
-    );
+    let (ok, stderr) = run(ROBOT, &["--threads", "0", "--steps", "1"]);
     assert!(!ok);
     assert!(stderr.contains("--threads must be at least 1"), "{stderr}");
     // Bounded before any work: neither a capacity overflow nor a pool of
     // a hundred thousand threads.
     for (flag, value) in [("--steps", "18446744073709551615"), ("--threads", "100000")] {
-        let small = ["--statue-tris", "1000", "--turbine-tris", "1000"];
-        let args = [&small[..], &[flag, value]].concat();
-        let (ok, stderr) = run(env!("CARGO_BIN_EXE_lucy-on-turbine"), &args);
+        let (ok, stderr) = run(LUCY, &with(&SMALL_LUCY, &[flag, value]));
         assert!(!ok, "{flag} {value} accepted");
         assert!(
             stderr.contains(&format!("{flag} {value} is more than")),
@@ -224,18 +225,8 @@ fn sims_reject_bad_flags_with_a_message() {
 /// fail late (after the runs), run with nonsense, or be impossible to give.
 #[test]
 fn sims_check_every_flag_before_the_first_run() {
-    let small = [
-        "--robot-tris",
-        "1000",
-        "--plant-tris",
-        "2000",
-        "--steps",
-        "1",
-    ];
-    let bin = env!("CARGO_BIN_EXE_robot-in-plant");
     let reject = |extra: &[&str], want: &str| {
-        let args: Vec<&str> = small.iter().chain(extra).copied().collect();
-        let (ok, stderr) = run(bin, &args);
+        let (ok, stderr) = run(ROBOT, &small_robot(extra));
         assert!(!ok, "{extra:?} was accepted");
         assert!(stderr.contains(want), "{extra:?}: {stderr}");
         // Rejected before any mesh was made or any shape ran.
@@ -262,40 +253,20 @@ fn sims_check_every_flag_before_the_first_run() {
     );
     reject(&["--json", "/nonexistent-dir/x.json"], "cannot write there");
     reject(&["--subdivide", "7"], "--subdivide 7 multiplies");
-    // The documented X,Z form, with a negative value, runs.
     let json = temp("offset.json");
-    let args: Vec<&str> = small
-        .iter()
-        .copied()
-        .chain([
-            "--offset",
-            "-0.2,0.1",
-            "--shapes",
-            "plain",
-            "--json",
-            json.to_str().unwrap(),
-        ])
-        .collect();
-    let (ok, stderr) = run(bin, &args);
-    let v = report(ok, &stderr, &json);
+    // The small scene with `extra` flags, running `shapes`: its report.
+    let report_of = |extra: &[&str], shapes: &str| {
+        let out = ["--shapes", shapes, "--json", json.to_str().unwrap()];
+        let (ok, stderr) = run(ROBOT, &small_robot(&[extra, &out].concat()));
+        report(ok, &stderr, &json)
+    };
+    // The documented X,Z form, with a negative value, runs.
+    let v = report_of(&["--offset", "-0.2,0.1"], "plain");
     // plain in both contact modes.
     assert_eq!(v["runs"].as_array().unwrap().len(), 2);
     let robot_tris = v["scene"]["dropped_triangles"].as_u64().unwrap();
     // --subdivide 2 drops the same robot with 16 times the triangles.
-    let args: Vec<&str> = small
-        .iter()
-        .copied()
-        .chain([
-            "--subdivide",
-            "2",
-            "--shapes",
-            "plain-patches",
-            "--json",
-            json.to_str().unwrap(),
-        ])
-        .collect();
-    let (ok, stderr) = run(bin, &args);
-    let v = report(ok, &stderr, &json);
+    let v = report_of(&["--subdivide", "2"], "plain-patches");
     assert_eq!(
         v["scene"]["dropped_triangles"].as_u64().unwrap(),
         16 * robot_tris
@@ -316,18 +287,12 @@ fn sims_check_every_flag_before_the_first_run() {
 /// under leaves of 5).
 #[test]
 fn leaf_size_sets_the_cbvh_shapes_leaves() {
-    let bin = env!("CARGO_BIN_EXE_lucy-on-turbine");
     let json = temp("leaves.json");
     let run_with = |leaf: &str| {
-        let (ok, stderr) = run(
-            bin,
+        let (ok, stderr) = lucy(
+            "3000",
+            "30",
             &[
-                "--statue-tris",
-                "3000",
-                "--turbine-tris",
-                "3000",
-                "--steps",
-                "30",
                 "--shapes",
                 "plain,hcc,clbvh,clbvh-compact",
                 "--contacts",
@@ -354,7 +319,7 @@ fn leaf_size_sets_the_cbvh_shapes_leaves() {
     assert!(five.0 < 0.8 * one.0, "plain {} → {}", one.0, five.0);
     assert!(five.1 < one.1, "hcc {} → {}", one.1, five.1);
     assert!(five.2 > 0.0);
-    let (ok, stderr) = run(bin, &["--leaf-size", "0", "--steps", "1"]);
+    let (ok, stderr) = run(LUCY, &["--leaf-size", "0", "--steps", "1"]);
     assert!(!ok);
     assert!(stderr.contains("--leaf-size"), "{stderr}");
     assert!(!stderr.contains("dropping"), "{stderr}");
@@ -381,37 +346,35 @@ fn refused_within(bin: &str, args: &[&str]) -> String {
 /// a mesh can number: it used to be generated, then hit an assert).
 #[test]
 fn sims_check_mesh_counts_and_subdivide_before_any_mesh() {
-    let lucy = env!("CARGO_BIN_EXE_lucy-on-turbine");
-    let robot = env!("CARGO_BIN_EXE_robot-in-plant");
     // The other mesh is large: were it made first, 20 s would not do.
     let cases: [(&str, &[&str], &str); 6] = [
         (
-            lucy,
+            LUCY,
             &["--statue-tris", "30000000", "--turbine-tris", "0"],
             "--turbine-tris 0: the turbine generator makes 1000 to 200000000 triangles",
         ),
         (
-            lucy,
+            LUCY,
             &["--statue-tris", "999", "--turbine-tris", "30000000"],
             "--statue-tris 999: the statue generator",
         ),
         (
-            robot,
+            ROBOT,
             &["--robot-tris", "30000000", "--plant-tris", "0"],
             "--plant-tris 0: the plant generator",
         ),
         (
-            robot,
+            ROBOT,
             &["--robot-tris", "300000000"],
             "--robot-tris 300000000: the robot generator makes 1000 to 200000000",
         ),
         (
-            robot,
+            ROBOT,
             &["--robot-tris", "200000000", "--subdivide", "3"],
             "--subdivide 3: the robot of --robot-tris 200000000 has",
         ),
         (
-            lucy,
+            LUCY,
             &[
                 "--statue-tris",
                 "200000000",
@@ -438,7 +401,7 @@ fn sims_check_mesh_counts_and_subdivide_before_any_mesh() {
     )
     .unwrap();
     let e = refused_within(
-        robot,
+        ROBOT,
         &["--robot", ply.to_str().unwrap(), "--subdivide", "1"],
     );
     assert!(
@@ -447,7 +410,7 @@ fn sims_check_mesh_counts_and_subdivide_before_any_mesh() {
     );
     // A missing file is named with its flag before the other mesh is made.
     let e = refused_within(
-        lucy,
+        LUCY,
         &[
             "--statue-tris",
             "30000000",
@@ -464,43 +427,29 @@ fn sims_check_mesh_counts_and_subdivide_before_any_mesh() {
 /// never made, and the plot and frame are PNG files.
 #[test]
 fn sims_bound_replay_rounds_and_check_outputs() {
-    let bin = env!("CARGO_BIN_EXE_robot-in-plant");
-    let small = [
-        "--robot-tris",
-        "1000",
-        "--plant-tris",
-        "2000",
-        "--steps",
-        "1",
-    ];
-    fn with<'a>(small: &[&'a str], extra: &[&'a str]) -> Vec<&'a str> {
-        small.iter().chain(extra).copied().collect()
-    }
-    let e = refused_within(bin, &with(&small, &["--replay", "--replay-rounds", "1001"]));
+    let refused = |extra: &[&str]| refused_within(ROBOT, &small_robot(extra));
+    let e = refused(&["--replay", "--replay-rounds", "1001"]);
     assert!(e.contains("--replay-rounds") && e.contains("1001"), "{e}");
-    let e = refused_within(bin, &with(&small, &["--replay", "--replay-rounds", "0"]));
+    let e = refused(&["--replay", "--replay-rounds", "0"]);
     assert!(e.contains("--replay-rounds"), "{e}");
     let json = temp("rounds.json");
     let (ok, stderr) = run(
-        bin,
-        &with(
-            &small,
-            &[
-                "--replay",
-                "--replay-rounds",
-                "1000",
-                "--shapes",
-                "plain-patches",
-                "--json",
-                json.to_str().unwrap(),
-            ],
-        ),
+        ROBOT,
+        &small_robot(&[
+            "--replay",
+            "--replay-rounds",
+            "1000",
+            "--shapes",
+            "plain-patches",
+            "--json",
+            json.to_str().unwrap(),
+        ]),
     );
     report(ok, &stderr, &json);
     let missing = temp("no-such-dir");
     for flag in ["--json", "--plot", "--render"] {
         let p = missing.join("sub").join("x.png");
-        let e = refused_within(bin, &with(&small, &[flag, p.to_str().unwrap()]));
+        let e = refused(&[flag, p.to_str().unwrap()]);
         assert!(
             e.contains(&format!("{flag} {}", p.display())) && e.contains("does not exist"),
             "{flag}: {e}"
@@ -509,7 +458,7 @@ fn sims_bound_replay_rounds_and_check_outputs() {
     }
     for flag in ["--plot", "--render"] {
         let p = temp("x.txt");
-        let e = refused_within(bin, &with(&small, &[flag, p.to_str().unwrap()]));
+        let e = refused(&[flag, p.to_str().unwrap()]);
         assert!(e.contains(flag) && e.contains(".png"), "{flag}: {e}");
         assert!(!p.exists());
     }
@@ -519,19 +468,7 @@ fn sims_bound_replay_rounds_and_check_outputs() {
 /// and the sims: the same words for the same value.
 #[test]
 fn render_and_sims_check_threads_alike() {
-    let sim = |t: &str| {
-        refused_within(
-            env!("CARGO_BIN_EXE_robot-in-plant"),
-            &[
-                "--robot-tris",
-                "1000",
-                "--plant-tris",
-                "2000",
-                "--threads",
-                t,
-            ],
-        )
-    };
+    let sim = |t: &str| refused_within(ROBOT, &with(&SMALL_ROBOT, &["--threads", t]));
     let render = |t: &str| {
         crate::common::cbvh_refuses_within(
             &[

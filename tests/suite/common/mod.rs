@@ -202,6 +202,55 @@ pub fn test_rays(mesh: &Mesh, seed: u64, n: usize) -> Vec<Ray> {
         .collect()
 }
 
+/// A camera's coherent fan of 24 × 24 rays from in front of `mesh`'s box
+/// through its middle plane.
+pub fn camera_rays(mesh: &Mesh) -> Vec<Ray> {
+    let (lo, hi) = mesh.bounds().unwrap();
+    let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
+    let eye = (lo + hi) * 0.5 + Vec3A::new(0.1, 0.2, 2.5) * (hi - lo).length().max(1e-3);
+    let mut rays = Vec::with_capacity(24 * 24);
+    for y in 0..24 {
+        for x in 0..24 {
+            let p = lo + (hi - lo) * Vec3A::new(x as f32 / 23.0, y as f32 / 23.0, 0.5);
+            rays.push(Ray::new(eye, (p - eye).normalize_or(Vec3A::Z)));
+        }
+    }
+    rays
+}
+
+/// A codec's own ray traversal (`query::closest_hit` and
+/// `query::any_hit`) against the generic one over its cursor, for every
+/// ray up to every limit in `t_maxes`: the same closest hit, bit for bit,
+/// and the same any hit. Returns how many (ray, limit) pairs hit; `what`
+/// names the case in failures.
+pub fn check_own_traversal_is_generic<C: RayCursor>(
+    c: &C,
+    rays: &[Ray],
+    t_maxes: [f32; 3],
+    what: &str,
+) -> usize {
+    let mut s = TraversalStats::default();
+    let mut hits = 0;
+    for ray in rays {
+        for t_max in t_maxes {
+            let own = query::closest_hit(c, ray, t_max, &mut s);
+            let generic = query::ray::closest_hit_generic(c, ray, t_max, &mut s);
+            assert_eq!(
+                hit_bits(own),
+                hit_bits(generic),
+                "{what}, {ray:?}, t_max {t_max}"
+            );
+            hits += usize::from(own.is_some());
+            assert_eq!(
+                query::any_hit(c, ray, t_max, &mut s),
+                query::ray::any_hit_generic(c, ray, t_max, &mut s),
+                "{what}, {ray:?}, t_max {t_max}"
+            );
+        }
+    }
+    hits
+}
+
 /// Closest hit, any hit, overlap and closest point equal brute force.
 pub fn check_queries<C: RayCursor>(c: &C, mesh: &Mesh, seed: u64) {
     let mut stats = TraversalStats::default();
@@ -647,6 +696,24 @@ pub fn cbvh_refuses_within(args: &[&str], secs: u64) -> String {
     }
 }
 
+/// `cbvh build MODEL --codec CODEC --out-of-core --chunk-triangles 12000
+/// -o OUT`'s arguments: the out-of-core build the command-line tests ask
+/// for.
+#[cfg(feature = "app")]
+pub fn out_of_core_build<'a>(model: &'a str, codec: &'a str, out: &'a str) -> [&'a str; 9] {
+    [
+        "build",
+        model,
+        "--codec",
+        codec,
+        "--out-of-core",
+        "--chunk-triangles",
+        "12000",
+        "-o",
+        out,
+    ]
+}
+
 /// What the out-of-core codecs' command-line tests share: a 100 k-triangle
 /// statue saved as `m.ply` in `d`; `cbvh build m.ply --codec CODEC
 /// --out-of-core --chunk-triangles 12000 -o OUT --json` reports an
@@ -664,18 +731,7 @@ pub fn cli_builds_out_of_core(
     let ply = d.join("m.ply");
     cbvh::mesh::save(&mesh, &ply).unwrap();
     let (p, out) = (ply.to_str().unwrap(), out.to_str().unwrap());
-    let (ok, stdout, stderr) = cbvh(&[
-        "build",
-        p,
-        "--codec",
-        codec,
-        "--out-of-core",
-        "--chunk-triangles",
-        "12000",
-        "-o",
-        out,
-        "--json",
-    ]);
+    let (ok, stdout, stderr) = cbvh(&[&out_of_core_build(p, codec, out)[..], &["--json"]].concat());
     assert!(ok, "{stderr}");
     let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     assert_eq!(v["out_of_core"], true);
@@ -804,6 +860,50 @@ pub fn check_streamed_like_direct<S: cbvh::codec::Codec, D: cbvh::codec::Codec>(
     )
     .unwrap_or_else(|e| panic!("{what}: {e}"));
     assert_eq!(paged.triangle_count(), mesh.triangles.len(), "{what}");
+}
+
+/// The models both out-of-core codecs' streamed builds are checked on: a
+/// statue, a robot and a turbine, a soup, and [`edge_case_meshes`] (named
+/// one, same, flat and huge).
+pub fn streamed_meshes() -> Vec<(&'static str, Mesh)> {
+    use cbvh::scene::{Kind, generate};
+    let g = |k, n| generate(k, n, 1, &mut |_, _| {}).unwrap();
+    let mut v = vec![
+        ("statue", g(Kind::Statue, 3000)),
+        ("robot", g(Kind::Robot, 4000)),
+        ("turbine", g(Kind::Turbine, 3000)),
+        ("soup", soup(7, 500, 2.0)),
+    ];
+    for (k, m) in edge_case_meshes().into_iter().enumerate() {
+        v.push((["one", "same", "flat", "huge"][k], m));
+    }
+    v
+}
+
+/// Runs `f` in a rayon pool of `threads` workers.
+pub fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
+/// The bytes `run(threads)` writes are the same run in pools of 1, 2 and
+/// 3 threads.
+pub fn check_same_bytes_in_1_2_3_threads(run: impl Fn(usize) -> Vec<u8> + Sync) {
+    let one = in_pool(1, || run(1));
+    assert_eq!(one, in_pool(2, || run(2)));
+    assert_eq!(one, in_pool(3, || run(3)));
+}
+
+/// The directory `d` is empty: a refused build left no temporary file.
+pub fn assert_no_file_left(d: &std::path::Path) {
+    assert_eq!(
+        std::fs::read_dir(d).unwrap().count(),
+        0,
+        "no temporary file"
+    );
 }
 
 /// Meshes at the edges of what a builder and a codec take:
