@@ -1,7 +1,5 @@
 //! What can stop a render or its output.
 
-use std::path::PathBuf;
-
 use crate::build::BuildError;
 
 /// A render or image-output error.
@@ -38,7 +36,7 @@ pub enum RenderError {
     #[error("cannot encode {path} as PNG: {source}")]
     Png {
         /// The file.
-        path: PathBuf,
+        path: std::path::PathBuf,
         /// Why.
         source: png::EncodingError,
     },
@@ -47,7 +45,7 @@ pub enum RenderError {
     #[error("cannot encode {path} as GIF: {source}")]
     Gif {
         /// The file.
-        path: PathBuf,
+        path: std::path::PathBuf,
         /// Why.
         source: gif::EncodingError,
     },
