@@ -97,7 +97,7 @@ struct OutOfCore {
 }
 
 /// `b` bytes in GiB, or MiB below one GiB.
-fn gib(b: u64) -> String {
+fn size_text(b: u64) -> String {
     if b < 1 << 30 {
         format!("{:.1} MiB", b as f64 / (1u64 << 20) as f64)
     } else {
@@ -148,8 +148,8 @@ fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> 
             &format!(
                 "{what} builds in memory (about {} of the {} budget); add --out-of-core to build \
                  it in chunks",
-                gib(need),
-                gib(budget)
+                size_text(need),
+                size_text(budget)
             ),
         );
     }
@@ -162,8 +162,8 @@ fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> 
                 "{what} has about {} triangles: building it in memory needs about {}, over the \
                  {} budget (--memory-mib)",
                 estimated.1,
-                gib(need),
-                gib(budget)
+                size_text(need),
+                size_text(budget)
             )
         };
         let flags: Vec<_> = names.iter().map(|n| format!("--codec {n}")).collect();
@@ -178,8 +178,8 @@ fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> 
         return Err(format!(
             "{what} would need about {} to build in memory, over the {} budget: an out-of-core \
              build reads a mesh file; write the model with `cbvh gen ... -o FILE.ply` first",
-            gib(need),
-            gib(budget)
+            size_text(need),
+            size_text(budget)
         )
         .into());
     };
@@ -194,8 +194,8 @@ fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> 
         return Err(format!(
             "{what}: its vertices and per-triangle flags alone need about {}, most of the {} \
              budget; raise --memory-mib",
-            gib(resident),
-            gib(budget)
+            size_text(resident),
+            size_text(budget)
         )
         .into());
     }
@@ -211,8 +211,8 @@ fn plan(a: &BuildArgs) -> Result<Option<OutOfCore>, Box<dyn std::error::Error>> 
                  {}, over the {} budget (--memory-mib): give fewer triangles a chunk, or none \
                  to size chunks from the budget",
                 n.min(estimated.1),
-                gib(chunk_bytes),
-                gib(budget)
+                size_text(chunk_bytes),
+                size_text(budget)
             )
             .into());
         }
