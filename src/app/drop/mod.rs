@@ -376,7 +376,8 @@ pub fn dropped_from(m: &MeshFlags, seed: u64, subdivide: u32) -> Result<(Dropped
                     cache_budget_bytes: 1 << 20,
                 },
             )
-            .map_err(|e| format!("{}: {e}", p.display()))?;
+            // Every CodecFileError names the file.
+            .map_err(|e| e.to_string())?;
             let b = codec.root_box();
             let f = DroppedFile {
                 path: p.clone(),
