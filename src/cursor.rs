@@ -32,8 +32,10 @@
 //! nothing above it.
 
 mod batch;
+mod scaled;
 
 pub use batch::ChildBoxes;
+pub use scaled::Scaled;
 
 use crate::geom::{Aabb, Triangle};
 
@@ -212,6 +214,12 @@ impl<N: Copy> Children<N> {
     pub fn set_boxes(&mut self, boxes: ChildBoxes, nodes: [N; MAX_CHILDREN]) {
         self.boxes = boxes;
         self.nodes = nodes;
+    }
+
+    /// Scales every child's box by `s` ([`ChildBoxes::scaled`]).
+    #[inline(always)]
+    pub fn scale_boxes(&mut self, s: glam::Vec3A) {
+        self.boxes = self.boxes.scaled(s);
     }
 
     /// Number of children.

@@ -143,6 +143,19 @@ impl Aabb {
         Aabb::new(c - e, c + e)
     }
 
+    /// The box scaled axis by axis by `s` (no component zero; a negative
+    /// one mirrors, swapping that axis's bounds); an empty box stays empty.
+    /// Exact: a product rounds the same way for a bound as for a point's
+    /// coordinate, so the result contains the scaled points of the box.
+    #[inline]
+    pub fn scaled(&self, s: Vec3A) -> Aabb {
+        if self.is_empty() {
+            return *self;
+        }
+        let (p, q) = (self.min * s, self.max * s);
+        Aabb::new(p.min(q), p.max(q))
+    }
+
     /// The eight corners.
     pub fn corners(&self) -> [Vec3A; 8] {
         let (a, b) = (self.min, self.max);

@@ -300,6 +300,22 @@ fn transformed_rows(r: &Rows, n: usize, pose: &Pose) -> Rows {
     out
 }
 
+/// [`ChildBoxes::scaled`] on rows of `n` lanes.
+#[inline(always)]
+fn scaled_rows(r: &Rows, n: usize, s: Vec3A) -> Rows {
+    let s = s.to_array().map(Vec4::splat);
+    let mut out = Rows::EMPTY;
+    for k in 0..chunks(n) {
+        let live = live(n, k);
+        for (a, &sa) in s.iter().enumerate() {
+            let (p, q) = (r.min[a][k] * sa, r.max[a][k] * sa);
+            out.min[a][k] = Vec4::select(live, p.min(q), Vec4::INFINITY);
+            out.max[a][k] = Vec4::select(live, p.max(q), Vec4::NEG_INFINITY);
+        }
+    }
+    out
+}
+
 /// The mask of lanes `0..n`.
 #[inline(always)]
 fn lane_mask(n: usize) -> u32 {
@@ -613,6 +629,29 @@ impl ChildBoxes {
                 Repr::Narrow(out)
             }
             Repr::Wide(rows) => Repr::Wide(transformed_rows(rows, self.len, pose)),
+        };
+        ChildBoxes {
+            len: self.len,
+            repr,
+        }
+    }
+
+    /// Every box scaled axis by axis by `s` (no component zero; a negative
+    /// one mirrors, swapping that axis's bounds), as [`Aabb::scaled`] lane
+    /// by lane; padding stays empty. Exact: a product rounds the same way
+    /// for a box's bound as for a point's coordinate, so a scaled box
+    /// contains the scaled points of the box.
+    #[inline(always)]
+    pub fn scaled(&self, s: Vec3A) -> ChildBoxes {
+        let repr = match &self.repr {
+            Repr::Narrow(pair) => {
+                let mut out = [Aabb::EMPTY; NARROW];
+                for (o, b) in out.iter_mut().zip(pair).take(self.len) {
+                    *o = b.scaled(s);
+                }
+                Repr::Narrow(out)
+            }
+            Repr::Wide(rows) => Repr::Wide(scaled_rows(rows, self.len, s)),
         };
         ChildBoxes {
             len: self.len,

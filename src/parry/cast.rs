@@ -15,7 +15,6 @@ use super::shape::{CbvhShape, to_parry_triangle};
 use crate::cursor::TraversalStats;
 use crate::geom::Aabb;
 use crate::query::find_best;
-use crate::with_codec;
 
 /// Time at which the ball around `b` (moving with `m1`) meets the ball of
 /// `other` (moving with `m2`), or `f32::MAX`.
@@ -65,7 +64,7 @@ pub fn cast_nonlinear<D: ?Sized + QueryDispatcher>(
 ) -> Option<ShapeCastHit> {
     let sphere = other.compute_local_bounding_sphere();
     let mut stats = TraversalStats::default();
-    let found = with_codec!(mesh.codec(), |c| find_best(
+    let found = with_cursor!(mesh, |c| find_best(
         c,
         end,
         &mut stats,

@@ -15,7 +15,6 @@ use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle};
 use crate::cursor::TraversalStats;
 use crate::geom::{Aabb, Ray};
 use crate::query::find_best;
-use crate::with_codec;
 
 fn box_distance(x: &Aabb, y: &Aabb) -> f32 {
     (x.min - y.max)
@@ -39,7 +38,7 @@ pub fn distance<D: QueryDispatcher>(
 ) -> ShapeDistance {
     let other_box = from_parry_aabb(&other.compute_aabb(&other_in_mesh(pos12, mesh_first)));
     let mut stats = TraversalStats::default();
-    let found = with_codec!(mesh.codec(), |c| find_best(
+    let found = with_cursor!(mesh, |c| find_best(
         c,
         f32::MAX,
         &mut stats,
@@ -84,7 +83,7 @@ pub fn closest_points<D: QueryDispatcher>(
     let other_box = from_parry_aabb(&other.compute_aabb(&other_in_mesh(pos12, mesh_first)));
     let mut stats = TraversalStats::default();
     let bound = max_dist + max_dist.abs() * 1e-6 + 1e-7;
-    let found = with_codec!(mesh.codec(), |c| find_best(
+    let found = with_cursor!(mesh, |c| find_best(
         c,
         bound,
         &mut stats,
@@ -126,7 +125,7 @@ pub fn cast_shapes<D: QueryDispatcher>(
     let ray = Ray::new(ob.center(), vel.into());
     let half = ob.half_extents();
     let mut stats = TraversalStats::default();
-    let found = with_codec!(mesh.codec(), |c| find_best(
+    let found = with_cursor!(mesh, |c| find_best(
         c,
         options.max_time_of_impact,
         &mut stats,

@@ -22,7 +22,6 @@ use crate::contact::{Interference, PairFacing, PairKernel, PatchOptions, PatchSe
 use crate::cursor::TraversalStats;
 use crate::geom::Triangle;
 use crate::query::{Prediction, bvtt, bvtt_min, bvtt_par, bvtt_par_within};
-use crate::with_codec;
 
 /// Node pairs the parallel traversal starts from: enough tasks to balance
 /// two to a few dozen threads, few enough that a small contact costs little.
@@ -82,7 +81,7 @@ pub fn patches(
     let (mut candidates, mut contacts) = (0u64, 0u64);
     let largest = prediction.at_most();
     let facing = pair_facing(&pose, s1, s2);
-    with_codec!(s1.codec(), |a| with_codec!(s2.codec(), |b| {
+    with_cursor!(s1, |a| with_cursor!(s2, |b| {
         let (states, _stats) = bvtt_par_within(
             a,
             b,
@@ -131,7 +130,7 @@ pub fn pair_facing(pose: &crate::geom::Pose, s1: &CbvhShape, s2: &CbvhShape) -> 
 /// two-tree traversal and an exact triangle-triangle test, with no contacts.
 pub fn interference(pos12: &PPose, s1: &CbvhShape, s2: &CbvhShape) -> u64 {
     let pose = pose_from_parry(pos12);
-    with_codec!(s1.codec(), |a| with_codec!(s2.codec(), |b| {
+    with_cursor!(s1, |a| with_cursor!(s2, |b| {
         let (states, _) = bvtt_par(
             a,
             b,
@@ -162,7 +161,7 @@ pub fn for_each_pair(
     mut f: impl FnMut(u32, &Triangle, u32, &Triangle) -> ControlFlow<()>,
 ) {
     let pose = pose_from_parry(pos12);
-    with_codec!(s1.codec(), |a| with_codec!(s2.codec(), |b| {
+    with_cursor!(s1, |a| with_cursor!(s2, |b| {
         bvtt(a, b, &pose, prediction, stats, &mut f);
     }));
 }
@@ -273,7 +272,7 @@ pub fn contact(pos12: &PPose, s1: &CbvhShape, s2: &CbvhShape, prediction: Real) 
 pub fn distance(pos12: &PPose, s1: &CbvhShape, s2: &CbvhShape) -> ShapeDistance {
     let pose = pose_from_parry(pos12);
     let mut stats = TraversalStats::default();
-    let found = with_codec!(s1.codec(), |a| with_codec!(s2.codec(), |b| bvtt_min(
+    let found = with_cursor!(s1, |a| with_cursor!(s2, |b| bvtt_min(
         a,
         b,
         &pose,
@@ -302,7 +301,7 @@ pub fn closest_points(
     let pose = pose_from_parry(pos12);
     let mut stats = TraversalStats::default();
     let bound = max_dist + max_dist.abs() * 1e-6 + 1e-7;
-    let found = with_codec!(s1.codec(), |a| with_codec!(s2.codec(), |b| bvtt_min(
+    let found = with_cursor!(s1, |a| with_cursor!(s2, |b| bvtt_min(
         a,
         b,
         &pose,

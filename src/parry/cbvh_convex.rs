@@ -23,7 +23,6 @@ use crate::contact::{Facing, PatchOptions, PatchPoint, PatchSet};
 use crate::cursor::TraversalStats;
 use crate::geom::Triangle;
 use crate::query::overlap;
-use crate::with_codec;
 
 /// Calls `f` for each triangle of `mesh` whose box comes within
 /// `prediction` of the box of `convex` placed at `pose` (in the mesh's frame).
@@ -36,7 +35,7 @@ fn for_each_triangle_near(
 ) {
     let query = from_parry_aabb(&convex.compute_aabb(pose)).loosened(prediction);
     let mut stats = TraversalStats::default();
-    with_codec!(mesh.codec(), |c| {
+    with_cursor!(mesh, |c| {
         overlap(c, &query, &mut stats, &mut f);
     });
 }

@@ -26,7 +26,6 @@ use crate::contact::edges::ALL_ACTIVE;
 use crate::contact::{Facing, PairFacing, PairKernel, PatchOptions, PatchSet};
 use crate::cursor::TraversalStats;
 use crate::query::overlap;
-use crate::with_codec;
 
 /// Contact manifolds in the dispatcher's `mode`; `flipped` says the cbvh
 /// shape is the second shape of the pair.
@@ -94,7 +93,7 @@ pub fn patches(
         .oriented(Some(facing));
     let query = from_parry_aabb(&tm.compute_aabb(tm_in_mesh)).loosened(prediction);
     let mut stats = TraversalStats::default();
-    with_codec!(mesh.codec(), |c| {
+    with_cursor!(mesh, |c| {
         overlap(c, &query, &mut stats, |i, tri| {
             let ptri = to_parry_triangle(tri);
             let b = ptri.compute_aabb(&mesh_in_tm).loosened(prediction);
@@ -142,7 +141,7 @@ pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + S
     let mut stats = TraversalStats::default();
     let tm_center = glam::Vec3A::from((tm_in_mesh * tm.local_aabb().center()).to_array());
     let facing = mesh.facing(tm_center);
-    with_codec!(mesh.codec(), |c| {
+    with_cursor!(mesh, |c| {
         overlap(c, &query, &mut stats, |i, tri| {
             let ptri = to_parry_triangle(tri);
             let cone = EdgeCone::new(tri, mesh.edge_flags_of(i), facing);

@@ -33,6 +33,22 @@
 //! - `raycast_target` (feature `render`): parry's `TriMesh` as a target of
 //!   the ray tracer, to render through parry's own ray casting.
 
+/// Runs `$body` with `$c` bound to a [`CbvhShape`]'s tree as a cursor,
+/// scaled as the shape is ([`Scaled`](crate::cursor::Scaled): the codec's
+/// own cursor behind a flag when the shape is unscaled). Every traversal of
+/// a shape's tree in this folder goes through it, so that a scaled view
+/// ([`CbvhShape::scaled`]) answers every query.
+macro_rules! with_cursor {
+    ($shape:expr, |$c:ident| $body:expr) => {{
+        let shape: &$crate::parry::CbvhShape = $shape;
+        let scale = shape.scale();
+        $crate::with_codec!(shape.codec(), |raw| {
+            let $c = &$crate::cursor::Scaled::new(raw, scale);
+            $body
+        })
+    }};
+}
+
 pub mod cast;
 pub mod cbvh_any;
 pub mod cbvh_cbvh;

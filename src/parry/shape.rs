@@ -22,8 +22,9 @@ use crate::codec::common::MassProps;
 use crate::codec::{
     AnyCodec, AnyOptions, ByteSize, CodecError, CodecFileError, CodecKind, OpenOptions,
 };
+use crate::contact::edges::{BACK, FRONT};
 use crate::contact::{EdgeFlags, Facing};
-use crate::cursor::{NodeCursor, TraversalStats};
+use crate::cursor::{NodeCursor, Scaled, TraversalStats};
 use crate::geom::{Aabb, Pose, Ray, TriHit, Triangle};
 use crate::mesh::Mesh;
 use crate::query;
@@ -48,15 +49,36 @@ pub enum ShapeBuildError {
 
 struct Inner {
     codec: AnyCodec,
+    triangles: usize,
+}
+
+/// What depends on the shape's scale ([`CbvhShape::scaled`]): shared by
+/// the clones of one view, made anew for each scale.
+struct View {
+    /// The factors the codec's tree is scaled by (all 1 unscaled).
+    scale: Vec3A,
     /// Active edges, by triangle id ([`EdgeFlags`]): the codec's (shared,
-    /// not copied) or the ones given to [`CbvhShape::with_edges`].
+    /// not copied) or the ones given to [`CbvhShape::with_edges`], for the
+    /// scale.
     edges: EdgeFlags,
     aabb: Aabb,
     /// Mass properties at density 1.
     unit_mass: MassProperties,
-    triangles: usize,
     fallback: OnceLock<Bvh>,
     fallback_builds: AtomicUsize,
+}
+
+impl View {
+    fn new(scale: Vec3A, edges: EdgeFlags, aabb: Aabb, unit_mass: MassProperties) -> Arc<Self> {
+        Arc::new(View {
+            scale,
+            edges,
+            aabb,
+            unit_mass,
+            fallback: OnceLock::new(),
+            fallback_builds: AtomicUsize::new(0),
+        })
+    }
 }
 
 /// A triangle mesh stored as a cbvh BVH, usable as a parry / rapier shape.
@@ -69,6 +91,7 @@ struct Inner {
 #[derive(Clone)]
 pub struct CbvhShape {
     inner: Arc<Inner>,
+    view: Arc<View>,
     sides: Sides,
 }
 
@@ -110,6 +133,25 @@ pub fn parry_mass(m: &MassProps) -> MassProperties {
         m.mass,
         parry3d::math::Matrix::from_cols_array(&m.inertia),
     )
+}
+
+/// `m` for the body scaled by `s` along its local axes: the mass by
+/// `|det S|`, the centre of mass by `S`, and the inertia tensor about the
+/// centre of mass through the second moments `C = tr(I)/2 E - I`, which
+/// scale as `|det S| S C S` (so `I' = tr(C') E - C'`).
+fn scaled_mass(m: &MassProperties, s: Vec3A) -> MassProperties {
+    if m.inv_mass == 0.0 {
+        return *m;
+    }
+    let det = (s.x * s.y * s.z).abs();
+    let i = m.reconstruct_inertia_matrix();
+    let trace = i.x_axis.x + i.y_axis.y + i.z_axis.z;
+    let c = parry3d::math::Matrix::from_diagonal(Vector::splat(0.5 * trace)) - i;
+    let sm = parry3d::math::Matrix::from_diagonal(s.into());
+    let c2 = sm * c * sm * det;
+    let trace2 = c2.x_axis.x + c2.y_axis.y + c2.z_axis.z;
+    let i2 = parry3d::math::Matrix::from_diagonal(Vector::splat(trace2)) - c2;
+    MassProperties::with_inertia_matrix(m.local_com * Vector::from(s), m.mass() * det, i2)
 }
 
 /// Converts a parry pose into cbvh's.
@@ -204,14 +246,75 @@ impl CbvhShape {
             inner: Arc::new(Inner {
                 triangles: codec.triangle_count(),
                 codec,
-                edges,
-                aabb,
-                unit_mass,
-                fallback: OnceLock::new(),
-                fallback_builds: AtomicUsize::new(0),
             }),
+            view: View::new(Vec3A::ONE, edges, aabb, unit_mass),
             sides: Sides::Auto,
         }
+    }
+
+    /// The same shape scaled by `scale` along its local axes: a view over
+    /// the same compressed tree, not a re-encoding ([`Scaled`]). Uniform,
+    /// non-uniform and mirrored (negative) factors are taken; a scaled
+    /// shape scales again by the product. `None` if a factor is zero or
+    /// not finite.
+    ///
+    /// Every query of the view answers as a shape built from the mesh with
+    /// its vertices scaled first: boxes, triangles (and so contacts, rays,
+    /// casts and projections), the mass properties (mass by `|sx sy sz|`,
+    /// the centre of mass by `scale`, the inertia tensor from the scaled
+    /// second moments) and the active edges. A uniform factor keeps every
+    /// angle, so the edge flags are shared; a mirror turns the surface's
+    /// sides about (the front and back bits swap, and a closed mesh's
+    /// outward side with them); a non-uniform scale changes the angles
+    /// between triangles, so the flags are computed again from the scaled
+    /// triangles, at the default flat angle (about a second a million
+    /// triangles, one byte a triangle kept).
+    pub fn scaled(&self, scale: Vector) -> Option<CbvhShape> {
+        let total = self.view.scale * Vec3A::from(scale);
+        if !total.is_finite() || total.cmpeq(Vec3A::ZERO).any() {
+            return None;
+        }
+        let s = Vec3A::from(scale);
+        let det = f64::from(s.x) * f64::from(s.y) * f64::from(s.z);
+        let uniform = s.x.abs() == s.y.abs() && s.y.abs() == s.z.abs();
+        let edges = if uniform {
+            let e = &self.view.edges;
+            let mut out = if det < 0.0 {
+                let swapped = e
+                    .as_slice()
+                    .iter()
+                    .map(|&f| ((f & FRONT) << 3) | ((f & BACK) >> 3))
+                    .collect();
+                let mut m = EdgeFlags::from_flags(swapped).expect("swapped flags stay in range");
+                m.boundary_edges = e.boundary_edges;
+                m.non_manifold_edges = e.non_manifold_edges;
+                m.misoriented_edges = e.misoriented_edges;
+                m.flat_edges = e.flat_edges;
+                m
+            } else {
+                e.clone()
+            };
+            out.signed_volume = e.signed_volume * det;
+            out
+        } else {
+            with_codec!(&self.inner.codec, |raw| {
+                let c = Scaled::new(raw, total);
+                EdgeFlags::compute(c.triangle_count(), |id| c.triangle(id))
+            })
+        };
+        let aabb = self.view.aabb.scaled(s);
+        let unit_mass = scaled_mass(&self.view.unit_mass, s);
+        Some(CbvhShape {
+            inner: self.inner.clone(),
+            view: View::new(total, edges, aabb, unit_mass),
+            sides: self.sides,
+        })
+    }
+
+    /// The factors the codec's tree is scaled by along each local axis
+    /// (all 1 for a shape that was never [`scaled`](Self::scaled)).
+    pub fn scale(&self) -> Vec3A {
+        self.view.scale
     }
 
     /// The same shape taking contacts on `sides` (cheap: the data is
@@ -229,13 +332,13 @@ impl CbvhShape {
     /// The active edges of the triangles, by id: the codec's, or the ones
     /// given to [`with_edges`](Self::with_edges).
     pub fn edge_flags(&self) -> &EdgeFlags {
-        &self.inner.edges
+        &self.view.edges
     }
 
     /// The edge flags of triangle `id` ([`EdgeFlags::get`]).
     #[inline]
     pub fn edge_flags_of(&self, id: u32) -> u8 {
-        self.inner.edges.get(id)
+        self.view.edges.get(id)
     }
 
     /// How the triangles face a contact with a shape whose centre is at
@@ -244,8 +347,8 @@ impl CbvhShape {
     /// (with [`Sides::Auto`]).
     pub fn facing(&self, toward: Vec3A) -> Facing {
         match self.sides {
-            Sides::Auto if self.inner.edges.is_closed() => {
-                Facing::OneSided(self.inner.edges.outward())
+            Sides::Auto if self.view.edges.is_closed() => {
+                Facing::OneSided(self.view.edges.outward())
             }
             Sides::OneSided => Facing::OneSided(1.0),
             _ => Facing::TwoSided { toward },
@@ -269,24 +372,24 @@ impl CbvhShape {
 
     /// The local box, as cbvh's type.
     pub fn local_aabb(&self) -> Aabb {
-        self.inner.aabb
+        self.view.aabb
     }
 
     /// Whether the compatibility fallback (a parry `Bvh`) has been built.
     /// The native path, through [`Dispatcher`](super::Dispatcher), never builds it.
     pub fn fallback_bvh_built(&self) -> bool {
-        self.inner.fallback.get().is_some()
+        self.view.fallback.get().is_some()
     }
 
     /// How many times a caller asked for the fallback `Bvh` (each call of
     /// [`CompositeShape::bvh`]).
     pub fn fallback_bvh_requests(&self) -> usize {
-        self.inner.fallback_builds.load(Ordering::Relaxed)
+        self.view.fallback_builds.load(Ordering::Relaxed)
     }
 
     /// Triangle `id` as a parry triangle.
     pub fn parry_triangle(&self, id: u32) -> PTriangle {
-        with_codec!(&self.inner.codec, |c| to_parry_triangle(&c.triangle(id)))
+        with_cursor!(self, |c| to_parry_triangle(&c.triangle(id)))
     }
 }
 
@@ -302,7 +405,7 @@ impl RayCast for CbvhShape {
         let mut best: Option<RayIntersection> = None;
         // The primitive test is parry's own triangle ray cast, so hits,
         // normals and features are exactly parry's TriMesh's.
-        with_codec!(&self.inner.codec, |c| query::closest_hit_with(
+        with_cursor!(self, |c| query::closest_hit_with(
             c,
             &r,
             max_time_of_impact,
@@ -329,7 +432,7 @@ impl CbvhShape {
     /// cbvh tree, with its id.
     fn closest_triangle(&self, pt: Vector) -> Option<(u32, PTriangle)> {
         let mut stats = TraversalStats::default();
-        let hit = with_codec!(&self.inner.codec, |c| query::closest_point(
+        let hit = with_cursor!(self, |c| query::closest_point(
             c,
             pt.into(),
             f32::INFINITY,
@@ -377,11 +480,11 @@ impl PointQuery for CbvhShape {
 
 impl Shape for CbvhShape {
     fn compute_local_aabb(&self) -> PAabb {
-        to_parry_aabb(&self.inner.aabb)
+        to_parry_aabb(&self.view.aabb)
     }
 
     fn compute_local_bounding_sphere(&self) -> BoundingSphere {
-        let b = self.inner.aabb;
+        let b = self.view.aabb;
         BoundingSphere::new(b.center().into(), b.half_extents().length())
     }
 
@@ -389,13 +492,15 @@ impl Shape for CbvhShape {
         Box::new(self.clone())
     }
 
-    /// Scaling would need re-encoding the compressed tree: not supported.
-    fn scale_dyn(&self, _scale: Vector, _num_subdivisions: u32) -> Option<Box<dyn Shape>> {
-        None
+    /// A scaled view over the same compressed tree ([`CbvhShape::scaled`]);
+    /// `None` for a zero or non-finite factor. A mesh needs no
+    /// subdivisions: its triangles scale exactly.
+    fn scale_dyn(&self, scale: Vector, _num_subdivisions: u32) -> Option<Box<dyn Shape>> {
+        Some(Box::new(self.scaled(scale)?))
     }
 
     fn mass_properties(&self, density: Real) -> MassProperties {
-        let m = self.inner.unit_mass;
+        let m = self.view.unit_mass;
         if m.inv_mass == 0.0 {
             return m;
         }
@@ -446,8 +551,8 @@ impl CompositeShape for CbvhShape {
     /// first call (logged once). The cbvh dispatcher never calls this. Set
     /// `CBVH_DEBUG_FALLBACK=1` to print a backtrace of the caller.
     fn bvh(&self) -> &Bvh {
-        self.inner.fallback_builds.fetch_add(1, Ordering::Relaxed);
-        self.inner.fallback.get_or_init(|| {
+        self.view.fallback_builds.fetch_add(1, Ordering::Relaxed);
+        self.view.fallback.get_or_init(|| {
             if std::env::var_os("CBVH_DEBUG_FALLBACK").is_some() {
                 log::warn!("{}", std::backtrace::Backtrace::force_capture());
             }
@@ -458,8 +563,7 @@ impl CompositeShape for CbvhShape {
                 self.inner.triangles,
                 self.inner.codec.name()
             );
-            let leaves: Vec<PAabb> = with_codec!(&self.inner.codec, |c| (0..c.triangle_count()
-                as u32)
+            let leaves: Vec<PAabb> = with_cursor!(self, |c| (0..c.triangle_count() as u32)
                 .map(|id| to_parry_aabb(&Aabb::of_triangle(&c.triangle(id))))
                 .collect());
             Bvh::from_leaves(BvhBuildStrategy::default(), &leaves)

@@ -35,6 +35,7 @@ mod racbvh;
 mod racbvh_stream;
 #[cfg(feature = "app")]
 mod render;
+mod scaling;
 mod scene_gen;
 mod shape_queries;
 #[cfg(feature = "app")]
