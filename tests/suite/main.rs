@@ -16,6 +16,7 @@ mod pairs;
 
 mod builder_depth;
 mod clbvh;
+mod closed_mass;
 #[cfg(feature = "app")]
 mod codec_files;
 mod codec_suite;
