@@ -21,6 +21,7 @@ mod closed_mass;
 mod codec_files;
 mod codec_suite;
 mod contacts;
+mod edge_bends;
 mod edge_flags;
 mod far_from_origin;
 mod hcc;
