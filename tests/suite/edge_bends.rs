@@ -9,13 +9,46 @@
 //!   [`CbvhShape::edge_flags_of`], on the shape as built and on the shape
 //!   of the codec's file read back, for open two-triangle folds (wound up
 //!   and wound down) and closed folded prisms.
+//! - Motion in rapier: a box, its rotations locked, pushed at a constant
+//!   horizontal speed without friction across a floor folded by 3° or 10°
+//!   (up and down) crosses the fold without a ghost bump: its upward speed
+//!   never exceeds the rate the surface under it rises by more than
+//!   [`BUMP_SPEED`], and its bottom stays within [`HEIGHT_TOLERANCE`] of the
+//!   analytic support height (relative to where it rests on the flat
+//!   approach: rapier lets a resting contact sink by its allowed error). A
+//!   box sliding freely into a 60° upward fold (a wall) stops there. For
+//!   parry's cuboid on every codec in both contact modes and a cbvh box
+//!   on the same codec; parry's `TriMesh` with and without
+//!   `FIX_INTERNAL_EDGES` is printed beside them, not judged. Rapier's
+//!   contact recycling is off ([`Setup::world`] says why).
+//! - Contacts and motion of a ball at a 10° and a 30° ridge, bends between
+//!   the documented flat angle (5°) and issue 49's mutated one (50°),
+//!   where only an active crease gives the right answer: a ball touching
+//!   the crease is pushed from the crease towards its centre (the
+//!   analytic contact), and a ball pushed over the ridge keeps its
+//!   distance from the surface. With the flat angle at 50° the first gets
+//!   no contact and the second sinks 32 mm (113 mm at 30°).
+//!
+//! The valleys, the wall and the ball's distance pass. The boxes over
+//! ridges, the cbvh box over the 3° valley, and the ball's contacts and
+//! speed just before a ridge do not (issue 49): those tests are
+//! `#[ignore]`d with what fails in their doc comments, and run with
+//! `-- --ignored`.
+//!
+//! Run with `-- --nocapture` for the table of figures.
 
 use cbvh::Mesh;
 use cbvh::build::BuildOptions;
 use cbvh::codec::racbvh::RacOptions;
 use cbvh::codec::{AnyCodec, AnyOptions, CodecKind, OpenOptions};
-use cbvh::parry::CbvhShape;
-use parry3d::math::Vector;
+use cbvh::parry::{CbvhShape, ContactMode, Dispatcher};
+use cbvh::sim::slide::{CbvhMode, Rep, box_mesh};
+use parry3d::math::{Pose, Vector};
+use parry3d::query::{ContactManifold, PersistentQueryDispatcher};
+use parry3d::shape::{Ball, SharedShape};
+use rapier3d::prelude::{
+    ColliderBuilder, NarrowPhase, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle,
+};
 
 /// The bends under test (degrees).
 const BENDS: [f32; 4] = [3.0, 10.0, 30.0, 60.0];
@@ -24,6 +57,13 @@ const BENDS: [f32; 4] = [3.0, 10.0, 30.0, 60.0];
 /// Jolt's default), written out rather than read from the constant, so
 /// that a changed threshold fails here.
 const DOCUMENTED_FLAT_DEG: f32 = 5.0;
+
+/// Largest upward speed of the box beyond the rate the surface under it
+/// rises (m/s).
+const BUMP_SPEED: f32 = 2e-3;
+/// Largest change of the box's height above the analytic support, from
+/// its resting height on the flat approach (m).
+const HEIGHT_TOLERANCE: f32 = 1e-3;
 
 /// Which way the second half of a fold turns, seen from above (the side
 /// the floor's top faces, or the solid's outside).
@@ -256,4 +296,589 @@ fn folded_solids_flag_the_crease_as_documented() {
             }
         }
     }
+}
+
+/// Half the side of the moving box (m).
+const HALF: f32 = 0.25;
+/// Speed the box is pushed at across the nearly flat folds (m/s).
+const PUSH_SPEED: f32 = 0.5;
+/// Speed the box slides into the wall at (m/s).
+const WALL_SPEED: f32 = 1.0;
+/// Where the box's centre starts (m; the crease is at `x = 0`).
+const START_X: f32 = -1.0;
+/// Steps before the box's resting height on the flat approach is taken:
+/// the contact settles first.
+const SETTLE_STEPS: usize = 30;
+/// Gravity (m/s²).
+const G: f32 = 9.81;
+
+/// A floor folded along `x = 0` (the crease from `z = -1` to `z = 1`):
+/// flat on `x ∈ [-3, 0]`, then three units bent `bend_deg` down (convex)
+/// or up (concave); two triangles a half, wound counter-clockwise seen
+/// from above. Each half's diagonal (a flat internal edge) lies across
+/// the box's path too.
+fn folded_floor(bend_deg: f32, fold: Fold) -> Mesh {
+    let [ex, ey] = bent(3.0, bend_deg, fold);
+    let vertices = vec![
+        [-3.0, 0.0, -1.0],
+        [-3.0, 0.0, 1.0],
+        [0.0, 0.0, -1.0],
+        [0.0, 0.0, 1.0],
+        [ex, ey, -1.0],
+        [ex, ey, 1.0],
+    ];
+    let mut triangles = vec![[0, 1, 2], [2, 1, 3], [2, 3, 4], [4, 3, 5]];
+    for t in &mut triangles {
+        let [a, b, c] = t.map(|i| Vector::from_array(vertices[i as usize]));
+        if sub(b, a).cross(sub(c, a)).y < 0.0 {
+            t.swap(1, 2);
+        }
+    }
+    Mesh::new(vertices, triangles)
+}
+
+/// The height the locked box's flat bottom rests at with its centre at
+/// `x`: the highest point of the floor under it.
+fn support(x: f32, bend_deg: f32, fold: Fold) -> f32 {
+    let t = bend_deg.to_radians().tan();
+    match fold {
+        Fold::Concave => t * (x + HALF).max(0.0),
+        Fold::Convex => -t * (x - HALF).max(0.0),
+    }
+}
+
+/// The distance from `(x, y)` to the folded floor's profile (the centre
+/// of a ball above it to the surface, whose points nearest it lie in the
+/// plane `z = const` through the ball's centre).
+fn profile_distance(x: f32, y: f32, bend_deg: f32, fold: Fold) -> f32 {
+    let to_segment = |a: [f32; 2], b: [f32; 2]| {
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let t = (((x - a[0]) * dx + (y - a[1]) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
+        (x - a[0] - t * dx).hypot(y - a[1] - t * dy)
+    };
+    let end = bent(3.0, bend_deg, fold);
+    to_segment([-3.0, 0.0], [0.0, 0.0]).min(to_segment([0.0, 0.0], end))
+}
+
+/// The fastest the support under the box at `x` rises when the box moves
+/// along `+x` at `vx`: a concave fold's slope once the front is past the
+/// crease (or within `reach` of it: it crossed during the step); nothing
+/// on a convex one (the box follows it down or falls).
+fn rise_rate(x: f32, vx: f32, reach: f32, bend_deg: f32, fold: Fold) -> f32 {
+    match fold {
+        Fold::Concave if x + HALF + reach > 0.0 => vx * bend_deg.to_radians().tan(),
+        _ => 0.0,
+    }
+}
+
+/// The moving body: parry's cuboid, a cbvh box of the ground's codec, or
+/// parry's ball (radius [`HALF`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Body {
+    Cuboid,
+    CbvhBox,
+    Ball,
+}
+
+impl Body {
+    /// The parry shape that stands for it on parry's `TriMesh`.
+    fn parry(self) -> Body {
+        match self {
+            Body::Ball => Body::Ball,
+            _ => Body::Cuboid,
+        }
+    }
+
+    fn parry_shape(self) -> SharedShape {
+        match self {
+            Body::Ball => SharedShape::ball(HALF),
+            _ => SharedShape::cuboid(HALF, HALF, HALF),
+        }
+    }
+}
+
+/// How the ground and the box are represented in a run.
+#[derive(Clone, Copy, Debug)]
+enum Setup {
+    /// The body on a cbvh ground of the codec, contacts in the mode.
+    Cbvh(Body, CodecKind, CbvhMode),
+    /// parry's cuboid or ball on parry's `TriMesh` (`Rep::TriMesh` or
+    /// `Rep::TriMeshFixed`): printed, not judged.
+    ParryOnTriMesh(Body, Rep),
+}
+
+impl Setup {
+    fn name(self) -> String {
+        match self {
+            Setup::Cbvh(Body::Cuboid, k, m) => format!("cuboid on {}", Rep::Cbvh(k, m)),
+            Setup::Cbvh(Body::CbvhBox, k, m) => format!("{0} box on {0}", Rep::Cbvh(k, m)),
+            Setup::Cbvh(Body::Ball, k, m) => format!("ball on {}", Rep::Cbvh(k, m)),
+            Setup::ParryOnTriMesh(Body::Ball, r) => format!("ball on {r}"),
+            Setup::ParryOnTriMesh(_, r) => format!("cuboid on {r}"),
+        }
+    }
+
+    fn body(self) -> Body {
+        match self {
+            Setup::Cbvh(b, ..) | Setup::ParryOnTriMesh(b, _) => b,
+        }
+    }
+
+    fn judged(self) -> bool {
+        !matches!(self, Setup::ParryOnTriMesh(..))
+    }
+
+    /// `body` on every codec in both modes, then its parry stand-in on the
+    /// two `TriMesh` grounds.
+    fn all(body: Body) -> Vec<Setup> {
+        let mut out = Vec::new();
+        for &k in CodecKind::ALL {
+            for m in CbvhMode::ALL {
+                out.push(Setup::Cbvh(body, k, m));
+            }
+        }
+        out.push(Setup::ParryOnTriMesh(body.parry(), Rep::TriMesh));
+        out.push(Setup::ParryOnTriMesh(body.parry(), Rep::TriMeshFixed));
+        out
+    }
+
+    /// A frictionless world with `floor` fixed and the box resting on its
+    /// flat half at [`START_X`], moving at `vx`, its rotations locked.
+    ///
+    /// Contact recycling is off: rapier 0.36 by default keeps a pair's
+    /// contacts until its relative pose has drifted 5 cm
+    /// (`normalized_contact_recycle_distance`), so a body sliding at
+    /// 0.5 m/s meets a new triangle up to six steps late and sinks into a
+    /// valley's far side by millimetres before a contact holds it, for
+    /// parry's `TriMesh` as for cbvh. These tests are about the contacts,
+    /// so every step computes them.
+    fn world(self, floor: &Mesh, vx: f32) -> (PhysicsWorld, RigidBodyHandle) {
+        let (mode, ground, body) = match self {
+            Setup::Cbvh(body, k, m) => (
+                m.contact_mode(),
+                SharedShape::new(shape(floor, k)),
+                match body {
+                    Body::CbvhBox => SharedShape::new(shape(&box_mesh(Vector::splat(HALF)), k)),
+                    _ => body.parry_shape(),
+                },
+            ),
+            Setup::ParryOnTriMesh(body, r) => (
+                ContactMode::default(),
+                r.mesh_shape(floor).unwrap(),
+                body.parry_shape(),
+            ),
+        };
+        let mut world = PhysicsWorld {
+            gravity: Vector::new(0.0, -G, 0.0),
+            ..Default::default()
+        };
+        world.narrow_phase =
+            NarrowPhase::with_query_dispatcher(Dispatcher::new(mode).then_default());
+        world.integration_parameters.contact_recycling = false;
+        let fixed = world.bodies.insert(RigidBodyBuilder::fixed());
+        world.colliders.insert_with_parent(
+            ColliderBuilder::new(ground).friction(0.0),
+            fixed,
+            &mut world.bodies,
+        );
+        let h = world.bodies.insert(
+            RigidBodyBuilder::dynamic()
+                .pose(Pose::from_translation(Vector::new(START_X, HALF, 0.0)))
+                .linvel(Vector::new(vx, 0.0, 0.0))
+                .lock_rotations()
+                .can_sleep(false),
+        );
+        world.colliders.insert_with_parent(
+            ColliderBuilder::new(body).density(1.0).friction(0.0),
+            h,
+            &mut world.bodies,
+        );
+        (world, h)
+    }
+}
+
+/// What a push across a fold measured.
+#[derive(Clone, Copy, Debug)]
+struct Crossing {
+    /// The box's largest upward speed beyond the rate the support under
+    /// it rises ([`rise_rate`]) (m/s).
+    bump: f32,
+    /// Where the box's centre was at its largest upward speed (m).
+    bump_x: f32,
+    /// The largest change of the box's bottom's height above the support
+    /// (a ball's: of its centre's distance to the surface, less its
+    /// radius) from its resting height on the flat approach (m).
+    height: f32,
+    /// The box's resting height above the support on the flat approach
+    /// (negative: sunk in) (m).
+    rest: f32,
+    /// Where the box's centre ended (m).
+    final_x: f32,
+}
+
+/// What a crossing is judged on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Judge {
+    /// No ghost bump: at most [`BUMP_SPEED`] up beyond the surface's own
+    /// rise, and as [`Judge::Height`].
+    Bump,
+    /// Within [`HEIGHT_TOLERANCE`] of the analytic support, and at the end
+    /// of the push (not held back at the crease).
+    Height,
+}
+
+impl Crossing {
+    fn ok(&self, judge: Judge) -> bool {
+        (judge == Judge::Height || self.bump < BUMP_SPEED)
+            && self.height < HEIGHT_TOLERANCE
+            && self.final_x > 0.9
+    }
+}
+
+/// Pushes the box across the fold at [`PUSH_SPEED`] (its horizontal
+/// velocity set before every step) until its centre is at `x = 1`, its
+/// back edge well past the crease.
+fn push_across(setup: Setup, bend_deg: f32, fold: Fold) -> Crossing {
+    let floor = folded_floor(bend_deg, fold);
+    let (mut world, h) = setup.world(&floor, PUSH_SPEED);
+    let dt = world.integration_parameters.dt;
+    let steps = ((1.0 - START_X) / PUSH_SPEED / dt).round() as usize;
+    let mut gaps = Vec::with_capacity(steps);
+    let (mut bump, mut bump_x) = (f32::NEG_INFINITY, START_X);
+    let mut final_x = START_X;
+    for step in 0..steps {
+        let b = &mut world.bodies[h];
+        let v = b.linvel();
+        b.set_linvel(Vector::new(PUSH_SPEED, v.y, 0.0), true);
+        world.step();
+        let b = &world.bodies[h];
+        let (p, v) = (b.translation(), b.linvel());
+        final_x = p.x;
+        if step >= SETTLE_STEPS {
+            let rise = rise_rate(p.x, PUSH_SPEED, PUSH_SPEED * dt, bend_deg, fold);
+            if v.y - rise > bump {
+                (bump, bump_x) = (v.y - rise, p.x);
+            }
+            let gap = match setup.body() {
+                Body::Ball => profile_distance(p.x, p.y, bend_deg, fold) - HALF,
+                _ => p.y - HALF - support(p.x, bend_deg, fold),
+            };
+            gaps.push((p.x, gap));
+        }
+    }
+    // The resting height: the mean over the flat approach, before the
+    // front nears the crease.
+    let flat: Vec<f32> = gaps
+        .iter()
+        .filter(|(x, _)| x + HALF < -0.05)
+        .map(|&(_, g)| g)
+        .collect();
+    assert!(flat.len() > 10, "{}: a flat approach", setup.name());
+    let rest = flat.iter().sum::<f32>() / flat.len() as f32;
+    let height = gaps
+        .iter()
+        .map(|&(_, g)| (g - rest).abs())
+        .fold(0.0, f32::max);
+    Crossing {
+        bump,
+        bump_x,
+        height,
+        rest,
+        final_x,
+    }
+}
+
+/// The mark after a figure line: judged and passed (nothing), failed, or
+/// printed for comparison only.
+fn verdict(setup: Setup, ok: bool) -> &'static str {
+    match (setup.judged(), ok) {
+        (false, _) => " (not judged)",
+        (true, true) => "",
+        (true, false) => " FAIL",
+    }
+}
+
+/// Pushes `body` across the fold on every codec in both modes (and its
+/// parry stand-in on parry's `TriMesh`, printed), and asserts that every
+/// cbvh run crosses as `judge` asks ([`Crossing::ok`]).
+fn crosses(bend_deg: f32, fold: Fold, body: Body, judge: Judge) {
+    let mut failures = Vec::new();
+    for setup in Setup::all(body) {
+        let c = push_across(setup, bend_deg, fold);
+        let line = format!(
+            "{fold:?} {bend_deg}° | {:<36} | bump {:+.5} m/s at x {:+.3} | height {:.5} m (rest {:+.5}) | final x {:.4}{}",
+            setup.name(),
+            c.bump,
+            c.bump_x,
+            c.height,
+            c.rest,
+            c.final_x,
+            verdict(setup, c.ok(judge)),
+        );
+        println!("{line}");
+        if setup.judged() && !c.ok(judge) {
+            failures.push(line);
+        }
+    }
+    assert!(failures.is_empty(), "ghost bumps:\n{}", failures.join("\n"));
+}
+
+/// [`crosses`] without a ghost bump.
+fn crosses_without_a_bump(bend_deg: f32, fold: Fold, body: Body) {
+    crosses(bend_deg, fold, body, Judge::Bump);
+}
+
+#[test]
+fn a_cuboid_crosses_a_10_degree_valley_without_a_bump() {
+    crosses_without_a_bump(10.0, Fold::Concave, Body::Cuboid);
+}
+
+#[test]
+fn a_cbvh_box_crosses_a_10_degree_valley_without_a_bump() {
+    crosses_without_a_bump(10.0, Fold::Concave, Body::CbvhBox);
+}
+
+#[test]
+fn a_cuboid_crosses_a_3_degree_valley_without_a_bump() {
+    crosses_without_a_bump(3.0, Fold::Concave, Body::Cuboid);
+}
+
+/// Fails: in the patch mode the cbvh box rises 1.7 mm over the valley
+/// (as parry's cuboid does on `TriMesh` with `FIX_INTERNAL_EDGES`); in
+/// the per-pair mode it is kicked up at 0.026 m/s as it reaches it.
+#[test]
+#[ignore = "issue 49: a cbvh box bumps over a 3° valley (see the doc comment)"]
+fn a_cbvh_box_crosses_a_3_degree_valley_without_a_bump() {
+    crosses_without_a_bump(3.0, Fold::Concave, Body::CbvhBox);
+}
+
+/// Fails: the 3° crease is inactive, so the down triangle's contact takes
+/// its face normal, 3° forward; the box slides down that plane while its
+/// back is still on the flat half and sinks 1.7 mm into the ridge (parry's
+/// `TriMesh` with `FIX_INTERNAL_EDGES`: 0.02 mm).
+#[test]
+#[ignore = "issue 49: parry's cuboid sinks 1.7 mm into a 3° ridge on cbvh (see the doc comment)"]
+fn a_cuboid_crosses_a_3_degree_ridge_without_a_bump() {
+    crosses_without_a_bump(3.0, Fold::Convex, Body::Cuboid);
+}
+
+/// Fails: in the patch mode the box's bottom triangles meet the down
+/// triangle along its face normal with the depth of the plane it spans,
+/// which lies above the flat half behind the crease: the box is thrown
+/// 18.6 mm up as its front reaches the ridge.
+#[test]
+#[ignore = "issue 49: a cbvh box is thrown up 18.6 mm at a 3° ridge (see the doc comment)"]
+fn a_cbvh_box_crosses_a_3_degree_ridge_without_a_bump() {
+    crosses_without_a_bump(3.0, Fold::Convex, Body::CbvhBox);
+}
+
+/// Fails: the 10° ridge is active from above, and a normal may lean over
+/// an active edge up to 90° from its triangle's face (`EdgeCone` in
+/// `src/parry/cones.rs`, `orient`'s ~96°): the box coming over the flat
+/// half meets the down triangle's crease with a normal 80° from the
+/// vertical, pointing back at it, and is kicked up (0.034 m/s, a free
+/// slide at 1 m/s is thrown back); the edge's real normal cone ends at the
+/// neighbour's face normal, which the flags do not hold.
+#[test]
+#[ignore = "issue 49: a box catches on an active 10° ridge (see the doc comment)"]
+fn a_cuboid_crosses_a_10_degree_ridge_without_a_bump() {
+    crosses_without_a_bump(10.0, Fold::Convex, Body::Cuboid);
+}
+
+/// Fails as the cuboid does (0.085 m/s in the patch mode).
+#[test]
+#[ignore = "issue 49: a box catches on an active 10° ridge (see the cuboid's test)"]
+fn a_cbvh_box_crosses_a_10_degree_ridge_without_a_bump() {
+    crosses_without_a_bump(10.0, Fold::Convex, Body::CbvhBox);
+}
+
+/// A ball pushed over a 10° ridge keeps its distance from the analytic
+/// surface: the crease is active from above, so over it the contact
+/// normal points from the crease to the ball's centre. With the flat
+/// angle at 50° (issue 49's mutation) the crease is inactive, the ball
+/// gets no contact from it and sinks 32 mm into the ridge (113 mm into a
+/// 30° one).
+#[test]
+fn a_ball_keeps_its_distance_over_a_10_degree_ridge() {
+    crosses(10.0, Fold::Convex, Body::Ball, Judge::Height);
+}
+
+/// The same over a 30° ridge.
+#[test]
+fn a_ball_keeps_its_distance_over_a_30_degree_ridge() {
+    crosses(30.0, Fold::Convex, Body::Ball, Judge::Height);
+}
+
+/// Fails in every codec and mode (0.032 m/s up as the centre reaches
+/// `x = -0.008`; parry's `TriMesh`, fixed or not: no bump): see
+/// [`a_ball_near_a_ridge_is_pushed_from_its_contact_points`], the
+/// contacts' cause.
+#[test]
+#[ignore = "issue 49: a ball is kicked up 0.032 m/s just before a 10° or 30° ridge (see the doc comment)"]
+fn a_ball_rolls_over_a_10_degree_ridge_without_a_bump() {
+    crosses_without_a_bump(10.0, Fold::Convex, Body::Ball);
+}
+
+/// Fails in the contacts themselves: every contact of a ball points
+/// from its point on the ground to the ball's centre, its distance that
+/// of the point less the radius. Just before a 10° ridge (the ball's
+/// centre at `(-0.005, 0.2499, 0)`, the crease at `x = 0`), cbvh reports
+/// the flat half's point under the ball, `(-0.005, 0, 0)`, in one
+/// manifold with the crease's point and with the crease's normal,
+/// `(-0.0200, 0.9998, 0)`, leaning back 1.15°; parry's `TriMesh` gives
+/// the flat point its face normal `(0, 1, 0)` in a manifold of its own.
+/// A ball pushed forward meets that normal as a slope and is lifted.
+#[test]
+#[ignore = "issue 49: cbvh gives a ball's flat-face contact near a ridge the crease's leaning normal (see the doc comment)"]
+fn a_ball_near_a_ridge_is_pushed_from_its_contact_points() {
+    let ball = Ball::new(HALF);
+    let dispatcher = Dispatcher::new(ContactMode::default()).then_default();
+    let mut failures = Vec::new();
+    for bend in [10.0f32, 30.0] {
+        let floor = folded_floor(bend, Fold::Convex);
+        for &kind in CodecKind::ALL {
+            let ground = shape(&floor, kind);
+            for x in [
+                -0.03f32, -0.02, -0.01, -0.005, -0.002, 0.002, 0.005, 0.01, 0.02,
+            ] {
+                // The centre 0.1 mm closer to the surface than the radius.
+                let (mut lo, mut hi) = (-1.0f32, 1.0f32);
+                for _ in 0..60 {
+                    let y = 0.5 * (lo + hi);
+                    if profile_distance(x, y, bend, Fold::Convex) < HALF - 1e-4 {
+                        lo = y;
+                    } else {
+                        hi = y;
+                    }
+                }
+                let centre = Vector::new(x, hi, 0.0);
+                let mut ms: Vec<ContactManifold<(), ()>> = Vec::new();
+                dispatcher
+                    .contact_manifolds(
+                        &Pose::from_translation(centre),
+                        &ground,
+                        &ball,
+                        0.01,
+                        &mut ms,
+                        &mut None,
+                    )
+                    .unwrap();
+                if ms.iter().all(|m| m.points.is_empty()) {
+                    failures.push(format!(
+                        "{kind}, ridge {bend}°, centre {centre:?}: no contact"
+                    ));
+                }
+                for m in &ms {
+                    for p in &m.points {
+                        let to_centre = centre - p.local_p1;
+                        let want = to_centre.normalize();
+                        let ok = m.local_n1.dot(want) > 0.1f32.to_radians().cos()
+                            && (p.dist - (to_centre.length() - HALF)).abs() < 1e-5;
+                        if !ok {
+                            failures.push(format!(
+                                "{kind}, ridge {bend}°, centre {centre:?}: point {:?} normal {:?} \
+                                 dist {:+.6}, want normal {want:?} dist {:+.6}",
+                                p.local_p1,
+                                m.local_n1,
+                                p.dist,
+                                to_centre.length() - HALF
+                            ));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "contacts not from their point to the centre:\n{}",
+        failures.join("\n")
+    );
+}
+
+/// A ball touching the crease of a 10° or 30° ridge from within the
+/// crease's normal cone (its centre 25 %, 50 % and 75 % of the way from
+/// the flat half's normal to the bent half's) gets, in every codec, the
+/// analytic contact: along the direction from the crease to its centre,
+/// as deep as its radius exceeds its centre's distance from the crease.
+/// An inactive crease (a flat angle of 50°) gives the faces' normals
+/// instead.
+#[test]
+fn a_ball_on_a_ridge_crease_is_pushed_away_from_the_crease() {
+    const DEPTH: f32 = 0.01;
+    let ball = Ball::new(HALF);
+    let dispatcher = Dispatcher::new(ContactMode::default()).then_default();
+    for bend in [10.0f32, 30.0] {
+        let floor = folded_floor(bend, Fold::Convex);
+        for &kind in CodecKind::ALL {
+            let ground = shape(&floor, kind);
+            for share in [0.25f32, 0.5, 0.75] {
+                let (s, c) = (share * bend).to_radians().sin_cos();
+                let dir = Vector::new(s, c, 0.0);
+                let at = format!("{kind}, ridge {bend}°, centre {share} of the way over");
+                let pos12 = Pose::from_translation(dir * (HALF - DEPTH));
+                let mut ms: Vec<ContactManifold<(), ()>> = Vec::new();
+                dispatcher
+                    .contact_manifolds(&pos12, &ground, &ball, 0.0, &mut ms, &mut None)
+                    .unwrap();
+                let points: Vec<_> = ms
+                    .iter()
+                    .flat_map(|m| m.points.iter().map(move |p| (m.local_n1, p)))
+                    .collect();
+                assert!(!points.is_empty(), "{at}: a contact");
+                for (n, p) in points {
+                    assert!(
+                        n.dot(dir) > 0.5f32.to_radians().cos(),
+                        "{at}: normal {n:?}, want {dir:?}"
+                    );
+                    assert!(
+                        (p.dist + DEPTH).abs() < 1e-4,
+                        "{at}: distance {}, want {}",
+                        p.dist,
+                        -DEPTH
+                    );
+                    assert!(
+                        p.local_p1.length() < 1e-3,
+                        "{at}: the contact on the ground at the crease, not at {:?}",
+                        p.local_p1
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// A box sliding freely at [`WALL_SPEED`] into a 60° upward fold stops
+/// there: its front climbs the wall no higher than its kinetic energy
+/// lifts it (`v² / 2g`, so no further along `x` than that over tan 60°,
+/// plus 1 cm), and it ends moving back or not at all.
+#[test]
+fn a_60_degree_wall_stops_a_sliding_box() {
+    let bend = 60.0f32;
+    let reach = WALL_SPEED * WALL_SPEED / (2.0 * G) / bend.to_radians().tan() + 0.01;
+    let mut failures = Vec::new();
+    for setup in [Body::Cuboid, Body::CbvhBox]
+        .into_iter()
+        .flat_map(Setup::all)
+    {
+        let floor = folded_floor(bend, Fold::Concave);
+        let (mut world, h) = setup.world(&floor, WALL_SPEED);
+        let mut front = f32::NEG_INFINITY;
+        for _ in 0..180 {
+            world.step();
+            front = front.max(world.bodies[h].translation().x + HALF);
+        }
+        let vx = world.bodies[h].linvel().x;
+        let ok = front < reach && vx < 0.01;
+        let line = format!(
+            "Concave 60° | {:<36} | front reached x = {front:+.4} (bound {reach:.4}) | final vx {vx:+.4}{}",
+            setup.name(),
+            verdict(setup, ok),
+        );
+        println!("{line}");
+        if setup.judged() && !ok {
+            failures.push(line);
+        }
+    }
+    assert!(failures.is_empty(), "not stopped:\n{}", failures.join("\n"));
 }
