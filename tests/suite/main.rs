@@ -15,6 +15,7 @@ mod common;
 mod pairs;
 
 mod builder_depth;
+mod characters;
 mod clbvh;
 mod closed_mass;
 #[cfg(feature = "app")]
@@ -39,6 +40,7 @@ mod racbvh_stream;
 mod render;
 mod scaling;
 mod scene_gen;
+mod scene_queries;
 mod shape_queries;
 #[cfg(feature = "app")]
 mod sims;

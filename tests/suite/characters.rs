@@ -1,0 +1,745 @@
+//! rapier's `KinematicCharacterController` walking a capsule (and, along
+//! a wall, a box) over cbvh ground, every codec, against the same walk over parry's `TriMesh` of
+//! the same triangles (the mesh's, or those of a codec that quantizes its
+//! corners), over parry primitives where the ground is made of boxes,
+//! and against the answer the geometry gives: a rolling terrain (the
+//! capsule's bottom stays an offset above the surface), ramps below and
+//! above the climb angle, stairs lower and higher than the autostep
+//! height, a wall it slides along, and a slope it snaps down.
+//!
+//! Each cbvh walk has the grounded flag of its `TriMesh` reference in
+//! every frame; its centre follows the reference's frame by frame on the
+//! terrain and the snap (within 1 mm), and ends near it after slides
+//! along walls and over edges, where the controller's path is chaotic
+//! ([`Follow`]).
+//!
+//! The character is a kinematic body with a capsule collider in the
+//! world, excluded from its own queries by the filter, moved each frame
+//! by `move_shape` through the broad phase's query pipeline with cbvh's
+//! dispatcher installed, and the world stepped, as a game does.
+
+use std::fmt::Write as _;
+
+use cbvh::Mesh;
+use cbvh::build::BuildOptions;
+use cbvh::codec::racbvh::RacOptions;
+use cbvh::codec::{AnyOptions, CodecKind};
+use cbvh::parry::{CbvhShape, Dispatcher, parry_trimesh};
+use parry3d::math::{Pose, Real, Vector};
+use parry3d::query::{DefaultQueryDispatcher, QueryDispatcher};
+use parry3d::shape::{Capsule, Cuboid, SharedShape, TriMesh};
+use rapier3d::control::{CharacterAutostep, CharacterLength, KinematicCharacterController};
+use rapier3d::prelude::{
+    ColliderBuilder, NarrowPhase, PhysicsWorld, QueryFilter, RigidBodyBuilder,
+};
+
+const DT: Real = 1.0 / 60.0;
+/// The capsule: half height 0.3 and radius 0.2, 1 m tall.
+const HALF_HEIGHT: Real = 0.3;
+const RADIUS: Real = 0.2;
+/// The controller's default offset: 1 % of the character's height.
+const OFFSET: Real = 0.01;
+
+fn capsule() -> Capsule {
+    Capsule::new_y(HALF_HEIGHT, RADIUS)
+}
+
+/// The characters of the wall: the capsule, and a box as tall and as deep
+/// (its bottom as far below its centre, its front as far ahead), so that
+/// both stop and rest where the same answers say.
+fn characters() -> [(&'static str, SharedShape); 2] {
+    [
+        ("capsule", SharedShape::new(capsule())),
+        (
+            "box",
+            SharedShape::cuboid(RADIUS, HALF_HEIGHT + RADIUS, RADIUS),
+        ),
+    ]
+}
+
+/// The height of the capsule's lowest point when its centre is at `y`.
+fn bottom(y: Real) -> Real {
+    y - HALF_HEIGHT - RADIUS
+}
+
+/// A surface extruded along x from a profile of (z, y) points, from
+/// `x = -w` to `x = w`, `cells` quads across and each profile segment
+/// split into segments of at most `step` along it, wound so that the
+/// normal of a rising or flat segment points up.
+fn extrude(profile: &[(Real, Real)], w: Real, cells: usize, step: Real) -> Mesh {
+    let mut points = vec![profile[0]];
+    for p in profile.windows(2) {
+        let ((z0, y0), (z1, y1)) = (p[0], p[1]);
+        let n = (((z1 - z0).hypot(y1 - y0) / step).ceil() as usize).max(1);
+        for i in 1..=n {
+            let t = i as Real / n as Real;
+            points.push((z0 + (z1 - z0) * t, y0 + (y1 - y0) * t));
+        }
+    }
+    let mut vertices = vec![];
+    for &(z, y) in &points {
+        for i in 0..=cells {
+            let x = -w + 2.0 * w * i as Real / cells as Real;
+            vertices.push([x, y, z]);
+        }
+    }
+    let at = |j: usize, i: usize| (j * (cells + 1) + i) as u32;
+    let mut triangles = vec![];
+    for j in 0..points.len() - 1 {
+        for i in 0..cells {
+            triangles.push([at(j, i), at(j + 1, i), at(j + 1, i + 1)]);
+            triangles.push([at(j, i), at(j + 1, i + 1), at(j, i + 1)]);
+        }
+    }
+    Mesh::new(vertices, triangles)
+}
+
+/// The gently rolling terrain's height: amplitude 0.3 m over 16 m.
+fn terrain_height(x: Real, z: Real) -> Real {
+    0.3 * (0.35 * x).sin() * (0.25 * z + 0.5).cos() + 0.1 * (0.2 * (x + z)).sin()
+}
+
+/// The terrain as a 32 x 32-cell heightfield mesh over [-8, 8]².
+fn terrain_mesh() -> Mesh {
+    let n = 32;
+    let coord = |i: usize| -8.0 + 16.0 * i as Real / n as Real;
+    let mut vertices = vec![];
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, z) = (coord(i), coord(j));
+            vertices.push([x, terrain_height(x, z), z]);
+        }
+    }
+    let at = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    let mut triangles = vec![];
+    for j in 0..n {
+        for i in 0..n {
+            triangles.push([at(i, j), at(i, j + 1), at(i + 1, j + 1)]);
+            triangles.push([at(i, j), at(i + 1, j + 1), at(i + 1, j)]);
+        }
+    }
+    Mesh::new(vertices, triangles)
+}
+
+/// What the ground is made of, for one run.
+enum Ground {
+    /// A cbvh shape, and the name of the run over parry's `TriMesh` of
+    /// the same triangles (its reference).
+    Cbvh(CbvhShape, String),
+    /// parry's `TriMesh`, built as a rapier user builds it (default
+    /// flags).
+    TriMesh(Box<TriMesh>),
+    /// Parry primitives: boxes with their poses.
+    Boxes(Vec<(Cuboid, Pose)>),
+}
+
+/// A triangle's corners, for comparing triangle sets.
+type Corners = [[u32; 3]; 3];
+
+/// The triangles' corners (as bits), sorted: equal for two shapes of the
+/// same triangles in any order.
+fn triangle_set(tris: impl Iterator<Item = [[f32; 3]; 3]>) -> Vec<Corners> {
+    let mut v: Vec<Corners> = tris.map(|t| t.map(|p| p.map(f32::to_bits))).collect();
+    v.sort_unstable();
+    v
+}
+
+/// The runs of one scenario: each codec, parry's `TriMesh` of the mesh,
+/// a `TriMesh` of the triangles of each codec that stores other
+/// (quantized) corners than the mesh's, and the boxes when the ground has
+/// a box form.
+fn grounds(mesh: &Mesh, boxes: Option<Vec<(Cuboid, Pose)>>) -> Vec<(String, Ground)> {
+    let options = AnyOptions {
+        racbvh: RacOptions {
+            cluster_nodes: 256,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let exact = triangle_set(
+        mesh.triangles
+            .iter()
+            .map(|t| t.map(|i| mesh.vertices[i as usize])),
+    );
+    // The triangle sets other than the mesh's, with their reference's name.
+    let mut quantized: Vec<(Vec<Corners>, String, Box<TriMesh>)> = vec![];
+    let mut out: Vec<(String, Ground)> = vec![];
+    for &k in CodecKind::ALL {
+        let s = CbvhShape::build(mesh, &BuildOptions::default(), k, &options).unwrap();
+        let tris: Vec<_> = (0..s.triangle_count() as u32)
+            .map(|id| s.parry_triangle(id))
+            .collect();
+        let set = triangle_set(
+            tris.iter()
+                .map(|t| [t.a.to_array(), t.b.to_array(), t.c.to_array()]),
+        );
+        let reference = if set == exact {
+            "parry TriMesh".to_string()
+        } else if let Some((_, name, _)) = quantized.iter().find(|q| q.0 == set) {
+            name.clone()
+        } else {
+            let vertices = tris.iter().flat_map(|t| [t.a, t.b, t.c]).collect();
+            let indices = (0..tris.len() as u32)
+                .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+                .collect();
+            let name = format!("parry TriMesh of {k}'s triangles");
+            quantized.push((
+                set,
+                name.clone(),
+                Box::new(TriMesh::new(vertices, indices).unwrap()),
+            ));
+            name
+        };
+        out.push((k.name().to_string(), Ground::Cbvh(s, reference)));
+    }
+    out.push((
+        "parry TriMesh".into(),
+        Ground::TriMesh(Box::new(parry_trimesh(mesh).unwrap())),
+    ));
+    for (_, name, t) in quantized {
+        out.push((name, Ground::TriMesh(t)));
+    }
+    if let Some(b) = boxes {
+        out.push(("parry cuboids".into(), Ground::Boxes(b)));
+    }
+    out
+}
+
+/// One frame of a walk: the capsule's centre after the move, and the
+/// controller's grounded flag.
+type Frame = (Vector, bool);
+
+/// Walks `character` from `start` for `frames` frames, asking for
+/// `desired(frame)` each frame, over `ground`.
+fn walk(
+    character: &SharedShape,
+    ground: &Ground,
+    controller: &KinematicCharacterController,
+    start: Vector,
+    frames: usize,
+    desired: impl Fn(usize) -> Vector,
+) -> Vec<Frame> {
+    let mut world = PhysicsWorld {
+        narrow_phase: NarrowPhase::with_query_dispatcher(Dispatcher::default().then_default()),
+        ..Default::default()
+    };
+    match ground {
+        Ground::Cbvh(s, _) => {
+            world
+                .colliders
+                .insert(ColliderBuilder::new(SharedShape::new(s.clone())));
+        }
+        Ground::TriMesh(t) => {
+            world
+                .colliders
+                .insert(ColliderBuilder::new(SharedShape::new((**t).clone())));
+        }
+        Ground::Boxes(boxes) => {
+            for (b, pose) in boxes {
+                world
+                    .colliders
+                    .insert(ColliderBuilder::new(SharedShape::new(*b)).position(*pose));
+            }
+        }
+    }
+    let body = world
+        .bodies
+        .insert(RigidBodyBuilder::kinematic_position_based().translation(start));
+    world.colliders.insert_with_parent(
+        ColliderBuilder::new(character.clone()),
+        body,
+        &mut world.bodies,
+    );
+    world.step();
+    let mut track = vec![];
+    for f in 0..frames {
+        let pos = *world.bodies[body].position();
+        let filter = QueryFilter::default().exclude_rigid_body(body);
+        let q = world.broad_phase.as_query_pipeline(
+            world.narrow_phase.query_dispatcher(),
+            &world.bodies,
+            &world.colliders,
+            filter,
+        );
+        let m = controller.move_shape(DT, &q, &*character.0, &pos, desired(f), |_| {});
+        let next = pos.translation + m.translation;
+        world.bodies[body].set_next_kinematic_translation(next);
+        world.step();
+        track.push((next, m.grounded));
+    }
+    track
+}
+
+/// The distance from the capsule at `centre` to the ground `t` (parry's
+/// `TriMesh` of the mesh: the exact surface).
+fn gap(t: &TriMesh, centre: Vector) -> Real {
+    DefaultQueryDispatcher
+        .distance(&Pose::from_translation(centre), t, &capsule())
+        .unwrap()
+        .distance
+}
+
+/// How closely a cbvh run must follow its reference's (parry's `TriMesh`
+/// of the same triangles): every frame, or only at the end. Either way
+/// the grounded flags must match frame by frame.
+#[derive(Clone, Copy, Debug)]
+enum Follow {
+    /// Every frame's centre within this distance (m).
+    Track(Real),
+    /// The last frame's centre within this distance (m), for walks that
+    /// slide along a wall or over edges: there the controller's path
+    /// depends on the geometry's last tenth of a millimetre. Perturbed by
+    /// racbvh's 16-bit corners, parry's own `TriMesh` walk ends 50 mm
+    /// from itself on the 30° ramp (a frame's travel) and 78 mm along the
+    /// wall; made of boxes, the stairs' and the wall's walks end 93 mm and
+    /// 19 mm from the `TriMesh` one (a box character's wall walk: 135 mm). The geometry's answers (heights,
+    /// stops, climbs) are checked against the analytic ones separately.
+    End(Real),
+}
+
+/// Runs a scenario on every ground, checks that each cbvh run follows its
+/// reference as `follow` asks with the same grounded flags, and returns
+/// the runs (codecs, then the `TriMesh` references, then the boxes) with a
+/// printed table of final positions.
+#[allow(clippy::too_many_arguments)]
+fn compare(
+    what: &str,
+    character: &SharedShape,
+    mesh: &Mesh,
+    boxes: Option<Vec<(Cuboid, Pose)>>,
+    controller: &KinematicCharacterController,
+    start: Vector,
+    frames: usize,
+    desired: impl Fn(usize) -> Vector + Copy,
+    follow: Follow,
+) -> Vec<(String, Vec<Frame>)> {
+    let grounds = grounds(mesh, boxes);
+    let runs: Vec<(String, Vec<Frame>)> = grounds
+        .iter()
+        .map(|(name, g)| {
+            let track = walk(character, g, controller, start, frames, desired);
+            (name.clone(), track)
+        })
+        .collect();
+    let track_of = |name: &str| &runs.iter().find(|r| r.0 == name).unwrap().1;
+    let reference_of = |i: usize| match &grounds[i].1 {
+        Ground::Cbvh(_, r) => r.clone(),
+        _ => "parry TriMesh".to_string(),
+    };
+    let mut table =
+        format!("{what}: final centre, grounded, largest and final deviation from the reference\n");
+    for (i, (name, track)) in runs.iter().enumerate() {
+        let reference = reference_of(i);
+        let other = track_of(&reference);
+        let (p, g) = *track.last().unwrap();
+        let worst = track
+            .iter()
+            .zip(other)
+            .map(|(a, b)| (a.0 - b.0).length())
+            .fold(0.0, Real::max);
+        let end = (p - other.last().unwrap().0).length();
+        let flags = track.iter().zip(other).filter(|(a, b)| a.1 != b.1).count();
+        writeln!(
+            table,
+            "  {name:<38} ({:8.4}, {:8.4}, {:8.4}) grounded {g:<5} dev {:6.2} mm, end {:6.2} mm, \
+             {flags} flags differ from {reference}",
+            p.x,
+            p.y,
+            p.z,
+            worst * 1000.0,
+            end * 1000.0,
+        )
+        .unwrap();
+    }
+    eprintln!("{table}");
+    for (i, (name, track)) in runs.iter().enumerate() {
+        if !matches!(grounds[i].1, Ground::Cbvh(..)) {
+            continue;
+        }
+        let reference = reference_of(i);
+        let other = track_of(&reference);
+        for (f, (a, b)) in track.iter().zip(other).enumerate() {
+            let tol = match follow {
+                Follow::Track(tol) => tol,
+                Follow::End(tol) if f + 1 == frames => tol,
+                Follow::End(_) => Real::INFINITY,
+            };
+            assert!(
+                (a.0 - b.0).length() <= tol,
+                "{what}, {name}, frame {f}: at {:?}, {reference} at {:?}\n{table}",
+                a.0,
+                b.0
+            );
+            assert_eq!(
+                a.1, b.1,
+                "{what}, {name}, frame {f}: grounded {} vs {reference} {}\n{table}",
+                a.1, b.1
+            );
+        }
+    }
+    runs
+}
+
+fn walker() -> KinematicCharacterController {
+    KinematicCharacterController {
+        offset: CharacterLength::Absolute(OFFSET),
+        ..Default::default()
+    }
+}
+
+/// Walking 4 m/s with a 2 m/s fall across the rolling terrain: the capsule
+/// stays on it, its bottom an offset above the surface under it (plus what
+/// the tilt adds: a ball on a slope of angle a rests (r + offset)/cos a
+/// above the surface point below its centre), grounded every frame.
+#[test]
+fn a_capsule_walks_over_a_tessellated_terrain_as_over_a_trimesh() {
+    let mesh = terrain_mesh();
+    let start = Vector::new(-6.0, terrain_height(-6.0, -5.0) + 0.6, -5.0);
+    let velocity = Vector::new(4.0, -2.0, 3.0);
+    let runs = compare(
+        "terrain",
+        &SharedShape::new(capsule()),
+        &mesh,
+        None,
+        &walker(),
+        start,
+        150,
+        |_| velocity * DT,
+        Follow::Track(1e-3),
+    );
+    let surface = parry_trimesh(&mesh).unwrap();
+    for (name, track) in &runs {
+        for (f, &(p, grounded)) in track.iter().enumerate().skip(10) {
+            let above = bottom(p.y) - terrain_height(p.x, p.z);
+            assert!(grounded, "{name}, frame {f}: not grounded at {p:?}");
+            // The slopes stay under 14 degrees: the tilt adds at most
+            // 0.2 (1/cos 14° - 1) = 6 mm; the piecewise-linear surface
+            // lies up to ~5 mm below the smooth one between vertices.
+            assert!(
+                (-6e-3..=OFFSET + 0.012).contains(&above),
+                "{name}, frame {f}: bottom {above} above the terrain at {p:?}"
+            );
+            let g = gap(&surface, p);
+            assert!(
+                (OFFSET - 2e-3..=OFFSET + 0.01).contains(&g),
+                "{name}, frame {f}: {g} from the surface at {p:?}"
+            );
+        }
+        // It got across: at least 90 % of the asked horizontal travel.
+        let travel = (track.last().unwrap().0 - start).with_y(0.0).length();
+        assert!(
+            travel >= 0.9 * 150.0 * DT * 5.0,
+            "{name}: travelled {travel}"
+        );
+    }
+}
+
+/// Where a ball of the capsule's radius, `OFFSET` off a plane tilted by
+/// `angle`, has its lowest point above the plane point under its centre.
+fn tilted_clearance(angle: Real) -> Real {
+    (RADIUS + OFFSET) / angle.cos() - RADIUS
+}
+
+/// A floor at 0 up to z = 0, a ramp of `angle` degrees up to `height`,
+/// then a plateau, 6 m wide.
+fn ramp_profile(angle: Real, height: Real) -> (Vec<(Real, Real)>, Real) {
+    let run = height / angle.to_radians().tan();
+    (
+        vec![(-4.0, 0.0), (0.0, 0.0), (run, height), (run + 4.0, height)],
+        run,
+    )
+}
+
+/// Walking uphill at 3 m/s (falling at 2 m/s): a 30-degree ramp, under
+/// the controller's 45-degree climb angle, is climbed to the plateau 0.8 m
+/// up, the capsule resting on the slope as on a plane on the way; a
+/// 60-degree ramp stops it at its foot.
+#[test]
+fn a_capsule_climbs_a_ramp_below_the_climb_angle_and_not_one_above() {
+    let start = Vector::new(0.0, bottom(0.0).abs() + OFFSET + 0.02, -1.5);
+    let desired = |_| Vector::new(0.0, -2.0, 3.0) * DT;
+    for (angle, climbs) in [(30.0, true), (60.0, false)] {
+        let (profile, run) = ramp_profile(angle, 0.8);
+        let mesh = extrude(&profile, 3.0, 6, 0.25);
+        let what = format!("{angle}-degree ramp");
+        let runs = compare(
+            &what,
+            &SharedShape::new(capsule()),
+            &mesh,
+            None,
+            &walker(),
+            start,
+            120,
+            desired,
+            Follow::End(0.1),
+        );
+        let slope = angle.to_radians();
+        for (name, track) in &runs {
+            let (p, grounded) = *track.last().unwrap();
+            assert!(grounded, "{what}, {name}: not grounded at {p:?}");
+            if climbs {
+                // On the plateau, an offset above it.
+                assert!(p.z > run + 0.5, "{what}, {name}: stopped at {p:?}");
+                let above = bottom(p.y) - 0.8;
+                assert!(
+                    (above - OFFSET).abs() < 2e-3,
+                    "{what}, {name}: bottom {above} above the plateau"
+                );
+                // On the slope, at the tilted clearance over it.
+                let on_slope: Vec<_> = track
+                    .iter()
+                    .filter(|(p, _)| p.z > 0.3 && p.z < run - 0.3)
+                    .collect();
+                assert!(
+                    on_slope.len() > 10,
+                    "{what}, {name}: {} frames on the slope",
+                    on_slope.len()
+                );
+                for (p, _) in on_slope {
+                    let above = bottom(p.y) - p.z * slope.tan();
+                    assert!(
+                        (above - tilted_clearance(slope)).abs() < 3e-3,
+                        "{what}, {name}: bottom {above} above the slope at {p:?}, not {}",
+                        tilted_clearance(slope)
+                    );
+                }
+            } else {
+                // At the foot: on the floor, the lower ball against the
+                // slope.
+                assert!(p.z < 0.1, "{what}, {name}: climbed to {p:?}");
+                let above = bottom(p.y);
+                assert!(
+                    (above - OFFSET).abs() < 0.02,
+                    "{what}, {name}: bottom {above} above the floor at {p:?}"
+                );
+            }
+        }
+    }
+}
+
+/// The stairs' profile: a floor at 0 up to z = 0, then `steps` steps of
+/// `rise` and 0.5 m deep, then a landing; and the same stairs as boxes
+/// (a floor slab and one box per step, from its riser to the far end).
+fn stairs(rise: Real, steps: usize) -> (Mesh, Vec<(Cuboid, Pose)>, Real) {
+    let depth = 0.5;
+    let end = steps as Real * depth + 4.0;
+    let mut profile = vec![(-4.0, 0.0), (0.0, 0.0)];
+    let mut boxes = vec![(
+        Cuboid::new(Vector::new(3.0, 0.5, (end + 4.0) / 2.0)),
+        Pose::from_translation(Vector::new(0.0, -0.5, (end - 4.0) / 2.0)),
+    )];
+    for i in 0..steps {
+        let z = i as Real * depth;
+        let h1 = (i + 1) as Real * rise;
+        profile.push((z, h1));
+        profile.push((z + depth, h1));
+        boxes.push((
+            Cuboid::new(Vector::new(3.0, h1 / 2.0, (end - z) / 2.0)),
+            Pose::from_translation(Vector::new(0.0, h1 / 2.0, (end + z) / 2.0)),
+        ));
+    }
+    profile.push((end, steps as Real * rise));
+    (extrude(&profile, 3.0, 6, 0.25), boxes, steps as Real * rise)
+}
+
+/// With autostep (at most 0.25 m up, 0.3 m of room) and snapping to the
+/// ground, walking at 2 m/s: four 0.15 m steps are climbed to the
+/// landing, as over the same stairs made of boxes; one 0.4 m step is not,
+/// the capsule stopping an offset before its riser. (Asked to fall at
+/// 2 m/s as well, the capsule climbed no step on any ground, parry's
+/// `TriMesh` and boxes included: it stopped at the first riser, so that
+/// walk tells nothing about cbvh. A box character is left out: on the
+/// four steps it stops at the first riser on parry's `TriMesh`, on the
+/// first step on the `TriMesh` of racbvh's triangles, and climbs them all
+/// on parry's boxes.)
+#[test]
+fn a_capsule_autosteps_low_stairs_and_not_a_high_one() {
+    let controller = KinematicCharacterController {
+        autostep: Some(CharacterAutostep {
+            max_height: CharacterLength::Absolute(0.25),
+            min_width: CharacterLength::Absolute(0.3),
+            include_dynamic_bodies: true,
+        }),
+        ..walker()
+    };
+    let start = Vector::new(0.0, bottom(0.0).abs() + OFFSET + 0.02, -1.0);
+    let desired = |_| Vector::new(0.0, 0.0, 2.0) * DT;
+    for (rise, steps, climbs) in [(0.15, 4, true), (0.4, 1, false)] {
+        let (mesh, boxes, top) = stairs(rise, steps);
+        let what = format!("{steps} steps of {rise} m");
+        let runs = compare(
+            &what,
+            &SharedShape::new(capsule()),
+            &mesh,
+            Some(boxes),
+            &controller,
+            start,
+            150,
+            desired,
+            Follow::End(0.15),
+        );
+        for (name, track) in &runs {
+            let (p, grounded) = *track.last().unwrap();
+            assert!(grounded, "{what}, {name}: not grounded at {p:?}");
+            if climbs {
+                assert!(p.z > 2.5, "{what}, {name}: stopped at {p:?}");
+                let above = bottom(p.y) - top;
+                assert!(
+                    (above - OFFSET).abs() < 2e-3,
+                    "{what}, {name}: bottom {above} above the landing at {p:?}"
+                );
+            } else {
+                let before = -(RADIUS + OFFSET);
+                assert!(
+                    (p.z - before).abs() < 3e-3,
+                    "{what}, {name}: stopped at {p:?}, not z = {before}"
+                );
+                assert!(
+                    (bottom(p.y) - OFFSET).abs() < 2e-3,
+                    "{what}, {name}: bottom at {} above the floor",
+                    bottom(p.y)
+                );
+                let highest = track.iter().map(|f| f.0.y).fold(Real::MIN, Real::max);
+                assert!(
+                    highest < start.y + 0.01,
+                    "{what}, {name}: rose to {highest}"
+                );
+            }
+        }
+    }
+}
+
+/// Walking diagonally into a wall at z = 2 (2 m/s along it, 3 m/s into
+/// it, falling at 2 m/s): the character (the capsule, or the box, its
+/// face flat against the wall's) stops an offset from the wall, never
+/// crosses it, and slides along it at the asked speed, as against the
+/// same floor and wall made of boxes.
+#[test]
+fn a_character_slides_along_a_wall_and_does_not_pass_through() {
+    let mesh = extrude(
+        &[(-4.0, 0.0), (2.0, 0.0), (2.0, 3.0), (4.0, 3.0)],
+        6.0,
+        12,
+        0.25,
+    );
+    let boxes = vec![
+        (
+            Cuboid::new(Vector::new(6.0, 0.5, 4.0)),
+            Pose::from_translation(Vector::new(0.0, -0.5, 0.0)),
+        ),
+        (
+            Cuboid::new(Vector::new(6.0, 1.5, 1.0)),
+            Pose::from_translation(Vector::new(0.0, 1.5, 3.0)),
+        ),
+    ];
+    let start = Vector::new(-2.0, bottom(0.0).abs() + OFFSET + 0.02, 0.0);
+    let desired = |_| Vector::new(2.0, -2.0, 3.0) * DT;
+    let frames = 120;
+    for (character_name, character) in characters() {
+        let what = format!("{character_name}, wall");
+        let runs = compare(
+            &what,
+            &character,
+            &mesh,
+            Some(boxes.clone()),
+            &walker(),
+            start,
+            frames,
+            desired,
+            Follow::End(0.1),
+        );
+        let stop = 2.0 - RADIUS - OFFSET;
+        for (name, track) in &runs {
+            for (f, (p, _)) in track.iter().enumerate() {
+                assert!(
+                    p.z <= stop + 1e-3,
+                    "{what}, {name}, frame {f}: through to {p:?}"
+                );
+            }
+            let (p, grounded) = *track.last().unwrap();
+            assert!(grounded, "{what}, {name}: not grounded at {p:?}");
+            assert!(
+                (p.z - stop).abs() < 3e-3,
+                "{what}, {name}: at {p:?}, not z = {stop}"
+            );
+            assert!(
+                (bottom(p.y) - OFFSET).abs() < 2e-3,
+                "{what}, {name}: bottom at {} above the floor",
+                bottom(p.y)
+            );
+            let along = p.x - start.x;
+            let asked = 2.0 * frames as Real * DT;
+            assert!(
+                along >= 0.95 * asked && along <= asked + 1e-3,
+                "{what}, {name}: slid {along} of {asked}"
+            );
+        }
+    }
+}
+
+/// Walking at 3 m/s with no fall off a plateau 1 m up and down a
+/// 20-degree slope: snapping to the ground (0.2 m) keeps the capsule on
+/// the slope, grounded every frame, at the tilted clearance above it, down
+/// to the floor; without snapping it walks off into the air.
+#[test]
+fn a_capsule_snaps_to_the_ground_walking_down_a_slope() {
+    let angle = 20.0f32;
+    let slope = angle.to_radians();
+    let run = 1.0 / slope.tan();
+    let mesh = extrude(
+        &[(-4.0, 1.0), (0.0, 1.0), (run, 0.0), (run + 4.0, 0.0)],
+        3.0,
+        6,
+        0.25,
+    );
+    let ground = |z: Real| (1.0 - z.max(0.0) * slope.tan()).max(0.0);
+    let start = Vector::new(0.0, 1.0 + bottom(0.0).abs() + OFFSET, -1.0);
+    let desired = |_| Vector::new(0.0, 0.0, 3.0) * DT;
+    let runs = compare(
+        "snap",
+        &SharedShape::new(capsule()),
+        &mesh,
+        None,
+        &walker(),
+        start,
+        90,
+        desired,
+        Follow::Track(1e-3),
+    );
+    for (name, track) in &runs {
+        for (f, &(p, grounded)) in track.iter().enumerate() {
+            assert!(grounded, "snap, {name}, frame {f}: not grounded at {p:?}");
+            let above = bottom(p.y) - ground(p.z);
+            let want = if p.z > 0.3 && p.z < run - 0.3 {
+                tilted_clearance(slope)
+            } else if p.z < -0.1 || p.z > run + 0.3 {
+                OFFSET
+            } else {
+                continue; // Rounding an edge.
+            };
+            assert!(
+                (above - want).abs() < 3e-3,
+                "snap, {name}, frame {f}: bottom {above} above the ground at {p:?}, not {want}"
+            );
+        }
+        assert!(track.last().unwrap().0.z > run + 0.5, "snap, {name}");
+    }
+    // Without snapping the same walk leaves the ground.
+    let free = KinematicCharacterController {
+        snap_to_ground: None,
+        ..walker()
+    };
+    let track = walk(
+        &SharedShape::new(capsule()),
+        &Ground::TriMesh(Box::new(parry_trimesh(&mesh).unwrap())),
+        &free,
+        start,
+        90,
+        desired,
+    );
+    let (p, grounded) = *track.last().unwrap();
+    assert!(
+        !grounded && bottom(p.y) > 0.5,
+        "no snap: at {p:?}, grounded {grounded}"
+    );
+}
