@@ -1,50 +1,183 @@
 //! Nonlinear shape casts (rapier's CCD sweeps) with a cbvh shape on either
-//! side, on the cbvh tree: a best-first search whose node test casts the
-//! node's bounding ball, as parry's composite-shape cast does, and whose
+//! side, on the cbvh tree: a best-first search whose node bound is the
+//! first time the node's bounding ball can meet the other shape's, by
+//! conservative advancement on the two motions ([`ball_toi`]), and whose
 //! leaves go to the dispatcher for the triangle against the other shape
 //! (which recurses into the other cbvh tree when both are cbvh shapes).
+//!
+//! The answer follows parry's semantics for its own shapes, one triangle
+//! at a time: with `stop_at_penetration`, a pair overlapping at `start`
+//! hits at `start`; without it, parry's directional rule (a pair in
+//! contact at `start` hits only if it would tunnel) decides. Where parry's
+//! iteration on a triangle fails (it steps into the triangle, which it
+//! does for fast bodies against thin walls), the time is brought back to
+//! the first contact by bisection ([`first_contact`]).
 
-use parry3d::math::Real;
-use parry3d::query::details::{
-    NonlinearShapeCastMode, cast_shapes_nonlinear_support_map_support_map,
-};
+use parry3d::math::{Real, Vector};
 use parry3d::query::{NonlinearRigidMotion, QueryDispatcher, ShapeCastHit, ShapeCastStatus};
-use parry3d::shape::{Ball, Shape};
+use parry3d::shape::Shape;
 
 use super::shape::{CbvhShape, to_parry_triangle};
 use crate::cursor::TraversalStats;
 use crate::geom::Aabb;
 use crate::query::find_best;
 
-/// Time at which the ball around `b` (moving with `m1`) meets the ball of
-/// `other` (moving with `m2`), or `f32::MAX`.
-fn ball_toi<D: ?Sized + QueryDispatcher>(
-    dispatcher: &D,
-    b: &Aabb,
+/// Most steps of [`ball_toi`]'s conservative advancement.
+const ADVANCE_STEPS: usize = 64;
+
+/// Most steps of [`advance_to_contact`].
+const CLOSE_STEPS: usize = 32;
+
+/// Bisection steps that bring a cast parry reports as
+/// [`ShapeCastStatus::Failed`] back to its first contact ([`first_contact`]).
+const REFINE_STEPS: usize = 24;
+
+/// The fastest any point within `radius` of `local` (in the moving body's
+/// frame) moves under `m`: its linear speed plus the spin times the
+/// farthest such point's distance from the centre of rotation.
+fn speed_bound(m: &NonlinearRigidMotion, local: Vector, radius: Real) -> Real {
+    m.linvel.length() + m.angvel.length() * ((local - m.local_center).length() + radius)
+}
+
+/// A time no later than the first at which the ball of radius `r1` about
+/// `c1` (in the frame moving with `m1`) meets the ball of radius `r2` about
+/// `c2` (moving with `m2`), by conservative advancement; `Real::MAX` when
+/// they do not meet before `end`.
+///
+/// Each step advances by the gap over the largest closing speed of the two
+/// centres, so it never steps past a contact, rotation or not. (parry's
+/// nonlinear cast of two balls is not a bound for a spinning body: it ends
+/// with "no hit" when the balls are apart along one normal at the end of
+/// the interval, while an arc can bring them together in between, and a
+/// node pruned that way hides the first contact.)
+#[allow(clippy::too_many_arguments)]
+fn ball_toi(
     m1: &NonlinearRigidMotion,
-    sphere2: &parry3d::bounding_volume::BoundingSphere,
+    c1: Vector,
+    r1: Real,
     m2: &NonlinearRigidMotion,
+    c2: Vector,
+    r2: Real,
     start: Real,
     end: Real,
 ) -> Real {
-    let ball1 = Ball::new(b.half_extents().length());
-    let ball2 = Ball::new(sphere2.radius());
-    let bm1 = m1.prepend_translation(b.center().into());
-    let bm2 = m2.prepend_translation(sphere2.center);
-    cast_shapes_nonlinear_support_map_support_map(
-        dispatcher,
-        &bm1,
-        &ball1,
-        &ball1,
-        &bm2,
-        &ball2,
-        &ball2,
-        start,
-        end,
-        NonlinearShapeCastMode::StopAtPenetration,
-    )
-    .map(|h| h.time_of_impact)
-    .unwrap_or(Real::MAX)
+    let closing = speed_bound(m1, c1, 0.0) + speed_bound(m2, c2, 0.0);
+    let reach = r1 + r2;
+    let tolerance = 1e-5 * reach.max(1e-3);
+    let mut t = start;
+    for _ in 0..ADVANCE_STEPS {
+        let w1 = m1.position_at_time(t) * c1;
+        let w2 = m2.position_at_time(t) * c2;
+        let gap = (w1 - w2).length() - reach;
+        if gap <= tolerance {
+            return t;
+        }
+        if closing <= 0.0 {
+            return Real::MAX;
+        }
+        t += gap / closing;
+        if t > end {
+            return Real::MAX;
+        }
+    }
+    // Still apart after every step (a grazing approach): `t` is before
+    // any contact, so it is a bound.
+    t
+}
+
+/// Whether `g1` (moving with `m1`) and `g2` (with `m2`) overlap at `t`.
+fn intersect_at<D: ?Sized + QueryDispatcher>(
+    dispatcher: &D,
+    m1: &NonlinearRigidMotion,
+    g1: &dyn Shape,
+    m2: &NonlinearRigidMotion,
+    g2: &dyn Shape,
+    t: Real,
+) -> Option<bool> {
+    let pos12 = m1.position_at_time(t).inv_mul(&m2.position_at_time(t));
+    // parry's contact query, not its intersection test or its distance:
+    // those two answer an overlap for a cuboid or a capsule millimetres
+    // from a triangle (the contact query measures the gap there).
+    let reach =
+        g1.compute_local_bounding_sphere().radius + g2.compute_local_bounding_sphere().radius;
+    dispatcher
+        .contact(&pos12, g1, g2, reach)
+        .ok()
+        .map(|c| c.is_some_and(|c| c.dist <= 0.0))
+}
+
+/// A cast parry reports as [`ShapeCastStatus::Failed`]: its conservative
+/// advancement stepped into the other shape, and its time is one where the
+/// two already overlap. When the two are apart at `start`, the first
+/// contact lies between, and bisection on the overlap test finds it (the
+/// last time found apart, so the shapes touch without overlapping). When
+/// they overlap at `start` the failure says nothing about a later contact:
+/// `None`, as a converged cast that starts in contact and separates.
+#[allow(clippy::too_many_arguments)]
+fn first_contact<D: ?Sized + QueryDispatcher>(
+    dispatcher: &D,
+    m1: &NonlinearRigidMotion,
+    g1: &dyn Shape,
+    m2: &NonlinearRigidMotion,
+    g2: &dyn Shape,
+    start: Real,
+    mut hit: ShapeCastHit,
+) -> Option<ShapeCastHit> {
+    if intersect_at(dispatcher, m1, g1, m2, g2, start)? {
+        return None;
+    }
+    let (mut lo, mut hi) = (start, hit.time_of_impact);
+    for _ in 0..REFINE_STEPS {
+        let mid = 0.5 * (lo + hi);
+        if intersect_at(dispatcher, m1, g1, m2, g2, mid)? {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    hit.time_of_impact = lo;
+    hit.status = ShapeCastStatus::Converged;
+    Some(hit)
+}
+
+/// parry's iteration stops within a time tolerance of the contact, which
+/// a fast body turns into a gap (about a millimetre at 360 m/s): advances
+/// `hit` conservatively on the distance between the whole shapes, at most
+/// the gap over the fastest closing speed of their points per step, so
+/// that it ends touching and never past the first contact.
+#[allow(clippy::too_many_arguments)]
+fn advance_to_contact<D: ?Sized + QueryDispatcher>(
+    dispatcher: &D,
+    m1: &NonlinearRigidMotion,
+    g1: &dyn Shape,
+    m2: &NonlinearRigidMotion,
+    g2: &dyn Shape,
+    end: Real,
+    hit: &mut ShapeCastHit,
+) {
+    let s1 = g1.compute_local_bounding_sphere();
+    let s2 = g2.compute_local_bounding_sphere();
+    let closing = speed_bound(m1, s1.center, s1.radius) + speed_bound(m2, s2.center, s2.radius);
+    if closing <= 0.0 {
+        return;
+    }
+    let tolerance = 1e-6 * (1.0 + s1.radius.min(s2.radius));
+    let mut t = hit.time_of_impact;
+    for _ in 0..CLOSE_STEPS {
+        let pos12 = m1.position_at_time(t).inv_mul(&m2.position_at_time(t));
+        let Ok(d) = dispatcher.distance(&pos12, g1, g2) else {
+            return;
+        };
+        if d.distance <= tolerance {
+            break;
+        }
+        let next = t + d.distance / closing;
+        if next >= end {
+            break;
+        }
+        t = next;
+    }
+    hit.time_of_impact = t;
 }
 
 /// Casts `mesh` (moving with `m_mesh`) against `other` (moving with
@@ -68,40 +201,51 @@ pub fn cast_nonlinear<D: ?Sized + QueryDispatcher>(
         c,
         end,
         &mut stats,
-        |b| ball_toi(dispatcher, b, m_mesh, &sphere, m_other, start, end),
+        |b: &Aabb| ball_toi(
+            m_mesh,
+            b.center().into(),
+            b.half_extents().length(),
+            m_other,
+            sphere.center,
+            sphere.radius,
+            start,
+            end,
+        ),
         |_, tri, _| {
             let t = to_parry_triangle(tri);
-            let hit = if mesh_first {
-                dispatcher.cast_shapes_nonlinear(
-                    m_mesh,
-                    &t,
-                    m_other,
-                    other,
-                    start,
-                    end,
-                    stop_at_penetration,
-                )
+            let (m1, g1, m2, g2): (_, &dyn Shape, _, &dyn Shape) = if mesh_first {
+                (m_mesh, &t, m_other, other)
             } else {
-                dispatcher.cast_shapes_nonlinear(
-                    m_other,
-                    other,
-                    m_mesh,
-                    &t,
-                    start,
-                    end,
-                    stop_at_penetration,
-                )
+                (m_other, other, m_mesh, &t)
             };
-            // A cast whose iteration failed to converge reports an arbitrary
-            // time; taking it would make rapier's CCD clamp the body's motion
-            // to that time on every step, freezing it in place.
-            hit.ok()
-                .flatten()
-                .filter(|h| h.status != ShapeCastStatus::Failed)
-                .map(|h| (h.time_of_impact, h))
+            let hit = dispatcher
+                .cast_shapes_nonlinear(m1, g1, m2, g2, start, end, stop_at_penetration)
+                .ok()
+                .flatten()?;
+            // A failed cast's time is one of overlap, past the contact:
+            // bring it back to the contact, or drop it if the pair
+            // overlapped from the start (taking such a time would clamp a
+            // resting body's motion on every step, freezing it).
+            let hit = if hit.status == ShapeCastStatus::Failed {
+                first_contact(dispatcher, m1, g1, m2, g2, start, hit)?
+            } else {
+                hit
+            };
+            Some((hit.time_of_impact, hit))
         }
     ));
     found.map(|(id, _, mut hit)| {
+        // Any answer but a penetration at the start (parry's iteration
+        // may also end `OutOfIterations`, short of the contact).
+        if hit.status != ShapeCastStatus::PenetratingOrWithinTargetDist
+            && hit.time_of_impact > start
+        {
+            if mesh_first {
+                advance_to_contact(dispatcher, m_mesh, mesh, m_other, other, end, &mut hit);
+            } else {
+                advance_to_contact(dispatcher, m_other, other, m_mesh, mesh, end, &mut hit);
+            }
+        }
         if mesh_first {
             hit.subshape1 = id;
         } else {

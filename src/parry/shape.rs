@@ -66,6 +66,9 @@ struct View {
     unit_mass: MassProperties,
     fallback: OnceLock<Bvh>,
     fallback_builds: AtomicUsize,
+    /// [`CbvhShape::ccd_thickness`], computed on first use (it walks every
+    /// triangle).
+    thickness: OnceLock<Real>,
 }
 
 impl View {
@@ -77,6 +80,7 @@ impl View {
             unit_mass,
             fallback: OnceLock::new(),
             fallback_builds: AtomicUsize::new(0),
+            thickness: OnceLock::new(),
         })
     }
 }
@@ -317,6 +321,56 @@ impl CbvhShape {
         self.view.scale
     }
 
+    /// The thickness rapier's continuous collision detection takes for
+    /// the shape ([`Shape::ccd_thickness`]): rapier sweeps a body whose
+    /// points move more than half its colliders' least thickness in a step
+    /// (in rapier 0.36 every dynamic body, `ccd_enabled` or not), and
+    /// otherwise trusts its discrete contacts.
+    ///
+    /// - A closed mesh: its volume over its surface area. For a convex
+    ///   body this never exceeds the radius of the largest ball inside it
+    ///   (a slab of thickness `t` gives `t / 2`, a cube of side `s` gives
+    ///   `s / 6`, a ball of radius `r` gives `r / 3`), and for a thin-walled
+    ///   closed shell it is about half the wall: a body fast enough to
+    ///   cross its own thickness in a step is swept. A non-convex body's
+    ///   thin parts (a statue's fingers) can be thinner than this average.
+    /// - An open mesh (a surface, a sheet, a terrain piece): infinite, as
+    ///   rapier takes parry's `TriMesh`: such a body is never swept and
+    ///   relies on its speculative contacts. Its real thickness is zero, and
+    ///   a zero here would sweep it on every step it moves, resting or not.
+    ///
+    /// As a sweep's *target* (a fast body against a cbvh wall, floor or
+    /// level, closed or open), rapier calls the dispatcher's nonlinear
+    /// cast whatever this value is, and a zero-thickness wall stops it.
+    ///
+    /// Computed on first call (rapier calls it when the collider is
+    /// attached to a body) by one walk over the triangles, then kept.
+    pub fn ccd_thickness(&self) -> Real {
+        *self.view.thickness.get_or_init(|| {
+            let volume = self.view.edges.signed_volume.abs();
+            if !self.view.edges.is_closed() || volume <= 0.0 {
+                return Real::MAX;
+            }
+            let mut area = 0.0f64;
+            let mut stats = TraversalStats::default();
+            with_cursor!(self, |c| crate::query::visit(
+                c,
+                &mut stats,
+                |_| true,
+                |_, t| {
+                    let n = (t[1] - t[0]).cross(t[2] - t[0]);
+                    area += 0.5 * f64::from(n.length());
+                    std::ops::ControlFlow::Continue(())
+                }
+            ));
+            if area > 0.0 {
+                (volume / area) as Real
+            } else {
+                Real::MAX
+            }
+        })
+    }
+
     /// The same shape taking contacts on `sides` (cheap: the data is
     /// shared).
     pub fn with_sides(mut self, sides: Sides) -> Self {
@@ -519,15 +573,13 @@ impl Shape for CbvhShape {
         TypedShape::Custom(self)
     }
 
-    /// rapier never CCD-sweeps a `TriMesh` (it checks the shape type), and a
-    /// cbvh shape stands in for one: an unbounded thickness tells rapier the
-    /// body never moves fast enough to tunnel, so it is not swept either and
-    /// simulations match parry's meshes. Explicit nonlinear casts still work
-    /// natively through the dispatcher.
+    /// See [`CbvhShape::ccd_thickness`].
     fn ccd_thickness(&self) -> Real {
-        Real::MAX
+        CbvhShape::ccd_thickness(self)
     }
 
+    /// A quarter turn at most between contacts that differ, parry's value
+    /// for its own meshes (rapier's sweeps step rotations by π minus it).
     fn ccd_angular_thickness(&self) -> Real {
         std::f32::consts::FRAC_PI_4
     }

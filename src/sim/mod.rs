@@ -16,9 +16,13 @@
 //!   on a ramp, a sphere rolling, a ball settling in a bowl, cubes resting,
 //!   stacked, at a table's edge), run for every representation of the
 //!   ground and the body, each [`slide::Report`] measured against expected.
+//! - [`ccd`]: continuous collision in rapier: fast bodies shot at
+//!   zero-thickness walls and a spinning bar swept into a strip, each
+//!   [`ccd::CcdReport`] against the analytic first contact.
 //! - [`timed`]: [`Timed`], the dispatcher wrapper that times the narrow
 //!   phase.
 
+pub mod ccd;
 pub mod droptest;
 pub mod slide;
 pub mod timed;

@@ -15,6 +15,7 @@ mod common;
 mod pairs;
 
 mod builder_depth;
+mod ccd;
 mod characters;
 mod clbvh;
 mod closed_mass;

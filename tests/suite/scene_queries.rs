@@ -486,6 +486,12 @@ struct Tally {
     /// hits, which cbvh and parry's `TriMesh` inherit alike. Listed,
     /// allowed.
     parry: Vec<String>,
+    /// Casts that report an earlier time than the reference where the
+    /// shapes do touch (within the target distance): a first contact the
+    /// reference misses, where parry's per-triangle cast of the triangle
+    /// touched fails (the reference drops failed casts; cbvh brings them
+    /// back to the contact). Listed, allowed.
+    missed: Vec<String>,
     wrong: Vec<String>,
 }
 
@@ -494,15 +500,19 @@ impl Tally {
         writeln!(
             summary,
             "{what:<28} {scene:<14} {:>5} queries {:>5} hits {:>3} ties {:>3} late \
-             {:>3} parry's {:>3} disagreements",
+             {:>3} parry's {:>3} missed {:>3} disagreements",
             self.queries,
             self.hits,
             self.ties.len(),
             self.late.len(),
             self.parry.len(),
+            self.missed.len(),
             self.wrong.len()
         )
         .unwrap();
+        for t in self.missed.iter().take(2) {
+            writeln!(summary, "    the reference's miss: {t}").unwrap();
+        }
         for t in self.parry.iter().take(3) {
             writeln!(summary, "    parry's own early hit: {t}").unwrap();
         }
@@ -741,8 +751,10 @@ fn points_match_the_per_triangle_reference() {
 /// by its box: the shape is still farther than the target distance there)
 /// and the shape is not within the target distance just before the
 /// answer; otherwise it is late (a first contact missed). An earlier time
-/// than every triangle's, or a hit where no triangle is hit, is wrong,
-/// unless `exhaustive()` (parry's per-triangle casts without the
+/// than every triangle's, or a hit where no triangle is hit, is the
+/// reference's miss when the shapes touch there (signed distance within
+/// the target distance), a tie when they are within the penetration
+/// tolerance, and otherwise wrong, unless `exhaustive()` (parry's per-triangle casts without the
 /// reference's pruning) answers it too: then it is parry's.
 #[allow(clippy::too_many_arguments)]
 fn judge(
@@ -776,13 +788,32 @@ fn judge(
         }
         (w, g) => {
             let line = format!("{at}: {g:?} vs {w:?}");
+            if let Some(g) = g
+                && sd(g) <= target + contact
+            {
+                t.missed
+                    .push(format!("{line} (signed distance {} there)", sd(g)));
+                return;
+            }
+            // Earlier, with the shapes within the tolerance a late answer
+            // is judged by: a tie the tolerance cannot separate.
+            if let (Some(_), Some(g)) = (w, g)
+                && sd(g) <= target + penetration
+            {
+                t.ties
+                    .push(format!("{line} (signed distance {} there)", sd(g)));
+                return;
+            }
             let e = exhaustive();
             match (e, g) {
                 (Some(e), Some(g)) if close(e, g, tol) => t.parry.push(format!(
                     "{line} (signed distance {} there; parry's own minimum {e})",
                     sd(g)
                 )),
-                _ => t.wrong.push(line),
+                _ => t.wrong.push(match g {
+                    Some(g) => format!("{line} (signed distance {} there)", sd(g)),
+                    None => line,
+                }),
             }
         }
     }
@@ -983,6 +1014,11 @@ fn nonlinear_casts() -> Vec<(String, String, Tally)> {
         let (centre, radius) = world_bounds(&tris);
         let q = scene.queries();
         let mut failed = 0;
+        // parry's own `TriMesh` of the same triangles, the arbiter of an
+        // answer earlier than the per-triangle reference: parry's
+        // composite cast reports it too.
+        let soup = soup_trimesh(&tris);
+        let still = NonlinearRigidMotion::constant_position(collider_pose());
         for (i, (name, shape)) in query_shapes(radius).into_iter().enumerate() {
             let mut t = Tally::default();
             let mut rng = Rng(0x5eed_0006);
@@ -1013,7 +1049,15 @@ fn nonlinear_casts() -> Vec<(String, String, Tally)> {
                     radius,
                     tol,
                     sd,
-                    || want.map(|w| w.time_of_impact),
+                    || {
+                        DefaultQueryDispatcher
+                            .cast_shapes_nonlinear(
+                                &motion, &*shape, &still, &soup, start, end, stop,
+                            )
+                            .ok()
+                            .flatten()
+                            .map(|h| h.time_of_impact)
+                    },
                 );
             }
             results.push((
@@ -1041,16 +1085,18 @@ fn nonlinear_shape_casts_are_never_early() {
     finish_with(&nonlinear_casts(), 40, 0.2);
 }
 
-/// Nonlinear casts find the first contact. Fails: the tree search's node
-/// test casts the node's bounding ball against the shape's with parry's
-/// conservative advancement, which answers `None` for balls that do meet
-/// when the motion is mostly across the first closest-points axis (it
-/// bisects along that one axis, then finds it separating at the end
-/// time), so the node holding the first contact is pruned and a later
-/// triangle answers, the shapes already penetrating there. parry's own
-/// `TriMesh` (the same ball test over its `Bvh`) misses as often.
+/// Nonlinear casts find the first contact: no late answer at all. Fails
+/// on 1 cast of about 80 hits for the capsule in every codec (the shape
+/// 19 mm deep just before the answer, parry's per-triangle cast of the
+/// triangle first touched converging past it), and for the ball in racbvh
+/// and hcc-ooc; parry's own `TriMesh` is late 2 to 4 times per shape. The
+/// tree search's node bound, conservative advancement on the two motions'
+/// closing speed (`src/parry/cast.rs`), misses nothing: before it, with
+/// parry's ball cast as the node test (which answers `None` for balls that
+/// do meet when the motion is mostly across the first closest-points
+/// axis), every codec was late 1 to 8 times per shape.
 #[test]
-#[ignore = "cbvh's nonlinear cast inherits parry's non-conservative ball test (src/parry/cast.rs)"]
+#[ignore = "parry's per-triangle nonlinear cast converges past the first contact in 1 of ~80 capsule casts"]
 fn nonlinear_shape_casts_find_the_first_contact() {
     finish_with(&nonlinear_casts(), 40, 0.0);
 }
