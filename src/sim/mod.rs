@@ -22,6 +22,7 @@
 pub mod droptest;
 pub mod slide;
 pub mod timed;
+pub mod trace;
 
 pub use droptest::{
     DropScene, Placement, Replay, RunReport, RunSpec, ShapeKind, SimError, Trajectory,
