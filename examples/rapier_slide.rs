@@ -16,7 +16,12 @@
 //! `--scene NAME` keeps the scenes whose name contains NAME; `--rep NAMES`
 //! (comma-separated) the runs whose ground or body is one of NAMES
 //! (`primitive`, `trimesh`, `trimesh-fixed`, `plain`, `plain-pairs`, ...);
-//! `--json FILE` writes every report. Failing scenes do not fail the
+//! `--json FILE` writes every report; `--codecs NAMES` the codecs to run
+//! (default `plain,hcc,clbvh`); `--trace DIR` writes, for every run, the
+//! moving body's energy and contacts at every step
+//! ([`cbvh::sim::trace`]) as `DIR/SCENE.GROUND.BODY.steps.csv` and
+//! `.contacts.csv`, and prints a summary line after the run's row.
+//! Failing scenes do not fail the
 //! program: the table is the result. A pairing that cannot be set up is
 //! listed as not run, with the reason (parry's convex hull of the fine
 //! icosphere, which parry leaves without faces).
@@ -26,14 +31,17 @@ use std::time::Instant;
 
 use cbvh::codec::CodecKind;
 use cbvh::sim::slide::{Rep, Report, Scene, pairings};
+use cbvh::sim::trace::Trace;
 
-/// The codecs the example runs, by name.
-const CODECS: [&str; 3] = ["plain", "hcc", "clbvh"];
+/// The codecs the example runs by default, by name.
+const CODECS: &str = "plain,hcc,clbvh";
 
 struct Args {
     scene: Option<String>,
     reps: Option<Vec<Rep>>,
     json: Option<String>,
+    codecs: String,
+    trace: Option<std::path::PathBuf>,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -41,6 +49,8 @@ fn parse_args() -> Result<Args, String> {
         scene: None,
         reps: None,
         json: None,
+        codecs: CODECS.into(),
+        trace: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
@@ -56,9 +66,12 @@ fn parse_args() -> Result<Args, String> {
                 )
             }
             "--json" => args.json = Some(value()?),
+            "--codecs" => args.codecs = value()?,
+            "--trace" => args.trace = Some(value()?.into()),
             "-h" | "--help" => {
                 println!(
                     "rapier_slide [--scene NAME] [--rep NAME[,NAME...]] [--json FILE]\n\
+                     \x20            [--codecs NAME[,NAME...]] [--trace DIR]\n\
                      scenes: {}",
                     Scene::standard()
                         .iter()
@@ -77,9 +90,10 @@ fn parse_args() -> Result<Args, String> {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     cbvh::logger::init_stderr();
     let args = parse_args()?;
-    let codecs = CODECS
-        .iter()
-        .map(|n| n.parse::<CodecKind>())
+    let codecs = args
+        .codecs
+        .split(',')
+        .map(|n| n.trim().parse::<CodecKind>())
         .collect::<Result<Vec<_>, _>>()?;
     let keep = |ground: Rep, body: Rep| {
         args.reps
@@ -114,7 +128,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             if !scene.has_ground(ground) || !keep(ground, body) {
                 continue;
             }
-            let r = match scene.run(ground, body) {
+            let mut trace = Trace::default();
+            let result = if args.trace.is_some() {
+                scene.run_traced(ground, body, &mut trace)
+            } else {
+                scene.run(ground, body)
+            };
+            let r = match result {
                 Ok(r) => r,
                 Err(e) => {
                     println!(
@@ -153,6 +173,28 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 r.max_travel,
                 if r.pass { "PASS" } else { "FAIL" }
             );
+            if let Some(dir) = &args.trace {
+                std::fs::create_dir_all(dir)?;
+                let stem = format!("{}.{}.{}", r.scene, r.ground, r.body);
+                let steps = dir.join(format!("{stem}.steps.csv"));
+                std::fs::write(&steps, trace.steps_csv())?;
+                std::fs::write(
+                    dir.join(format!("{stem}.contacts.csv")),
+                    trace.contacts_csv(),
+                )?;
+                let s = trace.summary();
+                println!(
+                    "    trace: lost {:.4} J ({:.1} % of the potential released), {} drops, \
+                     {:.1} points a step, ids kept {:.1} %, impulse {:.4} N s a step -> {}",
+                    s.energy_lost,
+                    100.0 * s.lost_fraction,
+                    s.drops,
+                    s.mean_points,
+                    100.0 * s.ids_kept,
+                    s.mean_impulse,
+                    steps.display()
+                );
+            }
             std::io::stdout().flush()?;
             reports.push(r);
         }

@@ -26,6 +26,7 @@ pub mod ccd;
 pub mod droptest;
 pub mod slide;
 pub mod timed;
+pub mod trace;
 
 pub use droptest::{
     DropScene, Placement, Replay, RunReport, RunSpec, ShapeKind, SimError, Trajectory,

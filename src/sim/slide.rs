@@ -54,6 +54,7 @@ use rapier3d::prelude::{
     ColliderBuilder, NarrowPhase, PhysicsWorld, RigidBody, RigidBodyBuilder, RigidBodyHandle,
 };
 
+use super::trace::{Trace, com_height};
 use crate::build::BuildOptions;
 use crate::codec::{AnyOptions, CodecKind};
 use crate::contact::PatchOptions;
@@ -907,18 +908,29 @@ fn add_body(
     handle
 }
 
-/// Steps `world` for `seconds` and tracks `bodies`.
-fn simulate(world: &mut PhysicsWorld, bodies: &[RigidBodyHandle], seconds: f32) -> Vec<Track> {
+/// Steps `world` for `seconds` and tracks `bodies`; `trace` records the
+/// first body's energy and contacts at every step.
+fn simulate(
+    world: &mut PhysicsWorld,
+    bodies: &[RigidBodyHandle],
+    seconds: f32,
+    mut trace: Option<&mut Trace>,
+) -> Vec<Track> {
     let dt = world.integration_parameters.dt;
     let steps = (seconds / dt).round() as usize;
     let mut tracks = vec![Track::default(); bodies.len()];
     for (track, h) in tracks.iter_mut().zip(bodies) {
         track.push(0.0, &world.bodies[*h]);
     }
+    let y0 = bodies.first().map(|h| com_height(world, *h));
     for step in 1..=steps {
         world.step();
+        let t = step as f32 * dt;
         for (track, h) in tracks.iter_mut().zip(bodies) {
-            track.push(step as f32 * dt, &world.bodies[*h]);
+            track.push(t, &world.bodies[*h]);
+        }
+        if let (Some(trace), Some(y0)) = (trace.as_deref_mut(), y0) {
+            trace.record(world, bodies[0], t, y0, GRAVITY);
         }
     }
     tracks
@@ -1062,6 +1074,26 @@ impl Scene {
     /// `ground` and `body` (two cbvh representations must share the
     /// contact mode).
     pub fn run(&self, ground: Rep, body: Rep) -> Result<Report, SlideError> {
+        self.run_with(ground, body, None)
+    }
+
+    /// [`run`](Self::run), tracing the (first) moving body's energy and
+    /// contacts at every step into `trace` (see [`super::trace`]).
+    pub fn run_traced(
+        &self,
+        ground: Rep,
+        body: Rep,
+        trace: &mut Trace,
+    ) -> Result<Report, SlideError> {
+        self.run_with(ground, body, Some(trace))
+    }
+
+    fn run_with(
+        &self,
+        ground: Rep,
+        body: Rep,
+        trace: Option<&mut Trace>,
+    ) -> Result<Report, SlideError> {
         let t0 = Instant::now();
         let mut world = new_world(ground, body)?;
         let o = match *self {
@@ -1069,7 +1101,14 @@ impl Scene {
                 angle_deg,
                 friction,
                 cells,
-            } => slide(&mut world, angle_deg, friction, cells, ground, body)?,
+            } => slide(
+                &mut world,
+                angle_deg,
+                friction,
+                cells,
+                (ground, body),
+                trace,
+            )?,
             Scene::Roll {
                 angle_deg,
                 friction,
@@ -1082,17 +1121,20 @@ impl Scene {
                 cells,
                 Body::Sphere(SPHERE_RADIUS, subdivisions),
                 (ground, body),
+                trace,
             )?,
             Scene::Bowl {
                 release_deg,
                 damping,
-            } => bowl(&mut world, release_deg, damping, ground, body)?,
-            Scene::Rest { cells } => rest(&mut world, cells, ground, body)?,
-            Scene::Stack { count, cells } => stack(&mut world, count, cells, ground, body)?,
-            Scene::TableEdge { overhang, cells } => {
-                table_edge(&mut world, overhang, cells, ground, body)?
+            } => bowl(&mut world, release_deg, damping, (ground, body), trace)?,
+            Scene::Rest { cells } => rest(&mut world, cells, (ground, body), trace)?,
+            Scene::Stack { count, cells } => {
+                stack(&mut world, count, cells, (ground, body), trace)?
             }
-            Scene::Rock { height } => rock(&mut world, height, ground, body)?,
+            Scene::TableEdge { overhang, cells } => {
+                table_edge(&mut world, overhang, cells, (ground, body), trace)?
+            }
+            Scene::Rock { height } => rock(&mut world, height, (ground, body), trace)?,
         };
         let rel_error = o
             .relative
@@ -1135,6 +1177,7 @@ fn slope_run(
     friction: f32,
     cells: usize,
     (ground_rep, body_rep): (Rep, Rep),
+    trace: Option<&mut Trace>,
 ) -> Result<SlopeRun, SlideError> {
     add_ground(
         world,
@@ -1162,7 +1205,7 @@ fn slope_run(
     let axis = rotation.inverse() * frame.across;
     let inertia_across = axis.dot(mprops.reconstruct_inertia_matrix() * axis);
     let (mass, height) = (b.mass(), com_of(b).dot(frame.normal));
-    let track = simulate(world, &[h], SLOPE_SECONDS).remove(0);
+    let track = simulate(world, &[h], SLOPE_SECONDS, trace).remove(0);
     Ok(SlopeRun {
         track,
         frame,
@@ -1246,17 +1289,10 @@ fn slide(
     angle_deg: f32,
     friction: f32,
     cells: usize,
-    ground: Rep,
-    body: Rep,
+    reps: (Rep, Rep),
+    trace: Option<&mut Trace>,
 ) -> Result<Outcome, SlideError> {
-    let run = slope_run(
-        world,
-        Body::Cube,
-        angle_deg,
-        friction,
-        cells,
-        (ground, body),
-    )?;
+    let run = slope_run(world, Body::Cube, angle_deg, friction, cells, reps, trace)?;
     let (s, c) = angle_deg.to_radians().sin_cos();
     Ok(run.outcome((GRAVITY * (s - friction * c)).max(0.0)))
 }
@@ -1268,8 +1304,9 @@ fn roll(
     cells: usize,
     sphere: Body,
     reps: (Rep, Rep),
+    trace: Option<&mut Trace>,
 ) -> Result<Outcome, SlideError> {
-    let run = slope_run(world, sphere, angle_deg, friction, cells, reps)?;
+    let run = slope_run(world, sphere, angle_deg, friction, cells, reps, trace)?;
     let (s, c) = angle_deg.to_radians().sin_cos();
     // Rolling without slipping: m a = m g sin θ − F, F r = I a / r, so
     // a = g sin θ / (1 + k) with k = I / (m r²), and the friction force
@@ -1288,8 +1325,8 @@ fn bowl(
     world: &mut PhysicsWorld,
     release_deg: f32,
     damping: f32,
-    ground: Rep,
-    body: Rep,
+    (ground, body): (Rep, Rep),
+    trace: Option<&mut Trace>,
 ) -> Result<Outcome, SlideError> {
     add_ground(world, Ground::Bowl, ground, DEFAULT_FRICTION)?;
     let ball = Body::Sphere(BOWL_BALL_RADIUS, SPHERE_SUBDIVISIONS);
@@ -1305,7 +1342,7 @@ fn bowl(
         DEFAULT_FRICTION,
         damping,
     );
-    let track = simulate(world, &[h], BOWL_SECONDS).remove(0);
+    let track = simulate(world, &[h], BOWL_SECONDS, trace).remove(0);
     let end = track.com.last().copied().unwrap_or(origin);
     let measured = end.x.hypot(end.z);
     let final_speed = track.final_speed();
@@ -1330,6 +1367,7 @@ fn cubes_on_flat(
     cells: usize,
     positions: &[Vector],
     (ground, body): (Rep, Rep),
+    trace: Option<&mut Trace>,
 ) -> Result<Vec<Track>, SlideError> {
     add_ground(
         world,
@@ -1353,18 +1391,18 @@ fn cubes_on_flat(
             )
         })
         .collect();
-    Ok(simulate(world, &handles, REST_SECONDS))
+    Ok(simulate(world, &handles, REST_SECONDS, trace))
 }
 
 fn rest(
     world: &mut PhysicsWorld,
     cells: usize,
-    ground: Rep,
-    body: Rep,
+    reps: (Rep, Rep),
+    trace: Option<&mut Trace>,
 ) -> Result<Outcome, SlideError> {
     let expected = 0.5 * CUBE_SIDE;
     let start = Vector::new(0.0, expected + DROP_GAP, 0.0);
-    let track = cubes_on_flat(world, cells, &[start], (ground, body))?.remove(0);
+    let track = cubes_on_flat(world, cells, &[start], reps, trace)?.remove(0);
     let measured = track.com.last().map_or(f32::NAN, |c| c.y);
     let final_speed = track.final_speed();
     Ok(Outcome {
@@ -1384,15 +1422,15 @@ fn stack(
     world: &mut PhysicsWorld,
     count: usize,
     cells: usize,
-    ground: Rep,
-    body: Rep,
+    reps: (Rep, Rep),
+    trace: Option<&mut Trace>,
 ) -> Result<Outcome, SlideError> {
     let count = count.max(1);
     let height = |i: usize| (i as f32 + 0.5) * CUBE_SIDE;
     let starts: Vec<Vector> = (0..count)
         .map(|i| Vector::new(0.0, height(i), 0.0))
         .collect();
-    let tracks = cubes_on_flat(world, cells, &starts, (ground, body))?;
+    let tracks = cubes_on_flat(world, cells, &starts, reps, trace)?;
     let ends: Vec<Vector> = tracks
         .iter()
         .map(|t| t.com.last().copied().unwrap_or(Vector::NAN))
@@ -1425,15 +1463,15 @@ fn table_edge(
     world: &mut PhysicsWorld,
     overhang: f32,
     cells: usize,
-    ground: Rep,
-    body: Rep,
+    reps: (Rep, Rep),
+    trace: Option<&mut Trace>,
 ) -> Result<Outcome, SlideError> {
     let start = Vector::new(
         0.5 * PLANE_SIZE + overhang * CUBE_SIDE,
         0.5 * CUBE_SIDE,
         0.0,
     );
-    let track = cubes_on_flat(world, cells, &[start], (ground, body))?.remove(0);
+    let track = cubes_on_flat(world, cells, &[start], reps, trace)?.remove(0);
     let max_travel = track.max_travel();
     let final_speed = track.final_speed();
     Ok(if overhang > 0.0 {
@@ -1467,8 +1505,8 @@ fn table_edge(
 fn rock(
     world: &mut PhysicsWorld,
     height: f32,
-    ground: Rep,
-    body: Rep,
+    (ground, body): (Rep, Rep),
+    trace: Option<&mut Trace>,
 ) -> Result<Outcome, SlideError> {
     add_ground(world, Ground::Dome, ground, ROLL_FRICTION)?;
     let r = DOME_RADIUS;
@@ -1488,7 +1526,7 @@ fn rock(
         ROLL_FRICTION,
         0.0,
     );
-    let track = simulate(world, &[h], ROCK_SECONDS).remove(0);
+    let track = simulate(world, &[h], ROCK_SECONDS, trace).remove(0);
     let max_tilt = track.tilts().fold(0.0, f32::max);
     let final_tilt = track.tilts().last().unwrap_or(f32::NAN);
     let (max_travel, final_speed) = (track.max_travel(), track.final_speed());
