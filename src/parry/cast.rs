@@ -2,8 +2,9 @@
 //! side, on the cbvh tree: a best-first search whose node bound is the
 //! first time the node's bounding ball can meet the other shape's, by
 //! conservative advancement on the two motions ([`ball_toi`]), and whose
-//! leaves go to the dispatcher for the triangle against the other shape
-//! (which recurses into the other cbvh tree when both are cbvh shapes).
+//! leaves go to the dispatcher for the triangle against the other shape.
+//! Two cbvh shapes are searched together, over pairs of nodes of both
+//! trees ([`cast_nonlinear_pair`]).
 //!
 //! The answer follows parry's semantics for its own shapes, one triangle
 //! at a time: with `stop_at_penetration`, a pair overlapping at `start`
@@ -20,7 +21,7 @@ use parry3d::shape::Shape;
 use super::shape::{CbvhShape, to_parry_triangle};
 use crate::cursor::TraversalStats;
 use crate::geom::Aabb;
-use crate::query::find_best;
+use crate::query::{bvtt_best, find_best};
 
 /// Most steps of [`ball_toi`]'s conservative advancement.
 const ADVANCE_STEPS: usize = 64;
@@ -180,6 +181,92 @@ fn advance_to_contact<D: ?Sized + QueryDispatcher>(
     hit.time_of_impact = t;
 }
 
+/// One pair of leaves (a triangle and the other shape, or two
+/// triangles): the dispatcher's cast, a failed one brought back to the
+/// first contact or dropped if the pair overlapped from the start (taking
+/// its time would clamp a resting body's motion on every step, freezing
+/// it).
+#[allow(clippy::too_many_arguments)]
+fn leaf_cast<D: ?Sized + QueryDispatcher>(
+    dispatcher: &D,
+    m1: &NonlinearRigidMotion,
+    g1: &dyn Shape,
+    m2: &NonlinearRigidMotion,
+    g2: &dyn Shape,
+    start: Real,
+    end: Real,
+    stop_at_penetration: bool,
+) -> Option<ShapeCastHit> {
+    let hit = dispatcher
+        .cast_shapes_nonlinear(m1, g1, m2, g2, start, end, stop_at_penetration)
+        .ok()
+        .flatten()?;
+    if hit.status == ShapeCastStatus::Failed {
+        first_contact(dispatcher, m1, g1, m2, g2, start, hit)
+    } else {
+        Some(hit)
+    }
+}
+
+/// Casts two cbvh shapes against each other: a branch-and-bound over
+/// pairs of nodes of both trees, a pair's bound the first time the two
+/// nodes' bounding balls can meet ([`ball_toi`]), and triangle pairs at
+/// the leaves. (Casting each triangle of one tree against the whole other
+/// shape would search the other tree once per triangle near it.)
+#[allow(clippy::too_many_arguments)]
+pub fn cast_nonlinear_pair<D: ?Sized + QueryDispatcher>(
+    dispatcher: &D,
+    s1: &CbvhShape,
+    m1: &NonlinearRigidMotion,
+    s2: &CbvhShape,
+    m2: &NonlinearRigidMotion,
+    start: Real,
+    end: Real,
+    stop_at_penetration: bool,
+) -> Option<ShapeCastHit> {
+    let mut stats = TraversalStats::default();
+    let found = with_cursor!(s1, |a| with_cursor!(s2, |b| bvtt_best(
+        a,
+        b,
+        end,
+        &mut stats,
+        |x: &Aabb, y: &Aabb| ball_toi(
+            m1,
+            x.center().into(),
+            x.half_extents().length(),
+            m2,
+            y.center().into(),
+            y.half_extents().length(),
+            start,
+            end,
+        ),
+        |_, ti, _, tj, _| {
+            let (t1, t2) = (to_parry_triangle(ti), to_parry_triangle(tj));
+            leaf_cast(
+                dispatcher,
+                m1,
+                &t1,
+                m2,
+                &t2,
+                start,
+                end,
+                stop_at_penetration,
+            )
+            .map(|h| (h.time_of_impact, h))
+        }
+    )));
+    found.map(|(i, j, _, mut hit)| {
+        if hit.status != ShapeCastStatus::PenetratingOrWithinTargetDist
+            && hit.time_of_impact > start
+        {
+            advance_to_contact(dispatcher, m1, s1, m2, s2, end, &mut hit);
+        }
+        hit.subshape1 = i;
+        hit.subshape2 = j;
+        hit
+    })
+}
+
 /// Casts `mesh` (moving with `m_mesh`) against `other` (moving with
 /// `m_other`). `mesh_first` says the mesh is shape 1 of the query, so the
 /// hit's sides follow the caller's order.
@@ -218,20 +305,8 @@ pub fn cast_nonlinear<D: ?Sized + QueryDispatcher>(
             } else {
                 (m_other, other, m_mesh, &t)
             };
-            let hit = dispatcher
-                .cast_shapes_nonlinear(m1, g1, m2, g2, start, end, stop_at_penetration)
-                .ok()
-                .flatten()?;
-            // A failed cast's time is one of overlap, past the contact:
-            // bring it back to the contact, or drop it if the pair
-            // overlapped from the start (taking such a time would clamp a
-            // resting body's motion on every step, freezing it).
-            let hit = if hit.status == ShapeCastStatus::Failed {
-                first_contact(dispatcher, m1, g1, m2, g2, start, hit)?
-            } else {
-                hit
-            };
-            Some((hit.time_of_impact, hit))
+            leaf_cast(dispatcher, m1, g1, m2, g2, start, end, stop_at_penetration)
+                .map(|h| (h.time_of_impact, h))
         }
     ));
     found.map(|(id, _, mut hit)| {

@@ -212,9 +212,23 @@ impl QueryDispatcher for Dispatcher {
         end_time: Real,
         stop_at_penetration: bool,
     ) -> Result<Option<ShapeCastHit>, Unsupported> {
-        // Leaves dispatch triangle-vs-other-shape back through `self`, which
+        // Two cbvh shapes: one search over pairs of nodes of both trees.
+        // One: the tree searched against the other shape, whose leaves
+        // dispatch triangle-vs-other-shape back through `self`, which
         // hands convex pairs on to parry's default dispatcher.
         let chain = self.clone().then_default();
+        if let (Some(a), Some(b)) = (g1.as_shape::<CbvhShape>(), g2.as_shape::<CbvhShape>()) {
+            return Ok(cast::cast_nonlinear_pair(
+                &chain,
+                a,
+                motion1,
+                b,
+                motion2,
+                start_time,
+                end_time,
+                stop_at_penetration,
+            ));
+        }
         if let Some(m) = g1.as_shape::<CbvhShape>() {
             Ok(cast::cast_nonlinear(
                 &chain,

@@ -327,13 +327,15 @@ impl CbvhShape {
     /// (in rapier 0.36 every dynamic body, `ccd_enabled` or not), and
     /// otherwise trusts its discrete contacts.
     ///
-    /// - A closed mesh: its volume over its surface area. For a convex
-    ///   body this never exceeds the radius of the largest ball inside it
-    ///   (a slab of thickness `t` gives `t / 2`, a cube of side `s` gives
-    ///   `s / 6`, a ball of radius `r` gives `r / 3`), and for a thin-walled
-    ///   closed shell it is about half the wall: a body fast enough to
-    ///   cross its own thickness in a step is swept. A non-convex body's
-    ///   thin parts (a statue's fingers) can be thinner than this average.
+    /// - A closed mesh: three times its volume over its surface area, which
+    ///   is parry's own value for its ball (the radius) and its cuboid (the
+    ///   least half extent) and, for any convex body, at most three times
+    ///   the radius of the largest ball inside it (volume over area never
+    ///   exceeds that radius): half of it is less than the body's least
+    ///   width, so a body rapier leaves unswept cannot cross a surface of
+    ///   zero thickness in one step. A slab of thickness `t` gives `1.5 t`.
+    ///   A non-convex body's thin parts (a statue's fingers) can be thinner
+    ///   than this average.
     /// - An open mesh (a surface, a sheet, a terrain piece): infinite, as
     ///   rapier takes parry's `TriMesh`: such a body is never swept and
     ///   relies on its speculative contacts. Its real thickness is zero, and
@@ -364,7 +366,7 @@ impl CbvhShape {
                 }
             ));
             if area > 0.0 {
-                (volume / area) as Real
+                (3.0 * volume / area) as Real
             } else {
                 Real::MAX
             }

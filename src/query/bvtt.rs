@@ -514,3 +514,81 @@ pub fn bvtt_min<A: NodeCursor, B: NodeCursor, T>(
     }
     best
 }
+
+/// Branch-and-bound over two hierarchies with a caller's node bound: the
+/// triangle pair with the smallest cost below `max_cost`, as [`bvtt_min`],
+/// but each node pair's lower bound is `node_cost(box_a, box_b)` with
+/// both boxes in their own tree's frame (for bounds that are not a
+/// distance under one fixed pose, such as the first time two moving
+/// bounding balls can meet). `leaf(i, tri_i, j, tri_j, best)` sees both
+/// triangles in their own frames.
+pub fn bvtt_best<A: NodeCursor, B: NodeCursor, T>(
+    a: &A,
+    b: &B,
+    max_cost: f32,
+    stats: &mut TraversalStats,
+    mut node_cost: impl FnMut(&Aabb, &Aabb) -> f32,
+    mut leaf: impl FnMut(u32, &Triangle, u32, &Triangle, f32) -> Option<(f32, T)>,
+) -> Option<(u32, u32, f32, T)> {
+    let (ra, ba) = a.root();
+    let (rb, bb) = b.root();
+    if ba.is_empty() || bb.is_empty() {
+        return None;
+    }
+    stats.nodes_visited += 1;
+    let c0 = node_cost(&ba, &bb);
+    // Written so that a NaN cost prunes too.
+    if c0.is_nan() || c0 >= max_cost {
+        return None;
+    }
+    let mut best_cost = max_cost;
+    let mut best: Option<(u32, u32, f32, T)> = None;
+    let mut stack: Vec<PairEntry<A::Node, B::Node>> = vec![(c0, ra, ba, rb, bb)];
+    let mut kids: Vec<PairEntry<A::Node, B::Node>> = Vec::with_capacity(16);
+    let (mut batch_a, mut batch_b) = (Children::new(ra), Children::new(rb));
+    let mut b_tris: Vec<(u32, Triangle)> = Vec::new();
+    while let Some((k, na, box_a, nb, box_b)) = stack.pop() {
+        if k >= best_cost {
+            continue;
+        }
+        let leaf_a = a.is_leaf(&na);
+        let leaf_b = b.is_leaf(&nb);
+        if leaf_a && leaf_b {
+            b_tris.clear();
+            b.for_each_triangle(&nb, |j, tj| b_tris.push((j, *tj)));
+            a.for_each_triangle(&na, |i, ti| {
+                for (j, tj) in &b_tris {
+                    stats.primitive_tests += 1;
+                    if let Some((k, payload)) = leaf(i, ti, *j, tj, best_cost)
+                        && k < best_cost
+                    {
+                        best_cost = k;
+                        best = Some((i, *j, k, payload));
+                    }
+                }
+            });
+            continue;
+        }
+        kids.clear();
+        if leaf_b || (!leaf_a && box_a.half_area() >= box_b.half_area()) {
+            a.children(&na, &mut batch_a);
+            let boxes = batch_a.boxes();
+            stats.nodes_visited += boxes.len() as u64;
+            for i in 0..boxes.len() {
+                let bx = boxes.get(i);
+                kids.push((node_cost(&bx, &box_b), batch_a.node(i), bx, nb, box_b));
+            }
+        } else {
+            b.children(&nb, &mut batch_b);
+            let boxes = batch_b.boxes();
+            stats.nodes_visited += boxes.len() as u64;
+            for i in 0..boxes.len() {
+                let bx = boxes.get(i);
+                kids.push((node_cost(&box_a, &bx), na, box_a, batch_b.node(i), bx));
+            }
+        }
+        kids.sort_unstable_by(|x, y| y.0.total_cmp(&x.0));
+        stack.extend(kids.drain(..).filter(|k| !k.0.is_nan() && k.0 < best_cost));
+    }
+    best
+}

@@ -34,7 +34,8 @@ use std::mem::MaybeUninit;
 
 pub use best::find_best;
 pub use bvtt::{
-    Prediction, bvtt, bvtt_from, bvtt_front, bvtt_min, bvtt_pairs, bvtt_par, bvtt_par_within,
+    Prediction, bvtt, bvtt_best, bvtt_from, bvtt_front, bvtt_min, bvtt_pairs, bvtt_par,
+    bvtt_par_within,
 };
 pub use overlap::{overlap, visit, visit_batch};
 pub use packet::{closest_hits, closest_hits_within};
