@@ -1,7 +1,7 @@
 //! Nonlinear shape casts (rapier's CCD sweeps) with a cbvh shape on either
 //! side, on the cbvh tree: a best-first search whose node bound is the
 //! first time the node's bounding ball can meet the other shape's, by
-//! conservative advancement on the two motions ([`ball_toi`]), and whose
+//! conservative advancement on the two motions (`ball_toi`), and whose
 //! leaves go to the dispatcher for the triangle against the other shape.
 //! Two cbvh shapes are searched together, over pairs of nodes of both
 //! trees ([`cast_nonlinear_pair`]).
@@ -12,7 +12,7 @@
 //! contact at `start` hits only if it would tunnel) decides. Where parry's
 //! iteration on a triangle fails (it steps into the triangle, which it
 //! does for fast bodies against thin walls), the time is brought back to
-//! the first contact by bisection ([`first_contact`]).
+//! the first contact by bisection (`first_contact`).
 
 use parry3d::math::{Real, Vector};
 use parry3d::query::{NonlinearRigidMotion, QueryDispatcher, ShapeCastHit, ShapeCastStatus};
@@ -30,7 +30,7 @@ const ADVANCE_STEPS: usize = 64;
 const CLOSE_STEPS: usize = 32;
 
 /// Bisection steps that bring a cast parry reports as
-/// [`ShapeCastStatus::Failed`] back to its first contact ([`first_contact`]).
+/// [`ShapeCastStatus::Failed`] back to its first contact (`first_contact`).
 const REFINE_STEPS: usize = 24;
 
 /// The fastest any point within `radius` of `local` (in the moving body's
@@ -210,7 +210,7 @@ fn leaf_cast<D: ?Sized + QueryDispatcher>(
 
 /// Casts two cbvh shapes against each other: a branch-and-bound over
 /// pairs of nodes of both trees, a pair's bound the first time the two
-/// nodes' bounding balls can meet ([`ball_toi`]), and triangle pairs at
+/// nodes' bounding balls can meet (`ball_toi`), and triangle pairs at
 /// the leaves. (Casting each triangle of one tree against the whole other
 /// shape would search the other tree once per triangle near it.)
 #[allow(clippy::too_many_arguments)]
