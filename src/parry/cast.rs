@@ -145,7 +145,9 @@ fn first_contact<D: ?Sized + QueryDispatcher>(
 /// a fast body turns into a gap (about a millimetre at 360 m/s): advances
 /// `hit` conservatively on the distance between the whole shapes, at most
 /// the gap over the fastest closing speed of their points per step, so
-/// that it ends touching and never past the first contact.
+/// that it ends touching and never past the first contact. Any answer but
+/// a penetration at `start` is advanced (parry's iteration may also end
+/// `OutOfIterations`, short of the contact).
 #[allow(clippy::too_many_arguments)]
 fn advance_to_contact<D: ?Sized + QueryDispatcher>(
     dispatcher: &D,
@@ -153,9 +155,14 @@ fn advance_to_contact<D: ?Sized + QueryDispatcher>(
     g1: &dyn Shape,
     m2: &NonlinearRigidMotion,
     g2: &dyn Shape,
+    start: Real,
     end: Real,
     hit: &mut ShapeCastHit,
 ) {
+    // A penetration at the start stays: there is nothing to advance.
+    if hit.status == ShapeCastStatus::PenetratingOrWithinTargetDist || hit.time_of_impact <= start {
+        return;
+    }
     let s1 = g1.compute_local_bounding_sphere();
     let s2 = g2.compute_local_bounding_sphere();
     let closing = speed_bound(m1, s1.center, s1.radius) + speed_bound(m2, s2.center, s2.radius);
@@ -256,11 +263,7 @@ pub fn cast_nonlinear_pair<D: ?Sized + QueryDispatcher>(
         }
     )));
     found.map(|(i, j, _, mut hit)| {
-        if hit.status != ShapeCastStatus::PenetratingOrWithinTargetDist
-            && hit.time_of_impact > start
-        {
-            advance_to_contact(dispatcher, m1, s1, m2, s2, end, &mut hit);
-        }
+        advance_to_contact(dispatcher, m1, s1, m2, s2, start, end, &mut hit);
         hit.subshape1 = i;
         hit.subshape2 = j;
         hit
@@ -310,16 +313,14 @@ pub fn cast_nonlinear<D: ?Sized + QueryDispatcher>(
         }
     ));
     found.map(|(id, _, mut hit)| {
-        // Any answer but a penetration at the start (parry's iteration
-        // may also end `OutOfIterations`, short of the contact).
-        if hit.status != ShapeCastStatus::PenetratingOrWithinTargetDist
-            && hit.time_of_impact > start
-        {
-            if mesh_first {
-                advance_to_contact(dispatcher, m_mesh, mesh, m_other, other, end, &mut hit);
-            } else {
-                advance_to_contact(dispatcher, m_other, other, m_mesh, mesh, end, &mut hit);
-            }
+        if mesh_first {
+            advance_to_contact(
+                dispatcher, m_mesh, mesh, m_other, other, start, end, &mut hit,
+            );
+        } else {
+            advance_to_contact(
+                dispatcher, m_other, other, m_mesh, mesh, start, end, &mut hit,
+            );
         }
         if mesh_first {
             hit.subshape1 = id;

@@ -469,6 +469,7 @@ pub fn bvtt_min<A: NodeCursor, B: NodeCursor, T>(
     let mut stack: Vec<PairEntry<A::Node, B::Node>> = vec![(d0, ra, ba, rb, bb)];
     let mut kids: Vec<PairEntry<A::Node, B::Node>> = Vec::with_capacity(8);
     let (mut batch_a, mut batch_b) = (Children::new(ra), Children::new(rb));
+    let mut b_tris: Vec<(u32, Triangle)> = Vec::new();
     while let Some((d, na, box_a, nb, box_b)) = stack.pop() {
         if d >= best_cost {
             continue;
@@ -476,19 +477,17 @@ pub fn bvtt_min<A: NodeCursor, B: NodeCursor, T>(
         let leaf_a = a.is_leaf(&na);
         let leaf_b = b.is_leaf(&nb);
         if leaf_a && leaf_b {
-            let mut b_tris: Vec<(u32, Triangle)> = Vec::new();
-            b.for_each_triangle(&nb, |j, tj| b_tris.push((j, *tj)));
-            a.for_each_triangle(&na, |i, ti| {
-                for (j, tj) in &b_tris {
-                    stats.primitive_tests += 1;
-                    if let Some((k, payload)) = leaf(i, ti, *j, tj, best_cost)
-                        && k < best_cost
-                    {
-                        best_cost = k;
-                        best = Some((i, *j, k, payload));
-                    }
-                }
-            });
+            leaf_pairs(
+                a,
+                b,
+                &na,
+                &nb,
+                &mut b_tris,
+                stats,
+                &mut best_cost,
+                &mut best,
+                &mut leaf,
+            );
             continue;
         }
         kids.clear();
@@ -554,19 +553,17 @@ pub fn bvtt_best<A: NodeCursor, B: NodeCursor, T>(
         let leaf_a = a.is_leaf(&na);
         let leaf_b = b.is_leaf(&nb);
         if leaf_a && leaf_b {
-            b_tris.clear();
-            b.for_each_triangle(&nb, |j, tj| b_tris.push((j, *tj)));
-            a.for_each_triangle(&na, |i, ti| {
-                for (j, tj) in &b_tris {
-                    stats.primitive_tests += 1;
-                    if let Some((k, payload)) = leaf(i, ti, *j, tj, best_cost)
-                        && k < best_cost
-                    {
-                        best_cost = k;
-                        best = Some((i, *j, k, payload));
-                    }
-                }
-            });
+            leaf_pairs(
+                a,
+                b,
+                &na,
+                &nb,
+                &mut b_tris,
+                stats,
+                &mut best_cost,
+                &mut best,
+                &mut leaf,
+            );
             continue;
         }
         kids.clear();
@@ -591,4 +588,34 @@ pub fn bvtt_best<A: NodeCursor, B: NodeCursor, T>(
         stack.extend(kids.drain(..).filter(|k| !k.0.is_nan() && k.0 < best_cost));
     }
     best
+}
+
+/// The leaf pair `na` × `nb` of [`bvtt_min`] and [`bvtt_best`]: every
+/// triangle pair through `leaf`, the best so far in `best_cost` / `best`
+/// (`b_tris`: scratch for `nb`'s triangles).
+#[allow(clippy::too_many_arguments)]
+fn leaf_pairs<A: NodeCursor, B: NodeCursor, T>(
+    a: &A,
+    b: &B,
+    na: &A::Node,
+    nb: &B::Node,
+    b_tris: &mut Vec<(u32, Triangle)>,
+    stats: &mut TraversalStats,
+    best_cost: &mut f32,
+    best: &mut Option<(u32, u32, f32, T)>,
+    leaf: &mut impl FnMut(u32, &Triangle, u32, &Triangle, f32) -> Option<(f32, T)>,
+) {
+    b_tris.clear();
+    b.for_each_triangle(nb, |j, tj| b_tris.push((j, *tj)));
+    a.for_each_triangle(na, |i, ti| {
+        for (j, tj) in b_tris.iter() {
+            stats.primitive_tests += 1;
+            if let Some((k, payload)) = leaf(i, ti, *j, tj, *best_cost)
+                && k < *best_cost
+            {
+                *best_cost = k;
+                *best = Some((i, *j, k, payload));
+            }
+        }
+    });
 }

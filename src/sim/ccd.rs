@@ -38,13 +38,10 @@ use std::fmt;
 
 use parry3d::math::{Rotation, Vector};
 use parry3d::shape::SharedShape;
-use rapier3d::prelude::{
-    ColliderBuilder, NarrowPhase, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle,
-};
+use rapier3d::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle};
 
-use super::slide::{Rep, SlideError, box_mesh, cube_mesh, icosphere_mesh};
+use super::slide::{self, Rep, SlideError, box_mesh, cube_mesh, icosphere_mesh};
 use crate::mesh::Mesh;
-use crate::parry::{ContactMode, Dispatcher};
 
 /// Radius of the ball and the capsule, half side of the cube (m).
 pub const RADIUS: f32 = 0.1;
@@ -258,22 +255,11 @@ impl fmt::Display for CcdReport {
     }
 }
 
+/// [`slide`](super::slide)'s world (the contact mode of the cbvh shapes in
+/// the scene) without gravity.
 fn new_world(target: Rep, body: Rep) -> Result<PhysicsWorld, SlideError> {
-    let mode = match (target, body) {
-        (Rep::Cbvh(_, a), Rep::Cbvh(_, b)) if a != b => {
-            return Err(SlideError::ModeMismatch {
-                ground: target.name(),
-                body: body.name(),
-            });
-        }
-        (Rep::Cbvh(_, m), _) | (_, Rep::Cbvh(_, m)) => m.contact_mode(),
-        _ => ContactMode::default(),
-    };
-    let mut world = PhysicsWorld {
-        gravity: Vector::ZERO,
-        ..Default::default()
-    };
-    world.narrow_phase = NarrowPhase::with_query_dispatcher(Dispatcher::new(mode).then_default());
+    let mut world = slide::new_world(target, body)?;
+    world.gravity = Vector::ZERO;
     Ok(world)
 }
 

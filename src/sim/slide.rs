@@ -833,7 +833,7 @@ fn com_of(b: &RigidBody) -> Vector {
 
 /// A world with the scene's gravity and a dispatcher in the contact mode of
 /// the cbvh representation among `ground` and `body`.
-fn new_world(ground: Rep, body: Rep) -> Result<PhysicsWorld, SlideError> {
+pub(super) fn new_world(ground: Rep, body: Rep) -> Result<PhysicsWorld, SlideError> {
     let mode = match (ground, body) {
         (Rep::Cbvh(_, a), Rep::Cbvh(_, b)) if a != b => {
             return Err(SlideError::ModeMismatch {
