@@ -1,47 +1,77 @@
-//! The analytic scenes of [`cbvh::sim::slide`] for every representation
-//! of the ground and the body, as a table of measured against expected:
-//! a cube sliding (or staying) on a ramp, a sphere rolling down one, a
-//! ball settling in a bowl, a cube dropped on the ground, a stack of cubes,
-//! a cube at a table's edge. Grounds are a parry primitive (where the scene
-//! has one), parry's `TriMesh` with and without `FIX_INTERNAL_EDGES`, and
-//! cbvh shapes of the plain, hcc and clbvh codecs in both contact modes;
-//! the body is of the same representation, and a primitive body is run on
-//! every mesh ground too (see [`cbvh::sim::slide::pairings`]).
+//! Every analytic scene of [`cbvh::sim`] for every representation of the
+//! ground and the body, as one table of measured against expected, in
+//! three parts:
+//!
+//! - contacts ([`cbvh::sim::slide`]): a cube sliding (or staying) on a
+//!   ramp, a sphere rolling down one, a ball settling in a bowl, a cube
+//!   dropped on the ground, a stack of cubes, a cube at a table's edge, a
+//!   block rocking on a dome;
+//! - continuous collision ([`cbvh::sim::ccd`]): a ball, a cube and a
+//!   capsule shot at a zero-thickness wall at 1 to 360 m/s and a bar spun
+//!   into a strip, with CCD on, against the analytic first contact;
+//! - characters ([`cbvh::sim::character`]): rapier's kinematic character
+//!   controller walking a capsule over terrain, ramps, stairs, along a
+//!   wall and down a slope it snaps to.
+//!
+//! Grounds are a parry primitive (where the scene has one), parry's
+//! `TriMesh` with and without `FIX_INTERNAL_EDGES`, cbvh shapes of each
+//! codec in both contact modes, and scaled cbvh shapes
+//! ([`cbvh::sim::slide::Rep::Scaled`]: built from the mesh squeezed by a
+//! non-uniform, mirrored factor and handed to rapier scaled back by it).
+//! The body is of the same representation, and a primitive body runs on
+//! every mesh ground too (see [`cbvh::sim::slide::pairings`] and
+//! [`cbvh::sim::ccd::pairings`]).
 //!
 //! ```sh
 //! cargo run --release --features sims --example rapier_slide
-//! cargo run --release --features sims --example rapier_slide -- --scene slide --rep plain-pairs --json out.json
+//! cargo run --release --features sims --example rapier_slide -- --scene shot --rep plain-pairs --json out.json
 //! ```
 //!
-//! `--scene NAME` keeps the scenes whose name contains NAME; `--rep NAMES`
-//! (comma-separated) the runs whose ground or body is one of NAMES
-//! (`primitive`, `trimesh`, `trimesh-fixed`, `plain`, `plain-pairs`, ...);
-//! `--json FILE` writes every report; `--codecs NAMES` the codecs to run
-//! (default `plain,hcc,clbvh`); `--trace DIR` writes, for every run, the
-//! moving body's energy and contacts at every step
+//! `--scene NAME` keeps the scenes whose name contains NAME (`slide`,
+//! `roll`, `shot`, `spin`, `walk`, ...); `--rep NAMES` (comma-separated)
+//! the runs whose ground or body is one of NAMES (`primitive`, `trimesh`,
+//! `trimesh-fixed`, `hull`, `plain`, `plain-pairs`, `plain-scaled`,
+//! `plain-scaled-pairs`, ...); `--codecs NAMES` the codecs to run (default
+//! `plain,hcc,clbvh`); `--scaled NAMES` the codecs also run scaled
+//! (default `plain`; `--scaled none` for none); `--json FILE` writes the
+//! contact scenes' reports; `--trace DIR` writes, for every contact
+//! scene's run, the moving body's energy and contacts at every step
 //! ([`cbvh::sim::trace`]) as `DIR/SCENE.GROUND.BODY.steps.csv` and
 //! `.contacts.csv`, and prints a summary line after the run's row.
-//! Failing scenes do not fail the
-//! program: the table is the result. A pairing that cannot be set up is
-//! listed as not run, with the reason (parry's convex hull of the fine
-//! icosphere, which parry leaves without faces).
+//! Failing scenes do not fail the program: the table is the result. A
+//! pairing that cannot be set up is listed as not run, with the reason
+//! (parry's convex hull of the fine icosphere, which parry leaves without
+//! faces).
 
 use std::io::Write;
 use std::time::Instant;
 
 use cbvh::codec::CodecKind;
+use cbvh::sim::ccd;
+use cbvh::sim::character::{self, Walk};
 use cbvh::sim::slide::{Rep, Report, Scene, pairings};
 use cbvh::sim::trace::Trace;
 
 /// The codecs the example runs by default, by name.
 const CODECS: &str = "plain,hcc,clbvh";
+/// The codecs it also runs scaled by default.
+const SCALED: &str = "plain";
 
 struct Args {
     scene: Option<String>,
     reps: Option<Vec<Rep>>,
     json: Option<String>,
     codecs: String,
+    scaled: String,
     trace: Option<std::path::PathBuf>,
+}
+
+/// The codecs named in `list` (comma-separated; `none` for none).
+fn parse_codecs(list: &str) -> Result<Vec<CodecKind>, cbvh::codec::UnknownCodec> {
+    if list.trim() == "none" {
+        return Ok(vec![]);
+    }
+    list.split(',').map(|n| n.trim().parse()).collect()
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -50,6 +80,7 @@ fn parse_args() -> Result<Args, String> {
         reps: None,
         json: None,
         codecs: CODECS.into(),
+        scaled: SCALED.into(),
         trace: None,
     };
     let mut it = std::env::args().skip(1);
@@ -67,15 +98,19 @@ fn parse_args() -> Result<Args, String> {
             }
             "--json" => args.json = Some(value()?),
             "--codecs" => args.codecs = value()?,
+            "--scaled" => args.scaled = value()?,
             "--trace" => args.trace = Some(value()?.into()),
             "-h" | "--help" => {
                 println!(
                     "rapier_slide [--scene NAME] [--rep NAME[,NAME...]] [--json FILE]\n\
-                     \x20            [--codecs NAME[,NAME...]] [--trace DIR]\n\
+                     \x20            [--codecs NAME[,NAME...]] [--scaled NAME[,NAME...]|none]\n\
+                     \x20            [--trace DIR]\n\
                      scenes: {}",
                     Scene::standard()
                         .iter()
                         .map(Scene::name)
+                        .chain(ccd::standard().iter().map(ccd::CcdScene::name))
+                        .chain(Walk::standard().iter().map(Walk::name))
                         .collect::<Vec<_>>()
                         .join(", ")
                 );
@@ -90,11 +125,8 @@ fn parse_args() -> Result<Args, String> {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     cbvh::logger::init_stderr();
     let args = parse_args()?;
-    let codecs = args
-        .codecs
-        .split(',')
-        .map(|n| n.trim().parse::<CodecKind>())
-        .collect::<Result<Vec<_>, _>>()?;
+    let codecs = parse_codecs(&args.codecs)?;
+    let scaled = parse_codecs(&args.scaled)?;
     let keep = |ground: Rep, body: Rep| {
         args.reps
             .as_ref()
@@ -124,7 +156,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         {
             continue;
         }
-        for (ground, body) in pairings(&codecs) {
+        for (ground, body) in pairings(&codecs, &scaled) {
             if !scene.has_ground(ground) || !keep(ground, body) {
                 continue;
             }
@@ -201,7 +233,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let passed = reports.iter().filter(|r| r.pass).count();
     println!(
-        "{passed} of {} pass, {} fail, {skipped} could not be set up ({:.1} s)",
+        "contacts: {passed} of {} pass, {} fail, {skipped} could not be set up ({:.1} s)\n",
         reports.len(),
         reports.len() - passed,
         t0.elapsed().as_secs_f64()
@@ -212,5 +244,82 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             serde_json::to_string_pretty(&reports)?.as_bytes(),
         )?;
     }
+    let wanted = |name: String| {
+        args.scene
+            .as_ref()
+            .is_none_or(|s| name.contains(s.as_str()))
+    };
+
+    // Continuous collision.
+    let t0 = Instant::now();
+    let (mut runs, mut fails) = (0, 0);
+    println!(
+        "{:<28} {:<16} {:<16} first contact (m or rad) against the analytic one; \
+         error and deepest sinking at the contact point",
+        "ccd scene", "surface", "body"
+    );
+    for scene in ccd::standard() {
+        if !wanted(scene.name()) {
+            continue;
+        }
+        for (target, body) in ccd::pairings(&codecs, &scaled) {
+            if !keep(target, body) {
+                continue;
+            }
+            let t = Instant::now();
+            match scene.run(target, body) {
+                Ok(r) => {
+                    runs += 1;
+                    let ok = r.passes();
+                    fails += usize::from(!ok);
+                    println!(
+                        "{r} {:>7.1} ms  {}",
+                        t.elapsed().as_secs_f64() * 1e3,
+                        if ok { "PASS" } else { "FAIL" }
+                    );
+                }
+                Err(e) => println!("{:<28} {target:<16} {body:<16} not run: {e}", scene.name()),
+            }
+            std::io::stdout().flush()?;
+        }
+    }
+    println!(
+        "ccd: {} of {runs} pass, {fails} fail ({:.1} s)\n",
+        runs - fails,
+        t0.elapsed().as_secs_f64()
+    );
+
+    // Characters.
+    let t0 = Instant::now();
+    let (mut runs, mut fails) = (0, 0);
+    println!(
+        "{:<18} {:<16} {:<30} {:>9} {:>9} {:>11}",
+        "walk", "ground", "quantity", "measured", "expected", "error"
+    );
+    for walk in Walk::standard() {
+        if !wanted(walk.name()) {
+            continue;
+        }
+        for ground in character::grounds(&codecs, &scaled) {
+            if !walk.has_ground(ground) || !keep(ground, ground) {
+                continue;
+            }
+            match walk.run(ground) {
+                Ok(r) => {
+                    runs += 1;
+                    let ok = r.passes();
+                    fails += usize::from(!ok);
+                    println!("{r}  {}", if ok { "PASS" } else { "FAIL" });
+                }
+                Err(e) => println!("{:<18} {ground:<16} not run: {e}", walk.name()),
+            }
+            std::io::stdout().flush()?;
+        }
+    }
+    println!(
+        "characters: {} of {runs} pass, {fails} fail ({:.1} s)",
+        runs - fails,
+        t0.elapsed().as_secs_f64()
+    );
     Ok(())
 }

@@ -40,7 +40,8 @@ use parry3d::math::{Rotation, Vector};
 use parry3d::shape::SharedShape;
 use rapier3d::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle};
 
-use super::slide::{self, Rep, SlideError, box_mesh, cube_mesh, icosphere_mesh};
+use super::slide::{self, CbvhMode, Rep, SlideError, box_mesh, cube_mesh, icosphere_mesh};
+use crate::codec::CodecKind;
 use crate::mesh::Mesh;
 
 /// Radius of the ball and the capsule, half side of the cube (m).
@@ -400,4 +401,52 @@ impl CcdScene {
             }
         }
     }
+}
+
+/// The scenes of the table: each projectile at 1 m/s (slow enough for the
+/// contacts alone: the control), 10, 60 and 360 m/s at an 8 × 8 wall, and
+/// the bar spinning at 30 and 120 rad/s into an 8 × 8 strip.
+pub fn standard() -> Vec<CcdScene> {
+    let mut all = Vec::new();
+    for projectile in Projectile::ALL {
+        for speed in [1.0, 10.0, 60.0, 360.0] {
+            all.push(CcdScene::Shot {
+                projectile,
+                speed,
+                cells: 8,
+            });
+        }
+    }
+    for omega in [30.0, 120.0] {
+        all.push(CcdScene::Spin { omega, cells: 8 });
+    }
+    all
+}
+
+/// The (surface, body) pairs of the table for `codecs` (and `scaled`
+/// codecs as [`Rep::Scaled`]), each cbvh one in both contact modes: a
+/// primitive body at every surface; a cbvh body of the surface's own
+/// representation at a cbvh surface, parry's convex hull at parry's
+/// `TriMesh`; and a plain cbvh body (both modes) at parry's `TriMesh`.
+pub fn pairings(codecs: &[CodecKind], scaled: &[CodecKind]) -> Vec<(Rep, Rep)> {
+    let mut targets = vec![Rep::TriMesh, Rep::TriMeshFixed];
+    for &kind in codecs {
+        targets.extend(CbvhMode::ALL.map(|m| Rep::Cbvh(kind, m)));
+    }
+    for &kind in scaled {
+        targets.extend(CbvhMode::ALL.map(|m| Rep::Scaled(kind, m)));
+    }
+    let mut all = Vec::new();
+    for t in targets {
+        all.push((t, Rep::Primitive));
+        if t.cbvh_mode().is_some() {
+            all.push((t, t));
+        } else {
+            all.push((t, Rep::Hull));
+        }
+    }
+    for m in CbvhMode::ALL {
+        all.push((Rep::TriMesh, Rep::Cbvh(CodecKind::Plain, m)));
+    }
+    all
 }

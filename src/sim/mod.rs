@@ -19,10 +19,14 @@
 //! - [`ccd`]: continuous collision in rapier: fast bodies shot at
 //!   zero-thickness walls and a spinning bar swept into a strip, each
 //!   [`ccd::CcdReport`] against the analytic first contact.
+//! - [`character`]: rapier's kinematic character controller walking a
+//!   capsule over terrain, ramps, stairs, a wall and a slope it snaps
+//!   down, each [`character::WalkReport`] against the geometry's answer.
 //! - [`timed`]: [`Timed`], the dispatcher wrapper that times the narrow
 //!   phase.
 
 pub mod ccd;
+pub mod character;
 pub mod droptest;
 pub mod slide;
 pub mod timed;

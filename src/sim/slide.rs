@@ -61,6 +61,8 @@ use crate::contact::PatchOptions;
 use crate::mesh::Mesh;
 use crate::parry::{CbvhShape, ContactMode, Dispatcher, ShapeBuildError, parry_trimesh};
 
+/// The factors of [`Rep::Scaled`]: non-uniform, and mirrored along y.
+pub const SCALED_BY: [f32; 3] = [2.0, -0.5, 1.25];
 /// Gravity's magnitude (m/s²), pointing down −y.
 pub const GRAVITY: f32 = 9.81;
 /// Friction of both colliders in [`Scene::slide`] and of the bowl scene.
@@ -406,6 +408,12 @@ pub enum Rep {
     /// [`BuildOptions`] and the codec's default options, its contacts in
     /// the mode.
     Cbvh(CodecKind, CbvhMode),
+    /// A [`CbvhShape`] as [`Rep::Cbvh`], built from the mesh with its
+    /// vertices divided by [`SCALED_BY`] and handed to rapier scaled back
+    /// by it ([`CbvhShape::scaled`]: a non-uniform, mirrored view over the
+    /// same tree). The shape is the scene's mesh again, so every scene's
+    /// answer holds for it.
+    Scaled(CodecKind, CbvhMode),
     /// parry's convex hull of the mesh's vertices, for a body: the same
     /// polyhedron as the mesh with parry's exact convex contacts, the
     /// reference for what a faceted body does (an icosphere rolls slower
@@ -426,6 +434,16 @@ impl Rep {
             Rep::Hull => "hull".into(),
             Rep::Cbvh(k, CbvhMode::Patches) => k.name().into(),
             Rep::Cbvh(k, CbvhMode::Pairs) => format!("{}-pairs", k.name()),
+            Rep::Scaled(k, CbvhMode::Patches) => format!("{}-scaled", k.name()),
+            Rep::Scaled(k, CbvhMode::Pairs) => format!("{}-scaled-pairs", k.name()),
+        }
+    }
+
+    /// The contact mode of a cbvh representation (`None` for parry's).
+    pub fn cbvh_mode(self) -> Option<CbvhMode> {
+        match self {
+            Rep::Cbvh(_, m) | Rep::Scaled(_, m) => Some(m),
+            _ => None,
         }
     }
 
@@ -476,6 +494,27 @@ impl Rep {
                 kind,
                 &AnyOptions::default(),
             )?),
+            Rep::Scaled(kind, _) => {
+                let s = SCALED_BY;
+                let unit = Mesh::new(
+                    mesh.vertices
+                        .iter()
+                        .map(|v| [v[0] / s[0], v[1] / s[1], v[2] / s[2]])
+                        .collect(),
+                    mesh.triangles.clone(),
+                );
+                let shape = CbvhShape::build(
+                    &unit,
+                    &BuildOptions::default(),
+                    kind,
+                    &AnyOptions::default(),
+                )?;
+                SharedShape::new(
+                    shape
+                        .scaled(Vector::from_array(s))
+                        .expect("SCALED_BY's factors are finite and non-zero"),
+                )
+            }
         })
     }
 }
@@ -501,10 +540,21 @@ impl FromStr for Rep {
             Some(c) => (c, CbvhMode::Pairs),
             None => (s, CbvhMode::Patches),
         };
+        let (codec, scaled) = match codec.strip_suffix("-scaled") {
+            Some(c) => (c, true),
+            None => (codec, false),
+        };
         let kind: CodecKind = codec.parse().map_err(|e| {
-            format!("{e} (or primitive, trimesh, trimesh-fixed; a codec may end in -pairs)")
+            format!(
+                "{e} (or primitive, trimesh, trimesh-fixed, hull; a codec may end in -scaled, \
+                 then in -pairs)"
+            )
         })?;
-        Ok(Rep::Cbvh(kind, mode))
+        Ok(if scaled {
+            Rep::Scaled(kind, mode)
+        } else {
+            Rep::Cbvh(kind, mode)
+        })
     }
 }
 
@@ -512,12 +562,16 @@ impl FromStr for Rep {
 /// representation on itself (a primitive on a primitive, a `TriMesh` on a
 /// `TriMesh`, a codec on the same codec in the same mode), a primitive
 /// body on every mesh ground, and the body's convex hull on the primitive
-/// ground (the faceted body's reference). A scene skips the grounds it has none of
-/// ([`Scene::has_ground`]).
-pub fn pairings(codecs: &[CodecKind]) -> Vec<(Rep, Rep)> {
+/// ground (the faceted body's reference). `scaled` codecs also run as
+/// [`Rep::Scaled`] shapes, in both modes. A scene skips the grounds it has
+/// none of ([`Scene::has_ground`]).
+pub fn pairings(codecs: &[CodecKind], scaled: &[CodecKind]) -> Vec<(Rep, Rep)> {
     let mut grounds = vec![Rep::TriMesh, Rep::TriMeshFixed];
     for &k in codecs {
         grounds.extend(CbvhMode::ALL.map(|m| Rep::Cbvh(k, m)));
+    }
+    for &k in scaled {
+        grounds.extend(CbvhMode::ALL.map(|m| Rep::Scaled(k, m)));
     }
     let mut all = vec![
         (Rep::Primitive, Rep::Primitive),
@@ -834,14 +888,14 @@ fn com_of(b: &RigidBody) -> Vector {
 /// A world with the scene's gravity and a dispatcher in the contact mode of
 /// the cbvh representation among `ground` and `body`.
 pub(super) fn new_world(ground: Rep, body: Rep) -> Result<PhysicsWorld, SlideError> {
-    let mode = match (ground, body) {
-        (Rep::Cbvh(_, a), Rep::Cbvh(_, b)) if a != b => {
+    let mode = match (ground.cbvh_mode(), body.cbvh_mode()) {
+        (Some(a), Some(b)) if a != b => {
             return Err(SlideError::ModeMismatch {
                 ground: ground.name(),
                 body: body.name(),
             });
         }
-        (Rep::Cbvh(_, m), _) | (_, Rep::Cbvh(_, m)) => m.contact_mode(),
+        (Some(m), _) | (_, Some(m)) => m.contact_mode(),
         _ => ContactMode::default(),
     };
     let mut world = PhysicsWorld {

@@ -10,7 +10,7 @@
 //! tunnels.
 //!
 //! The table of every pairing, parry's `TriMesh` included:
-//! `cargo run --release --features sims --example rapier_ccd`.
+//! `cargo run --release --features sims --example rapier_slide -- --scene shot` (and `spin`).
 
 use cbvh::codec::CodecKind;
 use cbvh::sim::ccd::{CcdReport, CcdScene, Projectile, SINK_TOLERANCE};
@@ -113,6 +113,38 @@ fn cbvh_balls_shot_at_cbvh_walls_meet_them_at_the_first_contact() {
             };
             reports.push(run(scene, rep, rep));
         }
+    }
+    check(&reports);
+}
+
+/// Scaled shapes ([`Rep::Scaled`]: a non-uniform, mirrored view) as the
+/// wall and as the fast body: the ball and the cube at 60 and 360 m/s, a
+/// primitive and a scaled cbvh body of the wall's codec and mode, and the
+/// bar spun into a scaled strip.
+#[test]
+fn scaled_cbvh_shapes_stop_fast_bodies_at_the_first_contact() {
+    let mut reports = Vec::new();
+    for rep in [
+        Rep::Scaled(CodecKind::Plain, CbvhMode::Patches),
+        Rep::Scaled(CodecKind::Hcc, CbvhMode::Pairs),
+        Rep::Scaled(CodecKind::Clbvh, CbvhMode::Patches),
+    ] {
+        for projectile in [Projectile::Ball, Projectile::Cube] {
+            for speed in [60.0, 360.0] {
+                let scene = CcdScene::Shot {
+                    projectile,
+                    speed,
+                    cells: 4,
+                };
+                reports.push(run(scene, rep, Rep::Primitive));
+                reports.push(run(scene, rep, rep));
+            }
+        }
+        let spin = CcdScene::Spin {
+            omega: 30.0,
+            cells: 4,
+        };
+        reports.push(run(spin, rep, Rep::Primitive));
     }
     check(&reports);
 }

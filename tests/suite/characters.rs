@@ -24,25 +24,16 @@ use cbvh::Mesh;
 use cbvh::build::BuildOptions;
 use cbvh::codec::racbvh::RacOptions;
 use cbvh::codec::{AnyOptions, CodecKind};
-use cbvh::parry::{CbvhShape, Dispatcher, parry_trimesh};
+use cbvh::parry::{CbvhShape, parry_trimesh};
+use cbvh::sim::character::{
+    self, DT, Frame, OFFSET, RADIUS, Walk, bottom, box_character, capsule, extrude, ramp_profile,
+    stairs, stepper, terrain_height, terrain_mesh, tilted_clearance, walker,
+};
+use cbvh::sim::slide::{CbvhMode, Rep};
 use parry3d::math::{Pose, Real, Vector};
 use parry3d::query::{DefaultQueryDispatcher, QueryDispatcher};
-use parry3d::shape::{Capsule, Cuboid, SharedShape, TriMesh};
-use rapier3d::control::{CharacterAutostep, CharacterLength, KinematicCharacterController};
-use rapier3d::prelude::{
-    ColliderBuilder, NarrowPhase, PhysicsWorld, QueryFilter, RigidBodyBuilder,
-};
-
-const DT: Real = 1.0 / 60.0;
-/// The capsule: half height 0.3 and radius 0.2, 1 m tall.
-const HALF_HEIGHT: Real = 0.3;
-const RADIUS: Real = 0.2;
-/// The controller's default offset: 1 % of the character's height.
-const OFFSET: Real = 0.01;
-
-fn capsule() -> Capsule {
-    Capsule::new_y(HALF_HEIGHT, RADIUS)
-}
+use parry3d::shape::{Cuboid, SharedShape, TriMesh};
+use rapier3d::control::KinematicCharacterController;
 
 /// The characters of the wall: the capsule, and a box as tall and as deep
 /// (its bottom as far below its centre, its front as far ahead), so that
@@ -50,75 +41,8 @@ fn capsule() -> Capsule {
 fn characters() -> [(&'static str, SharedShape); 2] {
     [
         ("capsule", SharedShape::new(capsule())),
-        (
-            "box",
-            SharedShape::cuboid(RADIUS, HALF_HEIGHT + RADIUS, RADIUS),
-        ),
+        ("box", SharedShape::new(box_character())),
     ]
-}
-
-/// The height of the capsule's lowest point when its centre is at `y`.
-fn bottom(y: Real) -> Real {
-    y - HALF_HEIGHT - RADIUS
-}
-
-/// A surface extruded along x from a profile of (z, y) points, from
-/// `x = -w` to `x = w`, `cells` quads across and each profile segment
-/// split into segments of at most `step` along it, wound so that the
-/// normal of a rising or flat segment points up.
-fn extrude(profile: &[(Real, Real)], w: Real, cells: usize, step: Real) -> Mesh {
-    let mut points = vec![profile[0]];
-    for p in profile.windows(2) {
-        let ((z0, y0), (z1, y1)) = (p[0], p[1]);
-        let n = (((z1 - z0).hypot(y1 - y0) / step).ceil() as usize).max(1);
-        for i in 1..=n {
-            let t = i as Real / n as Real;
-            points.push((z0 + (z1 - z0) * t, y0 + (y1 - y0) * t));
-        }
-    }
-    let mut vertices = vec![];
-    for &(z, y) in &points {
-        for i in 0..=cells {
-            let x = -w + 2.0 * w * i as Real / cells as Real;
-            vertices.push([x, y, z]);
-        }
-    }
-    let at = |j: usize, i: usize| (j * (cells + 1) + i) as u32;
-    let mut triangles = vec![];
-    for j in 0..points.len() - 1 {
-        for i in 0..cells {
-            triangles.push([at(j, i), at(j + 1, i), at(j + 1, i + 1)]);
-            triangles.push([at(j, i), at(j + 1, i + 1), at(j, i + 1)]);
-        }
-    }
-    Mesh::new(vertices, triangles)
-}
-
-/// The gently rolling terrain's height: amplitude 0.3 m over 16 m.
-fn terrain_height(x: Real, z: Real) -> Real {
-    0.3 * (0.35 * x).sin() * (0.25 * z + 0.5).cos() + 0.1 * (0.2 * (x + z)).sin()
-}
-
-/// The terrain as a 32 x 32-cell heightfield mesh over [-8, 8]².
-fn terrain_mesh() -> Mesh {
-    let n = 32;
-    let coord = |i: usize| -8.0 + 16.0 * i as Real / n as Real;
-    let mut vertices = vec![];
-    for j in 0..=n {
-        for i in 0..=n {
-            let (x, z) = (coord(i), coord(j));
-            vertices.push([x, terrain_height(x, z), z]);
-        }
-    }
-    let at = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-    let mut triangles = vec![];
-    for j in 0..n {
-        for i in 0..n {
-            triangles.push([at(i, j), at(i, j + 1), at(i + 1, j + 1)]);
-            triangles.push([at(i, j), at(i + 1, j + 1), at(i + 1, j)]);
-        }
-    }
-    Mesh::new(vertices, triangles)
 }
 
 /// What the ground is made of, for one run.
@@ -205,12 +129,8 @@ fn grounds(mesh: &Mesh, boxes: Option<Vec<(Cuboid, Pose)>>) -> Vec<(String, Grou
     out
 }
 
-/// One frame of a walk: the capsule's centre after the move, and the
-/// controller's grounded flag.
-type Frame = (Vector, bool);
-
 /// Walks `character` from `start` for `frames` frames, asking for
-/// `desired(frame)` each frame, over `ground`.
+/// `desired(frame)` each frame, over `ground` ([`character::walk`]).
 fn walk(
     character: &SharedShape,
     ground: &Ground,
@@ -219,55 +139,17 @@ fn walk(
     frames: usize,
     desired: impl Fn(usize) -> Vector,
 ) -> Vec<Frame> {
-    let mut world = PhysicsWorld {
-        narrow_phase: NarrowPhase::with_query_dispatcher(Dispatcher::default().then_default()),
-        ..Default::default()
+    let colliders: Vec<(SharedShape, Pose)> = match ground {
+        Ground::Cbvh(s, _) => vec![(SharedShape::new(s.clone()), Pose::IDENTITY)],
+        Ground::TriMesh(t) => vec![(SharedShape::new((**t).clone()), Pose::IDENTITY)],
+        Ground::Boxes(boxes) => boxes
+            .iter()
+            .map(|(b, p)| (SharedShape::new(*b), *p))
+            .collect(),
     };
-    match ground {
-        Ground::Cbvh(s, _) => {
-            world
-                .colliders
-                .insert(ColliderBuilder::new(SharedShape::new(s.clone())));
-        }
-        Ground::TriMesh(t) => {
-            world
-                .colliders
-                .insert(ColliderBuilder::new(SharedShape::new((**t).clone())));
-        }
-        Ground::Boxes(boxes) => {
-            for (b, pose) in boxes {
-                world
-                    .colliders
-                    .insert(ColliderBuilder::new(SharedShape::new(*b)).position(*pose));
-            }
-        }
-    }
-    let body = world
-        .bodies
-        .insert(RigidBodyBuilder::kinematic_position_based().translation(start));
-    world.colliders.insert_with_parent(
-        ColliderBuilder::new(character.clone()),
-        body,
-        &mut world.bodies,
-    );
-    world.step();
-    let mut track = vec![];
-    for f in 0..frames {
-        let pos = *world.bodies[body].position();
-        let filter = QueryFilter::default().exclude_rigid_body(body);
-        let q = world.broad_phase.as_query_pipeline(
-            world.narrow_phase.query_dispatcher(),
-            &world.bodies,
-            &world.colliders,
-            filter,
-        );
-        let m = controller.move_shape(DT, &q, &*character.0, &pos, desired(f), |_| {});
-        let next = pos.translation + m.translation;
-        world.bodies[body].set_next_kinematic_translation(next);
-        world.step();
-        track.push((next, m.grounded));
-    }
-    track
+    character::walk(
+        None, character, &colliders, controller, start, frames, desired,
+    )
 }
 
 /// The distance from the capsule at `centre` to the ground `t` (parry's
@@ -380,13 +262,6 @@ fn compare(
     runs
 }
 
-fn walker() -> KinematicCharacterController {
-    KinematicCharacterController {
-        offset: CharacterLength::Absolute(OFFSET),
-        ..Default::default()
-    }
-}
-
 /// Walking 4 m/s with a 2 m/s fall across the rolling terrain: the capsule
 /// stays on it, its bottom an offset above the surface under it (plus what
 /// the tilt adds: a ball on a slope of angle a rests (r + offset)/cos a
@@ -432,22 +307,6 @@ fn a_capsule_walks_over_a_tessellated_terrain_as_over_a_trimesh() {
             "{name}: travelled {travel}"
         );
     }
-}
-
-/// Where a ball of the capsule's radius, `OFFSET` off a plane tilted by
-/// `angle`, has its lowest point above the plane point under its centre.
-fn tilted_clearance(angle: Real) -> Real {
-    (RADIUS + OFFSET) / angle.cos() - RADIUS
-}
-
-/// A floor at 0 up to z = 0, a ramp of `angle` degrees up to `height`,
-/// then a plateau, 6 m wide.
-fn ramp_profile(angle: Real, height: Real) -> (Vec<(Real, Real)>, Real) {
-    let run = height / angle.to_radians().tan();
-    (
-        vec![(-4.0, 0.0), (0.0, 0.0), (run, height), (run + 4.0, height)],
-        run,
-    )
 }
 
 /// Walking uphill at 3 m/s (falling at 2 m/s): a 30-degree ramp, under
@@ -517,31 +376,6 @@ fn a_capsule_climbs_a_ramp_below_the_climb_angle_and_not_one_above() {
     }
 }
 
-/// The stairs' profile: a floor at 0 up to z = 0, then `steps` steps of
-/// `rise` and 0.5 m deep, then a landing; and the same stairs as boxes
-/// (a floor slab and one box per step, from its riser to the far end).
-fn stairs(rise: Real, steps: usize) -> (Mesh, Vec<(Cuboid, Pose)>, Real) {
-    let depth = 0.5;
-    let end = steps as Real * depth + 4.0;
-    let mut profile = vec![(-4.0, 0.0), (0.0, 0.0)];
-    let mut boxes = vec![(
-        Cuboid::new(Vector::new(3.0, 0.5, (end + 4.0) / 2.0)),
-        Pose::from_translation(Vector::new(0.0, -0.5, (end - 4.0) / 2.0)),
-    )];
-    for i in 0..steps {
-        let z = i as Real * depth;
-        let h1 = (i + 1) as Real * rise;
-        profile.push((z, h1));
-        profile.push((z + depth, h1));
-        boxes.push((
-            Cuboid::new(Vector::new(3.0, h1 / 2.0, (end - z) / 2.0)),
-            Pose::from_translation(Vector::new(0.0, h1 / 2.0, (end + z) / 2.0)),
-        ));
-    }
-    profile.push((end, steps as Real * rise));
-    (extrude(&profile, 3.0, 6, 0.25), boxes, steps as Real * rise)
-}
-
 /// With autostep (at most 0.25 m up, 0.3 m of room) and snapping to the
 /// ground, walking at 2 m/s: four 0.15 m steps are climbed to the
 /// landing, as over the same stairs made of boxes; one 0.4 m step is not,
@@ -554,14 +388,7 @@ fn stairs(rise: Real, steps: usize) -> (Mesh, Vec<(Cuboid, Pose)>, Real) {
 /// on parry's boxes.)
 #[test]
 fn a_capsule_autosteps_low_stairs_and_not_a_high_one() {
-    let controller = KinematicCharacterController {
-        autostep: Some(CharacterAutostep {
-            max_height: CharacterLength::Absolute(0.25),
-            min_width: CharacterLength::Absolute(0.3),
-            include_dynamic_bodies: true,
-        }),
-        ..walker()
-    };
+    let controller = stepper();
     let start = Vector::new(0.0, bottom(0.0).abs() + OFFSET + 0.02, -1.0);
     let desired = |_| Vector::new(0.0, 0.0, 2.0) * DT;
     for (rise, steps, climbs) in [(0.15, 4, true), (0.4, 1, false)] {
@@ -616,22 +443,7 @@ fn a_capsule_autosteps_low_stairs_and_not_a_high_one() {
 /// same floor and wall made of boxes.
 #[test]
 fn a_character_slides_along_a_wall_and_does_not_pass_through() {
-    let mesh = extrude(
-        &[(-4.0, 0.0), (2.0, 0.0), (2.0, 3.0), (4.0, 3.0)],
-        6.0,
-        12,
-        0.25,
-    );
-    let boxes = vec![
-        (
-            Cuboid::new(Vector::new(6.0, 0.5, 4.0)),
-            Pose::from_translation(Vector::new(0.0, -0.5, 0.0)),
-        ),
-        (
-            Cuboid::new(Vector::new(6.0, 1.5, 1.0)),
-            Pose::from_translation(Vector::new(0.0, 1.5, 3.0)),
-        ),
-    ];
+    let (mesh, boxes) = character::wall();
     let start = Vector::new(-2.0, bottom(0.0).abs() + OFFSET + 0.02, 0.0);
     let desired = |_| Vector::new(2.0, -2.0, 3.0) * DT;
     let frames = 120;
@@ -683,15 +495,8 @@ fn a_character_slides_along_a_wall_and_does_not_pass_through() {
 /// to the floor; without snapping it walks off into the air.
 #[test]
 fn a_capsule_snaps_to_the_ground_walking_down_a_slope() {
-    let angle = 20.0f32;
-    let slope = angle.to_radians();
-    let run = 1.0 / slope.tan();
-    let mesh = extrude(
-        &[(-4.0, 1.0), (0.0, 1.0), (run, 0.0), (run + 4.0, 0.0)],
-        3.0,
-        6,
-        0.25,
-    );
+    let slope = character::SNAP_SLOPE_DEG.to_radians();
+    let (mesh, run) = character::snap_slope();
     let ground = |z: Real| (1.0 - z.max(0.0) * slope.tan()).max(0.0);
     let start = Vector::new(0.0, 1.0 + bottom(0.0).abs() + OFFSET, -1.0);
     let desired = |_| Vector::new(0.0, 0.0, 3.0) * DT;
@@ -742,4 +547,32 @@ fn a_capsule_snaps_to_the_ground_walking_down_a_slope() {
         !grounded && bottom(p.y) > 0.5,
         "no snap: at {p:?}, grounded {grounded}"
     );
+}
+
+/// Every walk of [`Walk::standard`] over cbvh grounds (plain and hcc in
+/// both modes, clbvh, and scaled shapes: non-uniform and mirrored) meets
+/// the geometry's answer as [`Walk::judge`] measures it (the table's
+/// rows: `rapier_slide -- --scene walk`), as it does over parry's
+/// `TriMesh`.
+#[test]
+fn every_walk_meets_the_geometrys_answer_on_plain_compressed_and_scaled_grounds() {
+    let grounds = [
+        Rep::TriMesh,
+        Rep::Cbvh(CodecKind::Plain, CbvhMode::Patches),
+        Rep::Cbvh(CodecKind::Hcc, CbvhMode::Pairs),
+        Rep::Cbvh(CodecKind::Clbvh, CbvhMode::Patches),
+        Rep::Scaled(CodecKind::Plain, CbvhMode::Patches),
+        Rep::Scaled(CodecKind::Hcc, CbvhMode::Pairs),
+    ];
+    let mut failed = vec![];
+    for walk in Walk::standard() {
+        for ground in grounds {
+            let r = walk.run(ground).unwrap();
+            eprintln!("{r}");
+            if !r.passes() {
+                failed.push(r.to_string());
+            }
+        }
+    }
+    assert!(failed.is_empty(), "failing walks:\n{}", failed.join("\n"));
 }
