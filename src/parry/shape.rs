@@ -336,10 +336,10 @@ impl CbvhShape {
     ///   zero thickness in one step. A slab of thickness `t` gives `1.5 t`.
     ///   A non-convex body's thin parts (a statue's fingers) can be thinner
     ///   than this average.
-    /// - An open mesh (a surface, a sheet, a terrain piece): infinite, as
-    ///   rapier takes parry's `TriMesh`: such a body is never swept and
-    ///   relies on its speculative contacts. Its real thickness is zero, and
-    ///   a zero here would sweep it on every step it moves, resting or not.
+    /// - An open mesh (a surface, a sheet, a terrain piece): infinite: such
+    ///   a body is never swept and relies on its speculative contacts. Its
+    ///   real thickness is zero, and a zero here (parry's `TriMesh` answers
+    ///   0) sweeps it on every step it moves, resting or not.
     ///
     /// As a sweep's *target* (a fast body against a cbvh wall, floor or
     /// level, closed or open), rapier calls the dispatcher's nonlinear
