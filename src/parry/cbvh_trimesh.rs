@@ -22,7 +22,7 @@ use super::shape::{CbvhShape, from_parry_aabb, to_parry_triangle};
 use super::workspace::ManifoldUpdate;
 use parry3d::query::details::NormalConstraints;
 
-use super::cones::{EdgeCone, MeshNeighbours};
+use super::cones::EdgeCone;
 use crate::contact::edges::ALL_ACTIVE;
 use crate::contact::{Facing, PairFacing, PairKernel, PatchOptions, PatchSet};
 use crate::cursor::TraversalStats;
@@ -91,11 +91,7 @@ pub fn patches(
     );
     let mut kernel = PairKernel::new(prediction)
         .exact_separation(false)
-        .oriented(Some(facing))
-        .neighbours(Some(std::sync::Arc::new(MeshNeighbours {
-            a: mesh.clone(),
-            b: None,
-        })));
+        .oriented(Some(facing));
     let query = from_parry_aabb(&tm.compute_aabb(tm_in_mesh)).loosened(prediction);
     let mut stats = TraversalStats::default();
     with_cursor!(mesh, |c| {

@@ -6,7 +6,7 @@
 use std::collections::BTreeSet;
 
 use cbvh::build::BuildOptions;
-use cbvh::contact::orient::{SideCache, oriented_axis_near};
+use cbvh::contact::orient::oriented_axis;
 use cbvh::contact::{
     ContactSink, PairContact, PairKernel, PatchOptions, PatchSet, pair_contact, triangles_intersect,
 };
@@ -244,22 +244,11 @@ fn patches_cover_every_pair_parry_reports() {
                 .contact_manifolds(&pos12, &t1, &t2, prediction, &mut pm, &mut None)
                 .unwrap();
             let facing = cbvh_cbvh::pair_facing(&pose_from_parry(&pos12), &c1, &c2);
-            // The rule as the patches apply it: with the neighbours that
-            // bound a lean over a shared edge.
-            let neighbours = cbvh_cbvh::neighbours_of(&c1, &c2, &pose_from_parry(&pos12));
             let oriented = |i: u32, j: u32| {
                 let b = moved(&tri_of(&turbine, j), &pos12);
                 let (fa, fb) = (c1.edge_flags_of(i), c2.edge_flags_of(j));
-                oriented_axis_near(
-                    (&tri_of(&statue, i), i, fa),
-                    (&b, j, fb),
-                    &facing,
-                    prediction,
-                    None,
-                    &mut SideCache::new(),
-                    Some(neighbours.as_ref()),
-                )
-                .filter(|o| o.sep <= prediction)
+                oriented_axis(&tri_of(&statue, i), fa, &b, fb, &facing, prediction)
+                    .filter(|o| o.sep <= prediction)
             };
             let parry_pairs: BTreeSet<(u32, u32)> = pm
                 .iter()
@@ -326,8 +315,7 @@ fn patches_cover_every_pair_parry_reports() {
                     // takes the separating-axis bound for separated pairs).
                     let mut kernel = PairKernel::new(prediction)
                         .exact_separation(false)
-                        .oriented(Some(facing))
-                        .neighbours(Some(neighbours.clone()));
+                        .oriented(Some(facing));
                     let mut c = None;
                     let mut sink = |x: &cbvh::contact::PairContact| c = Some(*x);
                     let (fa, fb) = (c1.edge_flags_of(i), c2.edge_flags_of(j));

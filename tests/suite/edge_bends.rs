@@ -32,15 +32,15 @@
 //! The valleys, the wall, parry's cuboid over both ridges, and the
 //! ball's distance, contacts, speed and predicted contact at a ridge pass
 //! in every codec and both modes: a normal leaning over a shared edge
-//! leans no further than the neighbour's face normal (over a sharp edge
-//! only, cbvh against cbvh), and a pair whose separating axis leans past
-//! it leaves the contact to the neighbour
-//! (issue 49). A cbvh box passes in one mode and not the other over the
-//! 10° ridge (fails in the patch mode, 1.45 mm for a step) and the 3°
-//! ridge (fails per pair, 1.73 mm), and fails the 3° valley in both
-//! (1.70 mm in the patch mode, a 0.026 m/s kick per pair): those tests
-//! are `#[ignore]`d with what fails in their doc comments, and run with
-//! `-- --ignored`.
+//! leans no further than the neighbour's face normal (cbvh against cbvh:
+//! over a sharp edge, in the per-pair mode), and a pair whose separating
+//! axis leans past it leaves the contact to the neighbour
+//! (issue 49). A cbvh box (cbvh against cbvh) passes the 10° ridge in the
+//! per-pair mode, and fails it in the patch mode (a 0.085 m/s kick), the
+//! 3° ridge (18.6 mm up in the patch mode, 1.73 mm down per pair) and the
+//! 3° valley (1.70 mm in the patch mode, a 0.026 m/s kick per pair):
+//! those tests are `#[ignore]`d with what fails in their doc comments, and
+//! run with `-- --ignored`.
 //!
 //! Run with `-- --nocapture` for the table of figures.
 
@@ -683,19 +683,21 @@ fn a_cuboid_crosses_a_3_degree_ridge_without_a_bump() {
     crosses_without_a_bump(3.0, Fold::Convex, Body::Cuboid);
 }
 
-/// Fails in the per-pair mode only (1.73 mm into the ridge, every codec);
-/// the patch mode passes (0.89 mm; issue 49: thrown 18.6 mm up as its
-/// front reached the ridge, where the box's side triangles, beside the
-/// down triangle, met it along its face normal with the depth of the plane
-/// it spans, which lies above the flat half behind the crease; such a
-/// pair's separating axis leans past the bend of the box's own sharp
-/// bottom edge, and the pair now leaves the contact to the box's bottom).
-/// Per pair, the box sinks from the step its front passes the crease
+/// Fails in both modes. In the patch mode the box's side triangles,
+/// beside the down triangle, meet it along its face normal with the depth
+/// of the plane it spans, which lies above the flat half behind the
+/// crease: the box is thrown 18.6 mm up as its front reaches the ridge.
+/// With the neighbour lookups of the per-pair mode (such a pair's
+/// separating axis leans past the bend of the box's own sharp bottom
+/// edge, and the pair leaves the contact to the box's bottom) it passed
+/// (0.89 mm), but the lookups made the patch narrow phase about three
+/// times slower, so the patch mode does without them. Per pair the box
+/// sinks 1.73 mm into the ridge from the step its front passes the crease,
 /// while every manifold but one (the down triangle's with the box's front
 /// face, along the down half's normal) has the normal `(0, 1, 0)`, at a
 /// steady `vy = -0.0267` m/s (`-v tan 3°`); the cause is not found.
 #[test]
-#[ignore = "issue 49: in the per-pair mode a cbvh box sinks 1.7 mm into a 3° ridge (see the doc comment)"]
+#[ignore = "issue 49: a cbvh box is thrown up 18.6 mm (patch mode) or sinks 1.7 mm (per pair) at a 3° ridge (see the doc comment)"]
 fn a_cbvh_box_crosses_a_3_degree_ridge_without_a_bump() {
     crosses_without_a_bump(3.0, Fold::Convex, Body::CbvhBox);
 }
@@ -713,21 +715,20 @@ fn a_cuboid_crosses_a_10_degree_ridge_without_a_bump() {
     crosses_without_a_bump(10.0, Fold::Convex, Body::Cuboid);
 }
 
-/// Fails in the patch mode on plain, clbvh and hcc only: the box's bottom
-/// stays at the flat half's level for the step in which its back passes
-/// the crease, 1.45 mm above the support at `x = 0.258` (tolerance 1 mm;
-/// then it follows the slope). At `x = 0.25` the flat half's pair with
-/// the box's bottom triangle still gives `(0, 1, 0)` at the crease: the
-/// box rests 0.02 mm into the flat half, so the pair's separating axis is
-/// the flat half's back, not the crease's in-plane normal that leans past
-/// the down half's normal. No bump any more (issue 49: an active edge
-/// accepted a normal up to about 96° from its face, in
-/// `src/contact/orient.rs` as in `EdgeCone`; the box's bottom triangles
-/// met the down triangle's crease along its in-plane edge normal and the
-/// box was kicked up at 0.085 m/s in the patch mode, 0.034 m/s per pair).
-/// The per-pair mode and racbvh and hcc-ooc in the patch mode pass.
+/// Fails in the patch mode only; the per-pair mode passes in every codec.
+/// cbvh against cbvh orients each triangle pair's normal in
+/// `src/contact/orient.rs`, where an active edge accepts a normal up to
+/// about 96° from its face: the box's bottom triangles meet the down
+/// triangle's crease along its in-plane edge normal and the box is kicked
+/// up (0.085 m/s). The per-pair mode passes a lookup of the neighbours
+/// (`cbvh::contact::Neighbours`), which bounds the lean at the down half's
+/// neighbour, the flat half (issue 49: 0.034 m/s per pair before). With
+/// the same lookups the patch mode was 1.45 mm above the support for one
+/// step, as the box's back passed the crease (plain, clbvh, hcc; tolerance
+/// 1 mm), and its narrow phase about three times slower, so it does
+/// without them.
 #[test]
-#[ignore = "issue 49: in the patch mode a cbvh box hangs 1.45 mm over a 10° ridge for a step (see the doc comment)"]
+#[ignore = "issue 49: in the patch mode a cbvh box catches on an active 10° ridge (see the doc comment)"]
 fn a_cbvh_box_crosses_a_10_degree_ridge_without_a_bump() {
     crosses_without_a_bump(10.0, Fold::Convex, Body::CbvhBox);
 }
