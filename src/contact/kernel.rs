@@ -43,7 +43,7 @@ use glam::Vec3A;
 
 use super::features::clip_to_prism;
 pub use super::features::{closest_on_segments, closest_points};
-use super::orient::{OrientedAxis, PairFacing, SideCache, oriented_axis_cached};
+use super::orient::{Neighbours, OrientedAxis, PairFacing, SideCache, oriented_axis_near};
 use super::sat::{Batch, Corners, sat_dispatch};
 pub use super::sat::{LANES, Simd};
 use crate::geom::Triangle;
@@ -186,6 +186,8 @@ pub struct PairKernel {
     facing: Option<PairFacing>,
     /// Side A of the last oriented pair, for the next (see [`SideCache`]).
     sides: SideCache,
+    /// Where oriented pairs find their triangles' neighbours.
+    neighbours: Option<std::sync::Arc<dyn Neighbours>>,
     /// Work counters since creation.
     pub stats: KernelStats,
 }
@@ -216,6 +218,7 @@ impl PairKernel {
             exact: true,
             facing: None,
             sides: SideCache::new(),
+            neighbours: None,
             stats: KernelStats::default(),
         }
     }
@@ -239,6 +242,16 @@ impl PairKernel {
     /// takes the axis that separates most, either way round.
     pub fn oriented(mut self, facing: Option<PairFacing>) -> Self {
         self.facing = facing;
+        self
+    }
+
+    /// Where [`oriented`](Self::oriented) pairs find the triangles that
+    /// share their edges: a normal leaning over a shared edge then leans
+    /// no further than the neighbour's face normal
+    /// ([`super::orient::oriented_axis_near`]). `None` (the default): as
+    /// far as the flags allow.
+    pub fn neighbours(mut self, neighbours: Option<std::sync::Arc<dyn Neighbours>>) -> Self {
+        self.neighbours = neighbours;
         self
     }
 
@@ -363,15 +376,14 @@ impl PairKernel {
                     sep,
                     axis,
                 };
-                let Some(o) = oriented_axis_cached(
-                    &a,
-                    fa,
-                    &b,
-                    fb,
+                let Some(o) = oriented_axis_near(
+                    (&a, i, fa),
+                    (&b, j, fb),
                     facing,
                     self.prediction,
                     Some(hint),
                     &mut self.sides,
+                    self.neighbours.as_deref(),
                 ) else {
                     continue;
                 };

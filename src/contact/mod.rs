@@ -35,5 +35,5 @@ pub use kernel::{
     triangles_intersect,
 };
 pub use motion::MotionBound;
-pub use orient::{Facing, PairFacing};
+pub use orient::{Facing, Neighbours, PairFacing};
 pub use patch::{Patch, PatchOptions, PatchPoint, PatchSet, Region, opposed_losers};

@@ -64,6 +64,36 @@
 //! apart as millimetres deep. Such pairs give no contact; the triangles
 //! that do lie over each other give the contact.
 //!
+//! # Neighbours
+//!
+//! The flags say which edges are sharp, not how far the surface turns
+//! there. Given a lookup of the triangle sharing an edge ([`Neighbours`],
+//! [`oriented_axis_near`]; the per-pair mode passes one, the patch mode
+//! does not: on a statue resting on a CAD turbine most pairs asked for a
+//! lookup at the turbine's sharp edges, and the patch narrow phase took
+//! about three times as long), a normal
+//! leaning over a sharp edge (active from this side only) leans no further
+//! than that neighbour's face normal, where the edge's normal cone ends
+//! (the lookup runs only for an edge a tested axis leans over):
+//!
+//! - an active edge accepts a lean only up to there, so a box coming over
+//!   a ridge's flat half does not meet the down half's crease along its
+//!   in-plane edge normal, 80° from the vertical (a kick up);
+//! - a pair whose plain axis (the direction it separates along, or
+//!   penetrates least) leans past the neighbour's face normal at a sharp
+//!   edge gives no contact: the other triangle lies beyond the neighbour,
+//!   whose own pair with it gives the contact (Jolt's internal-edge
+//!   removal drops such contacts likewise);
+//! - a pair whose best axis is the neighbour's face normal itself, the
+//!   other triangle touching with an edge or a corner, gives none either:
+//!   the neighbour's pair gives it along its own face.
+//!
+//! Edges within the flat angle keep the rule above (the face normal): a
+//! bound there too (a lean up to the few degrees a convex crease turns)
+//! made a block rocking on a tessellated dome and an icosphere rolling on
+//! a tessellated ramp lose contacts (`physics::rock_low_holds`,
+//! `physics::roll_15deg_64x64`).
+//!
 //! The cone angle is the flat angle of the edge flags: a corner of a finely
 //! tessellated sphere is inactive, and the faces around it lie within that
 //! angle of the plane it rests on, so the plane's normal is accepted.
@@ -146,12 +176,57 @@ pub struct OrientedAxis {
 /// the module docs).
 const OUTWARD_MIN: f32 = -0.1;
 
+/// Where the triangle sharing an edge is found, so that a normal leaning
+/// over the edge leans no further than that triangle's face normal (the
+/// edge's normal cone ends there). The flags say which edges are shared;
+/// the neighbour is looked up only for an edge a normal leans over.
+pub trait Neighbours: Send + Sync {
+    /// The corner, off the edge, of the triangle sharing edge `k` (corner
+    /// `k` to `k + 1`) of triangle `t` (id `id` of side B when `b`, else of
+    /// side A; given in A's frame), in A's frame; `None` without one.
+    fn apex(&self, b: bool, id: u32, t: &Triangle, k: usize) -> Option<Vec3A>;
+}
+
+/// The cosine and sine of the bend at edge `k` of `t` (unit normal `out`
+/// of the side it faces, edge `k`'s unit in-plane outward normal `m`)
+/// toward the neighbour's corner `w`: the neighbour's face normal on that
+/// side is `out · c + m · s` (`s < 0`: concave from that side).
+pub fn bend_toward(t: &Triangle, k: usize, out: Vec3A, m: Vec3A, w: Vec3A) -> Option<(f32, f32)> {
+    let (a, b) = (t[k], t[(k + 1) % 3]);
+    let e = b - a;
+    let v = w - a;
+    let v = (v - e * (v.dot(e) / e.length_squared())).try_normalize()?;
+    Some((v.dot(m), -v.dot(out)))
+}
+
+/// How far past the neighbour's face normal a lean is still taken as
+/// within it (rounding; about 0.006°).
+const BEND_SLACK: f32 = 1e-4;
+
+/// How a direction leans over a shared edge, against the neighbour's face
+/// normal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Lean {
+    /// Not over the edge.
+    None,
+    /// Over it, short of the neighbour's face normal.
+    Within,
+    /// Along the neighbour's face normal (within rounding).
+    End,
+    /// Past it: out of the edge's normal cone.
+    Past,
+}
+
 /// How a triangle's support feature accepted an axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Support {
     Face,
     Active,
     Inactive,
+    /// A shared edge, the axis exactly its neighbour's face normal (the
+    /// end of the edge's normal cone): the neighbour, paired with the same
+    /// triangle, gives that contact along its own face.
+    ConeEnd,
 }
 
 /// One side of the pair, ready for the tests. What only some pairs need
@@ -177,6 +252,14 @@ struct Side {
     slack: f32,
     near: OnceCell<Aabb>,
     in_plane: OnceCell<[Option<Vec3A>; 3]>,
+    /// The triangle's id, and whether it is side B (for [`Neighbours`]).
+    id: u32,
+    is_b: bool,
+    /// Sharp edges: active from this side only (convex), shared with one
+    /// neighbour that bounds a lean over them.
+    shared: u8,
+    /// The bend at each shared edge, looked up on first use.
+    bends: [OnceCell<Option<(f32, f32)>>; 3],
 }
 
 impl Facing {
@@ -198,14 +281,32 @@ impl Facing {
 }
 
 impl Side {
+    #[cfg(test)]
     fn new(t: &Triangle, flags: u8, facing: Facing, slack: f32) -> Option<Self> {
+        Self::with_id(t, flags, facing, slack, 0, false)
+    }
+
+    fn with_id(
+        t: &Triangle,
+        flags: u8,
+        facing: Facing,
+        slack: f32,
+        id: u32,
+        is_b: bool,
+    ) -> Option<Self> {
         let raw = (t[1] - t[0]).cross(t[2] - t[0]).try_normalize()?;
         let sign = facing.sign(t, raw);
+        let active = side_bits(flags, sign > 0.0);
+        let other = side_bits(flags, sign <= 0.0);
         Some(Self {
             t: *t,
             raw,
             out: raw * sign,
-            active: side_bits(flags, sign > 0.0),
+            active,
+            id,
+            is_b,
+            shared: active & !other,
+            bends: Default::default(),
             rounding: 1e-6 * t[0].abs().max(t[1].abs()).max(t[2].abs()).max_element(),
             slack,
             near: OnceCell::new(),
@@ -348,9 +449,81 @@ impl Side {
         })
     }
 
+    /// The bend at shared edge `k` (see [`bend_toward`]), `None` when the
+    /// edge is not shared, there is no lookup, or no neighbour.
+    fn bend(&self, k: usize, nb: Option<&dyn Neighbours>) -> Option<(f32, f32)> {
+        if self.shared & (1 << k) == 0 {
+            return None;
+        }
+        let nb = nb?;
+        *self.bends[k].get_or_init(|| {
+            let w = nb.apex(self.is_b, self.id, &self.t, k)?;
+            let m = (self.t[(k + 1) % 3] - self.t[k])
+                .cross(self.raw)
+                .try_normalize()?;
+            bend_toward(&self.t, k, self.out, m, w)
+        })
+    }
+
+    /// Whether the unit `n` leans over edge `k` no further than the
+    /// neighbour's face normal (`(c, s)`, [`bend`](Self::bend)), and by
+    /// more than rounding.
+    fn leans_within(&self, k: usize, n: Vec3A, (c, s): (f32, f32)) -> Lean {
+        let m = (self.t[(k + 1) % 3] - self.t[k])
+            .cross(self.raw)
+            .normalize_or_zero();
+        let (d, x) = (n.dot(self.out), n.dot(m));
+        let past = x * c - d * s;
+        if x <= 1e-6 {
+            Lean::None
+        } else if past > BEND_SLACK {
+            Lean::Past
+        } else if past >= -BEND_SLACK {
+            Lean::End
+        } else {
+            Lean::Within
+        }
+    }
+
+    /// Whether the feature farthest along `n` (a unit direction out of this
+    /// side) is a shared edge that `n` leans over past the neighbour's face
+    /// normal: out of the edge's normal cone, on the neighbour's side.
+    fn past_bend(&self, n: Vec3A, nb: Option<&dyn Neighbours>) -> bool {
+        if nb.is_none() || self.shared == 0 {
+            return false;
+        }
+        let p = self.t.map(|v| n.dot(v));
+        let max = p[0].max(p[1]).max(p[2]);
+        let min = p[0].min(p[1]).min(p[2]);
+        let eps = 1e-4 * (max - min) + self.rounding;
+        let tied = p.map(|x| x >= max - eps);
+        if tied.iter().filter(|t| **t).count() != 2 {
+            return false;
+        }
+        let k = (0..3)
+            .find(|&k| tied[k] && tied[(k + 1) % 3])
+            .expect("two of three corners tied share an edge");
+        self.bend(k, nb)
+            .is_some_and(|b| self.leans_within(k, n, b) == Lean::Past)
+    }
+
     /// Whether the feature farthest along `n` (a unit direction out of this
     /// side) accepts `n`, and how.
+    #[cfg(test)]
     fn support(&self, n: Vec3A, cone_cos: f32, other: &Side) -> Option<Support> {
+        self.support_with(n, cone_cos, other, None)
+    }
+
+    /// [`support`](Self::support), with the neighbours that bound a lean
+    /// over a sharp edge: it accepts a lean only up to the neighbour's face
+    /// normal ([`Support::ConeEnd`] there).
+    fn support_with(
+        &self,
+        n: Vec3A,
+        cone_cos: f32,
+        other: &Side,
+        nb: Option<&dyn Neighbours>,
+    ) -> Option<Support> {
         let p = self.t.map(|v| n.dot(v));
         let max = p[0].max(p[1]).max(p[2]);
         let min = p[0].min(p[1]).min(p[2]);
@@ -376,7 +549,12 @@ impl Side {
                     .find(|&k| tied[k] && tied[(k + 1) % 3])
                     .expect("two of three corners tied share an edge");
                 if active(k) && outward && at_most_a_little_behind(n, m(k)) {
-                    Some(Support::Active)
+                    let lean = self.bend(k, nb).map(|b| self.leans_within(k, n, b));
+                    match lean {
+                        Some(Lean::Past) => within_cone.then_some(Support::Inactive),
+                        Some(Lean::End) => Some(Support::ConeEnd),
+                        _ => Some(Support::Active),
+                    }
                 } else {
                     within_cone.then_some(Support::Inactive)
                 }
@@ -427,14 +605,29 @@ impl SideCache {
 
     /// The side of `t` (flags `flags`, facing `facing`, near-box slack
     /// `slack`), made unless it is the last one asked for.
+    #[cfg(test)]
     fn side(&mut self, t: &Triangle, flags: u8, facing: Facing, slack: f32) -> Option<&Side> {
+        self.side_of(t, flags, facing, slack, 0)
+    }
+
+    /// [`side`](Self::side) of triangle `id` of side A.
+    fn side_of(
+        &mut self,
+        t: &Triangle,
+        flags: u8,
+        facing: Facing,
+        slack: f32,
+        id: u32,
+    ) -> Option<&Side> {
         let same = self.last.as_ref().is_some_and(|(f, fc, s)| {
             *f == flags
                 && *fc == facing
-                && s.as_ref().is_some_and(|s| s.t == *t && s.slack == slack)
+                && s.as_ref()
+                    .is_some_and(|s| s.t == *t && s.slack == slack && s.id == id)
         });
         if !same {
-            self.last = Some((flags, facing, Side::new(t, flags, facing, slack)));
+            let side = Side::with_id(t, flags, facing, slack, id, false);
+            self.last = Some((flags, facing, side));
         }
         self.last.as_ref().and_then(|(_, _, s)| s.as_ref())
     }
@@ -496,8 +689,25 @@ pub fn oriented_axis_cached(
     hint: Option<OrientedAxis>,
     cache: &mut SideCache,
 ) -> Option<OrientedAxis> {
-    let sa = cache.side(a, fa, facing.a, slack)?;
-    let sb = &Side::new(b, fb, facing.b, slack)?;
+    oriented_axis_near((a, 0, fa), (b, 0, fb), facing, slack, hint, cache, None)
+}
+
+/// [`oriented_axis_cached`] of triangles `a` (id `ia` of A) and `b` (id
+/// `ib` of B) whose neighbours `nb` finds: a normal leaning over a shared
+/// edge leans no further than the neighbour's face normal (see
+/// [`Neighbours`]). Without `nb`, the same.
+#[allow(clippy::too_many_arguments)]
+pub fn oriented_axis_near(
+    (a, ia, fa): (&Triangle, u32, u8),
+    (b, ib, fb): (&Triangle, u32, u8),
+    facing: &PairFacing,
+    slack: f32,
+    hint: Option<OrientedAxis>,
+    cache: &mut SideCache,
+    nb: Option<&dyn Neighbours>,
+) -> Option<OrientedAxis> {
+    let sa = cache.side_of(a, fa, facing.a, slack, ia)?;
+    let sb = &Side::with_id(b, fb, facing.b, slack, ib, true)?;
     let cone = facing.cone_cos;
     // No direction both sides may accept: nothing to search.
     if !sa.cones_meet(sb, cone) {
@@ -515,6 +725,8 @@ pub fn oriented_axis_cached(
     // The plain separating-axis result, whichever way round and whatever
     // the features: the pair's true separation or penetration depth.
     let mut plain = f32::NEG_INFINITY;
+    // The direction of `plain`.
+    let mut plain_axis: Option<Vec3A> = None;
     // An edge-edge axis of nearly parallel edges has a noisy direction: the
     // search below skips those, and so does the hint.
     let well_posed = |h: &OrientedAxis| match h.axis {
@@ -531,8 +743,8 @@ pub fn oriented_axis_cached(
         .filter(|h| sa.may_accept(h.normal, cone) && sb.may_accept(-h.normal, cone))
         .filter(well_posed)
         .and_then(|h| {
-            let ka = sa.support(h.normal, cone, sb)?;
-            let kb = sb.support(-h.normal, cone, sa)?;
+            let ka = sa.support_with(h.normal, cone, sb, nb)?;
+            let kb = sb.support_with(-h.normal, cone, sa, nb)?;
             Some((h, ka, kb))
         });
     if let Some((h, ka, kb)) = accepted_hint {
@@ -542,8 +754,9 @@ pub fn oriented_axis_cached(
     // With the hint, the plain result is known and a direction a side
     // rejects needs no separation.
     let known_plain = hint.map(|h| h.sep);
-    if let Some(p) = known_plain {
-        plain = p;
+    if let Some(h) = hint {
+        plain = h.sep;
+        plain_axis = Some(h.normal);
     }
     // One side flat (no active edge) and its face normal accepted by both:
     // that normal is the answer, without a search, when the faces meet
@@ -562,13 +775,13 @@ pub fn oriented_axis_cached(
             let flat_face = if sb.active == 0 {
                 let n = -sb.out;
                 (sa.may_accept(n, cone))
-                    .then(|| sa.support(n, cone, sb))
+                    .then(|| sa.support_with(n, cone, sb, nb))
                     .flatten()
                     .map(|ka| (n, 1, ka, Support::Face))
             } else if sa.active == 0 {
                 let n = sa.out;
                 (sb.may_accept(-n, cone))
-                    .then(|| sb.support(-n, cone, sa))
+                    .then(|| sb.support_with(-n, cone, sa, nb))
                     .flatten()
                     .map(|kb| (n, 0, Support::Face, kb))
             } else {
@@ -586,14 +799,17 @@ pub fn oriented_axis_cached(
             return;
         }
         let sep = separation(a, b, n);
-        plain = plain.max(sep);
+        if sep > plain {
+            plain = sep;
+            plain_axis = Some(n);
+        }
         if best.is_some_and(|(o, _, _)| sep <= o.sep) || !sep.is_finite() {
             return;
         }
-        let Some(ka) = sa.support(n, cone, sb) else {
+        let Some(ka) = sa.support_with(n, cone, sb, nb) else {
             return;
         };
-        let Some(kb) = sb.support(-n, cone, sa) else {
+        let Some(kb) = sb.support_with(-n, cone, sa, nb) else {
             return;
         };
         best = Some((
@@ -664,7 +880,26 @@ pub fn oriented_axis_cached(
             }
         }
     }
+    // The plain axis (the direction the pair separates along, or
+    // penetrates least) leans over a shared edge past the neighbour's face
+    // normal: the other triangle lies beyond the neighbour, whose own pair
+    // with it gives the contact (a box whose back has passed a ridge's
+    // crease is beside the flat half, not on it; a box reaching a ridge is
+    // beside the down half). Jolt's internal-edge removal drops such a
+    // contact likewise, whatever its depth.
+    if plain_axis.is_some_and(|n| sa.past_bend(n, nb) || sb.past_bend(-n, nb)) {
+        return None;
+    }
     let (mut o, ka, kb) = best?;
+    // The best axis is a neighbour's face normal at a shared edge: that
+    // neighbour's pair with the same triangle gives the contact (a box
+    // resting on a ridge's flat half meets the down side's crease along
+    // the flat half's normal, which the flat half reports itself).
+    if (ka == Support::ConeEnd && kb != Support::Face)
+        || (kb == Support::ConeEnd && ka != Support::Face)
+    {
+        return None;
+    }
     let longest2 = |t: &Triangle| {
         (t[1] - t[0])
             .length_squared()

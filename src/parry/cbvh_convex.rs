@@ -9,7 +9,7 @@ use std::ops::ControlFlow;
 use parry3d::math::{Pose as PPose, Real};
 use parry3d::query::{
     Contact, ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher,
-    PersistentQueryDispatcher, QueryDispatcher, ShapeIntersection,
+    PersistentQueryDispatcher, QueryDispatcher, ShapeIntersection, TrackedContact,
 };
 use parry3d::shape::Shape;
 
@@ -106,19 +106,29 @@ pub fn patches(
     for_each_triangle_near(mesh, convex, pose, prediction, |i, t| {
         candidates += 1;
         scratch.points.clear();
-        let Some(cone) = EdgeCone::new(t, mesh.edge_flags_of(i), facing) else {
+        let Some(mut cone) = EdgeCone::new(t, mesh.edge_flags_of(i), facing) else {
             return ControlFlow::Continue(());
         };
         let tri = to_parry_triangle(t);
-        let _ = DefaultQueryDispatcher.contact_manifold_convex_convex(
-            pose,
-            &tri,
-            convex,
-            Some(&cone),
-            None,
-            prediction,
-            &mut scratch,
-        );
+        let run = |cone: &EdgeCone, scratch: &mut ContactManifold<(), ()>| {
+            let _ = DefaultQueryDispatcher.contact_manifold_convex_convex(
+                pose,
+                &tri,
+                convex,
+                Some(cone),
+                None,
+                prediction,
+                scratch,
+            );
+        };
+        run(&cone, &mut scratch);
+        // The normal leaned over a shared edge: bound the lean by the
+        // neighbour's face normal and compute the contact again.
+        if cone.wanted() != 0 {
+            cone.complete(mesh, i, t);
+            scratch.points.clear();
+            run(&cone, &mut scratch);
+        }
         let n = glam::Vec3A::from(scratch.local_n1.to_array());
         let mut first = true;
         for (k, p) in scratch
@@ -169,18 +179,43 @@ pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + S
     // The convex shape's pose in the mesh's frame.
     let pose = if flipped { pos12.inverse() } else { *pos12 };
     let facing = convex_facing(mesh, convex, &pose);
+    // The manifold as it was before a first computation that may be
+    // redone (its points keep the warm-start impulses).
+    let mut saved: Vec<TrackedContact<C>> = Vec::new();
     for_each_triangle_near(mesh, convex, &pose, prediction, |i, t| {
         let tri = to_parry_triangle(t);
-        let cone = EdgeCone::new(t, mesh.edge_flags_of(i), facing);
-        let nc = cone.as_ref().map(|c| c as &dyn NormalConstraints);
-        if flipped {
-            let m = update.manifold(0, i);
-            let _ = DefaultQueryDispatcher
-                .contact_manifold_convex_convex(pos12, convex, &tri, None, nc, prediction, m);
+        let mut cone = EdgeCone::new(t, mesh.edge_flags_of(i), facing);
+        let m = if flipped {
+            update.manifold(0, i)
         } else {
-            let m = update.manifold(i, 0);
-            let _ = DefaultQueryDispatcher
-                .contact_manifold_convex_convex(pos12, &tri, convex, nc, None, prediction, m);
+            update.manifold(i, 0)
+        };
+        let run = |cone: &Option<EdgeCone>, m: &mut ContactManifold<M, C>| {
+            let nc = cone.as_ref().map(|c| c as &dyn NormalConstraints);
+            if flipped {
+                let _ = DefaultQueryDispatcher
+                    .contact_manifold_convex_convex(pos12, convex, &tri, None, nc, prediction, m);
+            } else {
+                let _ = DefaultQueryDispatcher
+                    .contact_manifold_convex_convex(pos12, &tri, convex, nc, None, prediction, m);
+            }
+        };
+        let may_redo = cone.as_ref().is_some_and(EdgeCone::has_shared);
+        let normals = (m.local_n1, m.local_n2);
+        if may_redo {
+            saved.clear();
+            saved.extend_from_slice(&m.points);
+        }
+        run(&cone, m);
+        // The normal leaned over a shared edge: bound the lean by the
+        // neighbour's face normal and compute the contact again, from the
+        // manifold as it was.
+        if let Some(c) = cone.as_mut().filter(|c| c.wanted() != 0) {
+            c.complete(mesh, i, t);
+            m.points.clear();
+            m.points.extend_from_slice(&saved);
+            (m.local_n1, m.local_n2) = normals;
+            run(&cone, m);
         }
         ControlFlow::Continue(())
     });

@@ -13,6 +13,7 @@ use parry3d::bounding_volume::BoundingVolume;
 use parry3d::math::{Pose as PPose, Real};
 use parry3d::query::{
     ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher, PersistentQueryDispatcher,
+    TrackedContact,
 };
 use parry3d::shape::{CompositeShape, Shape, TriMesh};
 
@@ -141,24 +142,49 @@ pub fn contact_manifolds<M: Default + Clone + Send + Sync, C: Default + Copy + S
     let mut stats = TraversalStats::default();
     let tm_center = glam::Vec3A::from((tm_in_mesh * tm.local_aabb().center()).to_array());
     let facing = mesh.facing(tm_center);
+    let mut saved: Vec<TrackedContact<C>> = Vec::new();
     with_cursor!(mesh, |c| {
         overlap(c, &query, &mut stats, |i, tri| {
             let ptri = to_parry_triangle(tri);
-            let cone = EdgeCone::new(tri, mesh.edge_flags_of(i), facing);
-            let own = cone.as_ref().map(|c| c as &dyn NormalConstraints);
             let b = ptri.compute_aabb(&mesh_in_tm).loosened(prediction);
             for j in tm.bvh().intersect_aabb(&b) {
                 tm.map_part_at(j, &mut |_, part, normals| {
-                    if flipped {
-                        let m = update.manifold(j, i);
-                        let _ = DefaultQueryDispatcher.contact_manifold_convex_convex(
-                            pos12, part, &ptri, normals, own, prediction, m,
-                        );
+                    // A cone per pair: what one pair's normal leaned over
+                    // says nothing of the next's.
+                    let mut cone = EdgeCone::new(tri, mesh.edge_flags_of(i), facing);
+                    let may_redo = cone.as_ref().is_some_and(EdgeCone::has_shared);
+                    let m = if flipped {
+                        update.manifold(j, i)
                     } else {
-                        let m = update.manifold(i, j);
-                        let _ = DefaultQueryDispatcher.contact_manifold_convex_convex(
-                            pos12, &ptri, part, own, normals, prediction, m,
-                        );
+                        update.manifold(i, j)
+                    };
+                    let run = |cone: &Option<EdgeCone>, m: &mut ContactManifold<M, C>| {
+                        let own = cone.as_ref().map(|c| c as &dyn NormalConstraints);
+                        let _ = if flipped {
+                            DefaultQueryDispatcher.contact_manifold_convex_convex(
+                                pos12, part, &ptri, normals, own, prediction, m,
+                            )
+                        } else {
+                            DefaultQueryDispatcher.contact_manifold_convex_convex(
+                                pos12, &ptri, part, own, normals, prediction, m,
+                            )
+                        };
+                    };
+                    let normals12 = (m.local_n1, m.local_n2);
+                    if may_redo {
+                        saved.clear();
+                        saved.extend_from_slice(&m.points);
+                    }
+                    run(&cone, m);
+                    // As against a convex shape: a normal that leaned over
+                    // a shared edge goes no further than the neighbour's
+                    // face normal, computed again from the manifold as it was.
+                    if let Some(c) = cone.as_mut().filter(|c| c.wanted() != 0) {
+                        c.complete(mesh, i, tri);
+                        m.points.clear();
+                        m.points.extend_from_slice(&saved);
+                        (m.local_n1, m.local_n2) = normals12;
+                        run(&cone, m);
                     }
                 });
             }

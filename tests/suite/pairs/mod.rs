@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 
 use cbvh::Mesh;
 use cbvh::build::BuildOptions;
-use cbvh::parry::cbvh_cbvh::pair_facing;
+use cbvh::parry::cbvh_cbvh::{neighbours_of, pair_facing};
 use cbvh::parry::cones::{EdgeCone, PairRule};
 use cbvh::parry::patches::drop_opposed_manifolds;
 use cbvh::parry::{CbvhShape, ContactMode, Dispatcher, parry_trimesh, pose_from_parry};
@@ -407,6 +407,8 @@ fn constrained_manifold(case: &Case, k: (u32, u32), prediction: f32) -> ContactM
                 fb: m2.cbvh.edge_flags_of(k.1),
                 facing: pair_facing(&pose, &m1.cbvh, &m2.cbvh),
                 prediction,
+                ids: k,
+                neighbours: Some(neighbours_of(&m1.cbvh, &m2.cbvh, &pose)),
             };
             run(
                 &m1.parry.triangle(k.0),
@@ -417,9 +419,7 @@ fn constrained_manifold(case: &Case, k: (u32, u32), prediction: f32) -> ContactM
             );
         }
         (s1, s2) => {
-            let (k1, k2) = (cone(s1, k.0, true), cone(s2, k.1, false));
-            let c1 = k1.as_ref().map(|c| c as &dyn NormalConstraints);
-            let c2 = k2.as_ref().map(|c| c as &dyn NormalConstraints);
+            let (mut k1, mut k2) = (cone(s1, k.0, true), cone(s2, k.1, false));
             // A TriMesh part with its pseudo-normals, any other part bare.
             let with = |side: Side, id: u32, f: &mut PartFn| match side {
                 Side::TriMesh(t) => t
@@ -427,11 +427,30 @@ fn constrained_manifold(case: &Case, k: (u32, u32), prediction: f32) -> ContactM
                     .map_part_at(id, &mut |_, part, normals| f(part, normals)),
                 other => other.with_part(id, |part| f(part, None)),
             };
-            with(s1, k.0, &mut |p1, n1| {
-                with(s2, k.1, &mut |p2, n2| {
-                    run(p1, p2, c1.or(n1), c2.or(n2), &mut m);
-                })
-            });
+            let go =
+                |k1: &Option<EdgeCone>, k2: &Option<EdgeCone>, m: &mut ContactManifold<(), ()>| {
+                    let c1 = k1.as_ref().map(|c| c as &dyn NormalConstraints);
+                    let c2 = k2.as_ref().map(|c| c as &dyn NormalConstraints);
+                    with(s1, k.0, &mut |p1, n1| {
+                        with(s2, k.1, &mut |p2, n2| {
+                            run(p1, p2, c1.or(n1), c2.or(n2), m);
+                        })
+                    });
+                };
+            go(&k1, &k2, &mut m);
+            // As the dispatcher does: a normal that leaned over a shared
+            // edge goes no further than the neighbour's face normal, and
+            // the manifold is computed again.
+            let wanted = |c: &Option<EdgeCone>| c.as_ref().is_some_and(|c| c.wanted() != 0);
+            if wanted(&k1) || wanted(&k2) {
+                for (c, side, id) in [(&mut k1, s1, k.0), (&mut k2, s2, k.1)] {
+                    if let (Some(c), Side::Cbvh(mm)) = (c.as_mut(), side) {
+                        c.complete(&mm.cbvh, id, &cbvh_triangle(mm, id));
+                    }
+                }
+                m = ContactManifold::new();
+                go(&k1, &k2, &mut m);
+            }
         }
     }
     m
