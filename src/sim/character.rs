@@ -231,6 +231,24 @@ pub fn snap_slope() -> (Mesh, Real) {
     )
 }
 
+/// The snap slope's height at `z` (see [`snap_slope`]).
+pub fn snap_ground(z: Real) -> Real {
+    (1.0 - z.max(0.0) * SNAP_SLOPE_DEG.to_radians().tan()).max(0.0)
+}
+
+/// How far above [`snap_ground`] a grounded capsule's bottom lies at
+/// `z`: [`tilted_clearance`] on the slope (`run` long), the offset on the
+/// plateau and the floor, `None` where it rounds an edge.
+pub fn snap_clearance(z: Real, run: Real) -> Option<Real> {
+    if z > 0.3 && z < run - 0.3 {
+        Some(tilted_clearance(SNAP_SLOPE_DEG.to_radians()))
+    } else if z < -0.1 || z > run + 0.3 {
+        Some(OFFSET)
+    } else {
+        None
+    }
+}
+
 /// One frame of a walk: the character's centre after the move, and the
 /// controller's grounded flag.
 pub type Frame = (Vector, bool);
@@ -368,13 +386,19 @@ impl fmt::Display for WalkReport {
     }
 }
 
-/// The start, asked velocity and frame count of a walk.
-struct Plan {
-    character: SharedShape,
-    controller: KinematicCharacterController,
-    start: Vector,
-    velocity: Vector,
-    frames: usize,
+/// How a walk is walked: the character, its controller, where it starts,
+/// the velocity it asks for every frame, and for how many frames.
+pub struct Plan {
+    /// The character's shape.
+    pub character: SharedShape,
+    /// The controller moving it.
+    pub controller: KinematicCharacterController,
+    /// The character's centre at the start.
+    pub start: Vector,
+    /// The velocity asked for every frame (m/s).
+    pub velocity: Vector,
+    /// How many frames.
+    pub frames: usize,
 }
 
 impl Walk {
@@ -455,7 +479,8 @@ impl Walk {
         Ok(vec![(rep.mesh_shape(&self.mesh())?, Pose::IDENTITY)])
     }
 
-    fn plan(&self) -> Plan {
+    /// The walk's [`Plan`].
+    pub fn plan(&self) -> Plan {
         let on_floor = Vector::new(0.0, bottom(0.0).abs() + OFFSET + 0.02, 0.0);
         let (character, controller, start, velocity, frames) = match *self {
             Walk::Terrain => (
@@ -614,18 +639,9 @@ impl Walk {
             }
             Walk::Snap => {
                 let (_, run) = snap_slope();
-                let slope = SNAP_SLOPE_DEG.to_radians();
-                let ground = |z: Real| (1.0 - z.max(0.0) * slope.tan()).max(0.0);
                 let dev = worst(&mut track.iter().filter_map(|&(p, _)| {
-                    let above = bottom(p.y) - ground(p.z);
-                    let want = if p.z > 0.3 && p.z < run - 0.3 {
-                        tilted_clearance(slope)
-                    } else if p.z < -0.1 || p.z > run + 0.3 {
-                        OFFSET
-                    } else {
-                        return None; // Rounding an edge.
-                    };
-                    Some((above - want).abs())
+                    let want = snap_clearance(p.z, run)?;
+                    Some((bottom(p.y) - snap_ground(p.z) - want).abs())
                 }));
                 (
                     "worst |clearance - want| (m)",

@@ -26,24 +26,14 @@ use cbvh::codec::racbvh::RacOptions;
 use cbvh::codec::{AnyOptions, CodecKind};
 use cbvh::parry::{CbvhShape, parry_trimesh};
 use cbvh::sim::character::{
-    self, DT, Frame, OFFSET, RADIUS, Walk, bottom, box_character, capsule, extrude, ramp_profile,
-    stairs, stepper, terrain_height, terrain_mesh, tilted_clearance, walker,
+    self, DT, Frame, OFFSET, RADIUS, Walk, bottom, capsule, ramp_profile, stairs, terrain_height,
+    terrain_mesh, tilted_clearance, walker,
 };
 use cbvh::sim::slide::{CbvhMode, Rep};
 use parry3d::math::{Pose, Real, Vector};
 use parry3d::query::{DefaultQueryDispatcher, QueryDispatcher};
 use parry3d::shape::{Cuboid, SharedShape, TriMesh};
 use rapier3d::control::KinematicCharacterController;
-
-/// The characters of the wall: the capsule, and a box as tall and as deep
-/// (its bottom as far below its centre, its front as far ahead), so that
-/// both stop and rest where the same answers say.
-fn characters() -> [(&'static str, SharedShape); 2] {
-    [
-        ("capsule", SharedShape::new(capsule())),
-        ("box", SharedShape::new(box_character())),
-    ]
-}
 
 /// What the ground is made of, for one run.
 enum Ground {
@@ -179,22 +169,18 @@ enum Follow {
     End(Real),
 }
 
-/// Runs a scenario on every ground, checks that each cbvh run follows its
+/// Runs the walk `w` ([`Walk::plan`], over [`Walk::mesh`] and
+/// [`Walk::boxes`]) on every ground, checks that each cbvh run follows its
 /// reference as `follow` asks with the same grounded flags, and returns
 /// the runs (codecs, then the `TriMesh` references, then the boxes) with a
 /// printed table of final positions.
-#[allow(clippy::too_many_arguments)]
-fn compare(
-    what: &str,
-    character: &SharedShape,
-    mesh: &Mesh,
-    boxes: Option<Vec<(Cuboid, Pose)>>,
-    controller: &KinematicCharacterController,
-    start: Vector,
-    frames: usize,
-    desired: impl Fn(usize) -> Vector + Copy,
-    follow: Follow,
-) -> Vec<(String, Vec<Frame>)> {
+fn compare(what: &str, w: Walk, follow: Follow) -> Vec<(String, Vec<Frame>)> {
+    let plan = w.plan();
+    let frames = plan.frames;
+    let desired = |_| plan.velocity * DT;
+    let (character, controller, start) = (&plan.character, &plan.controller, plan.start);
+    let mesh = &w.mesh();
+    let boxes = w.boxes();
     let grounds = grounds(mesh, boxes);
     let runs: Vec<(String, Vec<Frame>)> = grounds
         .iter()
@@ -269,19 +255,8 @@ fn compare(
 #[test]
 fn a_capsule_walks_over_a_tessellated_terrain_as_over_a_trimesh() {
     let mesh = terrain_mesh();
-    let start = Vector::new(-6.0, terrain_height(-6.0, -5.0) + 0.6, -5.0);
-    let velocity = Vector::new(4.0, -2.0, 3.0);
-    let runs = compare(
-        "terrain",
-        &SharedShape::new(capsule()),
-        &mesh,
-        None,
-        &walker(),
-        start,
-        150,
-        |_| velocity * DT,
-        Follow::Track(1e-3),
-    );
+    let start = Walk::Terrain.plan().start;
+    let runs = compare("terrain", Walk::Terrain, Follow::Track(1e-3));
     let surface = parry_trimesh(&mesh).unwrap();
     for (name, track) in &runs {
         for (f, &(p, grounded)) in track.iter().enumerate().skip(10) {
@@ -315,23 +290,10 @@ fn a_capsule_walks_over_a_tessellated_terrain_as_over_a_trimesh() {
 /// 60-degree ramp stops it at its foot.
 #[test]
 fn a_capsule_climbs_a_ramp_below_the_climb_angle_and_not_one_above() {
-    let start = Vector::new(0.0, bottom(0.0).abs() + OFFSET + 0.02, -1.5);
-    let desired = |_| Vector::new(0.0, -2.0, 3.0) * DT;
     for (angle, climbs) in [(30.0, true), (60.0, false)] {
-        let (profile, run) = ramp_profile(angle, 0.8);
-        let mesh = extrude(&profile, 3.0, 6, 0.25);
+        let (_, run) = ramp_profile(angle, 0.8);
         let what = format!("{angle}-degree ramp");
-        let runs = compare(
-            &what,
-            &SharedShape::new(capsule()),
-            &mesh,
-            None,
-            &walker(),
-            start,
-            120,
-            desired,
-            Follow::End(0.1),
-        );
+        let runs = compare(&what, Walk::Ramp { angle_deg: angle }, Follow::End(0.1));
         let slope = angle.to_radians();
         for (name, track) in &runs {
             let (p, grounded) = *track.last().unwrap();
@@ -388,23 +350,11 @@ fn a_capsule_climbs_a_ramp_below_the_climb_angle_and_not_one_above() {
 /// on parry's boxes.)
 #[test]
 fn a_capsule_autosteps_low_stairs_and_not_a_high_one() {
-    let controller = stepper();
-    let start = Vector::new(0.0, bottom(0.0).abs() + OFFSET + 0.02, -1.0);
-    let desired = |_| Vector::new(0.0, 0.0, 2.0) * DT;
     for (rise, steps, climbs) in [(0.15, 4, true), (0.4, 1, false)] {
-        let (mesh, boxes, top) = stairs(rise, steps);
+        let w = Walk::Stairs { rise, steps };
+        let (start, top) = (w.plan().start, stairs(rise, steps).2);
         let what = format!("{steps} steps of {rise} m");
-        let runs = compare(
-            &what,
-            &SharedShape::new(capsule()),
-            &mesh,
-            Some(boxes),
-            &controller,
-            start,
-            150,
-            desired,
-            Follow::End(0.15),
-        );
+        let runs = compare(&what, w, Follow::End(0.15));
         for (name, track) in &runs {
             let (p, grounded) = *track.last().unwrap();
             assert!(grounded, "{what}, {name}: not grounded at {p:?}");
@@ -443,23 +393,11 @@ fn a_capsule_autosteps_low_stairs_and_not_a_high_one() {
 /// same floor and wall made of boxes.
 #[test]
 fn a_character_slides_along_a_wall_and_does_not_pass_through() {
-    let (mesh, boxes) = character::wall();
-    let start = Vector::new(-2.0, bottom(0.0).abs() + OFFSET + 0.02, 0.0);
-    let desired = |_| Vector::new(2.0, -2.0, 3.0) * DT;
-    let frames = 120;
-    for (character_name, character) in characters() {
+    for (character_name, boxy) in [("capsule", false), ("box", true)] {
+        let w = Walk::Wall { boxy };
+        let (start, frames) = (w.plan().start, w.plan().frames);
         let what = format!("{character_name}, wall");
-        let runs = compare(
-            &what,
-            &character,
-            &mesh,
-            Some(boxes.clone()),
-            &walker(),
-            start,
-            frames,
-            desired,
-            Follow::End(0.1),
-        );
+        let runs = compare(&what, w, Follow::End(0.1));
         let stop = 2.0 - RADIUS - OFFSET;
         for (name, track) in &runs {
             for (f, (p, _)) in track.iter().enumerate() {
@@ -495,31 +433,14 @@ fn a_character_slides_along_a_wall_and_does_not_pass_through() {
 /// to the floor; without snapping it walks off into the air.
 #[test]
 fn a_capsule_snaps_to_the_ground_walking_down_a_slope() {
-    let slope = character::SNAP_SLOPE_DEG.to_radians();
     let (mesh, run) = character::snap_slope();
-    let ground = |z: Real| (1.0 - z.max(0.0) * slope.tan()).max(0.0);
-    let start = Vector::new(0.0, 1.0 + bottom(0.0).abs() + OFFSET, -1.0);
-    let desired = |_| Vector::new(0.0, 0.0, 3.0) * DT;
-    let runs = compare(
-        "snap",
-        &SharedShape::new(capsule()),
-        &mesh,
-        None,
-        &walker(),
-        start,
-        90,
-        desired,
-        Follow::Track(1e-3),
-    );
+    let plan = Walk::Snap.plan();
+    let runs = compare("snap", Walk::Snap, Follow::Track(1e-3));
     for (name, track) in &runs {
         for (f, &(p, grounded)) in track.iter().enumerate() {
             assert!(grounded, "snap, {name}, frame {f}: not grounded at {p:?}");
-            let above = bottom(p.y) - ground(p.z);
-            let want = if p.z > 0.3 && p.z < run - 0.3 {
-                tilted_clearance(slope)
-            } else if p.z < -0.1 || p.z > run + 0.3 {
-                OFFSET
-            } else {
+            let above = bottom(p.y) - character::snap_ground(p.z);
+            let Some(want) = character::snap_clearance(p.z, run) else {
                 continue; // Rounding an edge.
             };
             assert!(
@@ -535,12 +456,12 @@ fn a_capsule_snaps_to_the_ground_walking_down_a_slope() {
         ..walker()
     };
     let track = walk(
-        &SharedShape::new(capsule()),
+        &plan.character,
         &Ground::TriMesh(Box::new(parry_trimesh(&mesh).unwrap())),
         &free,
-        start,
-        90,
-        desired,
+        plan.start,
+        plan.frames,
+        |_| plan.velocity * DT,
     );
     let (p, grounded) = *track.last().unwrap();
     assert!(
