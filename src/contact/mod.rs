@@ -30,6 +30,7 @@ pub mod patch;
 mod sat;
 
 pub use edges::EdgeFlags;
+pub use features::closest_points as triangle_closest_points;
 pub use kernel::{
     ContactSink, Interference, KernelStats, PairContact, PairKernel, PairPoint, pair_contact,
     triangles_intersect,
