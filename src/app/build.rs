@@ -5,6 +5,7 @@ use std::time::Instant;
 use crate::build::{BuildOptions, Layout, build};
 use crate::codec::{AnyCodec, ByteSize, CodecKind, OpenOptions};
 
+use super::values::whole;
 use super::{CliResult, CodecFlags, MeshSource, Structure, progress_bar};
 
 /// Arguments of `cbvh build`.
@@ -39,7 +40,8 @@ pub struct BuildArgs {
     /// vertices and flags the build holds (within half the machine's
     /// memory): about 40 bytes a triangle in all for a closed mesh, at any
     /// size. At least 1.
-    #[arg(long, value_name = "MIB", value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_name = "MIB", allow_negative_numbers = true,
+          value_parser = whole::<u64>(1, u64::MAX))]
     pub memory_mib: Option<u64>,
     /// Build out of core whatever the model's size (a codec that builds
     /// out of core, marked so in `--codec`'s list; from a mesh file, with
@@ -52,7 +54,8 @@ pub struct BuildArgs {
     /// is built in memory, its triangles numbered by `u32`), and a chunk
     /// of that many of the model's triangles must be buildable within the
     /// memory budget (about 260 bytes a triangle).
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_CHUNK_TRIANGLES))]
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
+          value_parser = whole::<u64>(1, MAX_CHUNK_TRIANGLES))]
     pub chunk_triangles: Option<u64>,
 }
 

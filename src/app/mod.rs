@@ -224,17 +224,20 @@ pub struct MeshSource {
     /// hcc-ooc's low-level trees): the cache's budget in MiB. An hcc-ooc
     /// file whose i-HCCMesh fits is decoded whole; one that does not runs
     /// out of core, memory-mapped.
-    #[arg(long, value_name = "MIB", default_value_t = 1024)]
+    #[arg(long, value_name = "MIB", default_value_t = 1024, allow_negative_numbers = true,
+          value_parser = whole::<usize>(0, usize::MAX as u64))]
     pub cache_mib: usize,
     /// Generate the mesh instead: statue, turbine, plant, robot or isosurface.
     #[arg(long = "gen", value_name = "KIND")]
     pub gen_kind: Option<Kind>,
     /// Triangle count to generate, 1 000 to 200 000 000 (default: the
     /// kind's default).
-    #[arg(long, requires = "gen_kind")]
+    #[arg(long, requires = "gen_kind", allow_negative_numbers = true,
+          value_parser = whole::<usize>(0, usize::MAX as u64))]
     pub tris: Option<usize>,
     /// Generator seed.
-    #[arg(long, default_value_t = 0, requires = "gen_kind")]
+    #[arg(long, default_value_t = 0, requires = "gen_kind", allow_negative_numbers = true,
+          value_parser = whole::<u64>(0, u64::MAX))]
     pub seed: u64,
 }
 

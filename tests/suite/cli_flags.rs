@@ -1,7 +1,8 @@
 //! Issue 51, flags: the commands refuse, before any work and naming the
 //! flag, the value and what the flag takes, what they used to accept: a
 //! codec setting for a codec not in use (unknown key, value out of its
-//! bounds).
+//! bounds), and a negative number (clap used to read it as a flag and
+//! suggest `-- -5`, or report `-1` for `-10`).
 
 use crate::common::{cbvh_refuses_within, run_within};
 
@@ -95,4 +96,63 @@ fn cli_checks_every_codecs_settings_whether_in_use_or_not() {
             other => panic!("{extra:?} was not refused before the run: {other:?}"),
         }
     }
+}
+
+/// A negative number given to a numeric flag is refused as such: the
+/// message names the flag and says it takes a positive number, instead of
+/// clap's "unexpected argument '-5'" with its `-- -5` tip (or `-1` for
+/// `-10`, read as short flags).
+#[test]
+fn cli_refuses_negative_numbers_saying_the_flag_takes_a_positive_one() {
+    let d = crate::common::temp_dir_for("cli-flags", "negative");
+    let png = d.join("x.png");
+    let png = png.to_str().unwrap();
+    let ply = d.join("x.ply");
+    let ply = ply.to_str().unwrap();
+    for (args, flag) in [
+        (vec!["build", "--gen", "robot", "--tris", "-5"], "--tris"),
+        (
+            vec!["render", "--gen", "robot", "--width", "-10", "-o", png],
+            "--width",
+        ),
+        (
+            vec!["render", "--gen", "robot", "--lights", "-1", "-o", png],
+            "--lights",
+        ),
+        (vec!["gen", "robot", "--seed", "-1", "-o", ply], "--seed"),
+        (vec!["gen", "robot", "--tris", "-1000", "-o", ply], "--tris"),
+        (plain_build(&["--memory-mib", "-1"]), "--memory-mib"),
+        (
+            plain_build(&["--chunk-triangles", "-3"]),
+            "--chunk-triangles",
+        ),
+        (plain_build(&["--leaf-size", "-2"]), "--leaf-size"),
+        (plain_build(&["--vertex-bits", "-8"]), "--vertex-bits"),
+        (plain_build(&["--bits", "-5"]), "--bits"),
+        (plain_build(&["--cache-mib", "-5"]), "--cache-mib"),
+        (vec!["lucy-on-turbine", "--steps", "-2"], "--steps"),
+        (
+            vec!["lucy-on-turbine", "--statue-tris", "-1"],
+            "--statue-tris",
+        ),
+        (vec!["robot-in-plant", "--subdivide", "-1"], "--subdivide"),
+        (vec!["robot-in-plant", "--threads", "-4"], "--threads"),
+    ] {
+        let e = cbvh_refuses_within(&args, 20);
+        let value = args[args.iter().position(|a| *a == flag).unwrap() + 1];
+        assert!(
+            e.contains(&format!("invalid value '{value}' for '{flag}"))
+                && e.contains(&format!("{value} is negative"))
+                && e.contains("takes a positive")
+                && !e.contains("tip:"),
+            "{args:?}: {e}"
+        );
+    }
+    // The codec setting's shorthand says the same as its `--set`.
+    let e = cbvh_refuses_within(&plain_build(&["--set", "racbvh.cluster-nodes=-256"]), 20);
+    assert!(
+        e.contains("-256 is negative: racbvh.cluster-nodes takes a positive number"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&d).ok();
 }
