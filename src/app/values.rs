@@ -85,6 +85,12 @@ fn parse_whole<T: TryFrom<u64>>(name: &str, value: &str, values: Values) -> Resu
         .ok_or_else(|| format!("{name} takes {values}, not {value}"))
 }
 
+/// `value` for `flag` as a whole number from `min` to `max`, or why not
+/// (for parsers whose bounds are known only when the flag is given).
+pub fn whole_in(flag: &str, value: &str, min: u64, max: u64) -> Result<u64, String> {
+    parse_whole(flag, value, Values::whole(min, max))
+}
+
 /// A whole number from `min` to `max` (`max` at most `T`'s largest): a
 /// negative one is refused as such (declare the flag with
 /// `allow_negative_numbers = true`).

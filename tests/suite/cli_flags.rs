@@ -1,8 +1,9 @@
 //! Issue 51, flags: the commands refuse, before any work and naming the
 //! flag, the value and what the flag takes, what they used to accept: a
 //! codec setting for a codec not in use (unknown key, value out of its
-//! bounds), and a negative number (clap used to read it as a flag and
-//! suggest `-- -5`, or report `-1` for `-10`).
+//! bounds), a negative number (clap used to read it as a flag and suggest
+//! `-- -5`, or report `-1` for `-10`), and a `--memory-mib` beyond the
+//! machine's memory.
 
 use crate::common::{cbvh_refuses_within, run_within};
 
@@ -155,4 +156,36 @@ fn cli_refuses_negative_numbers_saying_the_flag_takes_a_positive_one() {
         "{e}"
     );
     std::fs::remove_dir_all(&d).ok();
+}
+
+/// The machine's memory, in MiB, as `MemTotal` in /proc/meminfo states it.
+fn machine_mib() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = s.lines().find(|l| l.starts_with("MemTotal:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib >> 10)
+}
+
+/// `--memory-mib` is at most the machine's memory: 2^64 − 1 used to switch
+/// the over-budget guard off.
+#[test]
+fn cli_memory_mib_is_at_most_the_machines_memory() {
+    let e = cbvh_refuses_within(&plain_build(&["--memory-mib", "18446744073709551615"]), 20);
+    assert!(e.contains("'--memory-mib <MIB>'"), "{e}");
+    match machine_mib() {
+        Some(mib) => {
+            let want = format!(
+                "18446744073709551615 MiB is more than the {mib} MiB this machine has (MemTotal \
+                 in /proc/meminfo): --memory-mib takes a whole number from 1 to {mib}"
+            );
+            assert!(e.contains(&want), "{e}");
+            let over = (mib + 1).to_string();
+            let e = cbvh_refuses_within(&plain_build(&["--memory-mib", &over]), 20);
+            assert!(e.contains(&format!("{over} MiB is more than")), "{e}");
+            let all = mib.to_string();
+            let (ok, _, err) = crate::common::cbvh(&plain_build(&["--memory-mib", &all]));
+            assert!(ok, "--memory-mib {all}: {err}");
+        }
+        None => assert!(e.contains("16 TiB"), "{e}"),
+    }
 }
