@@ -5,6 +5,7 @@ use std::time::Instant;
 use crate::build::{BuildOptions, Layout, build};
 use crate::codec::{AnyCodec, ByteSize, CodecKind, OpenOptions};
 
+use super::values::{Checked, whole, whole_in};
 use super::{CliResult, CodecFlags, MeshSource, Structure, progress_bar};
 
 /// Arguments of `cbvh build`.
@@ -38,8 +39,10 @@ pub struct BuildArgs {
     /// it, as large as 32 bytes a triangle of the model allow beside the
     /// vertices and flags the build holds (within half the machine's
     /// memory): about 40 bytes a triangle in all for a closed mesh, at any
-    /// size. At least 1.
-    #[arg(long, value_name = "MIB", value_parser = clap::value_parser!(u64).range(1..))]
+    /// size. At least 1, and at most the machine's memory (`MemTotal` in
+    /// /proc/meminfo; where that cannot be read, 16 TiB): a budget the
+    /// machine does not have would let a build go over its memory.
+    #[arg(long, value_name = "MIB", allow_negative_numbers = true, value_parser = memory_mib())]
     pub memory_mib: Option<u64>,
     /// Build out of core whatever the model's size (a codec that builds
     /// out of core, marked so in `--codec`'s list; from a mesh file, with
@@ -52,8 +55,36 @@ pub struct BuildArgs {
     /// is built in memory, its triangles numbered by `u32`), and a chunk
     /// of that many of the model's triangles must be buildable within the
     /// memory budget (about 260 bytes a triangle).
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_CHUNK_TRIANGLES))]
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
+          value_parser = whole::<u64>(1, MAX_CHUNK_TRIANGLES))]
     pub chunk_triangles: Option<u64>,
+}
+
+/// The most `--memory-mib` where the machine's memory cannot be read
+/// (not Linux): 16 TiB.
+pub const MEMORY_MIB_UNKNOWN_MACHINE: u64 = 16 << 20;
+
+/// `--memory-mib`'s parser: from 1 to the machine's memory in MiB
+/// ([`machine_memory`](super::machine_memory), read when the flag is
+/// given), or to [`MEMORY_MIB_UNKNOWN_MACHINE`] where that cannot be read.
+fn memory_mib() -> Checked<u64> {
+    Checked::new(|flag, value| {
+        let mib = whole_in(flag, value, 1, u64::MAX)?;
+        let (max, what) = match super::machine_memory() {
+            Some(bytes) => (bytes >> 20, "this machine has (MemTotal in /proc/meminfo)"),
+            None => (
+                MEMORY_MIB_UNKNOWN_MACHINE,
+                "(16 TiB) allowed where the machine's memory cannot be read",
+            ),
+        };
+        if mib > max {
+            return Err(format!(
+                "{mib} MiB is more than the {max} MiB {what}: {flag} takes a whole number from 1 \
+                 to {max}"
+            ));
+        }
+        Ok(mib)
+    })
 }
 
 /// The largest `--chunk-triangles`: a chunk is built in memory as a mesh,

@@ -7,6 +7,7 @@ use crate::files::{AtomicFile, IoError};
 use crate::scene::{GenWriteError, Kind};
 
 use super::CliResult;
+use super::values::whole;
 
 /// Arguments of `cbvh gen`.
 #[derive(clap::Args, Debug)]
@@ -16,10 +17,11 @@ pub struct GenArgs {
     /// Requested triangle count (the result is within 5 %; default: the
     /// kind's default), from 1 000 to the limit of the output's form (see
     /// `--output`).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<usize>(0, usize::MAX as u64))]
     pub tris: Option<usize>,
     /// Seed: the same seed gives the same mesh.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true,
+          value_parser = whole::<u64>(0, u64::MAX))]
     pub seed: u64,
     /// Output file, .ply (binary) or .obj. PLY is written as it is
     /// generated, in bounded memory, for every kind but the isosurface (up

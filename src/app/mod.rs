@@ -10,6 +10,8 @@
 //! - [`plot`]: the drop tests' PNG line plots.
 //! - [`check_output`], [`check_threads`], [`check_tris`]: the checks every
 //!   command makes of its flags before any work, naming the flag.
+//! - [`values`]: the numeric flags' value parsers (negative numbers, and
+//!   codec settings against the bounds the codecs declare).
 //!
 //! The binaries are a line each: [`main`] for `cbvh`, and
 //! [`exit`]`(drop::lucy::run(...))` for a drop test under its own name.
@@ -20,6 +22,7 @@ pub mod generate;
 pub mod info;
 pub mod plot;
 pub mod render;
+pub mod values;
 
 use std::process::ExitCode;
 
@@ -29,9 +32,14 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 use crate::Mesh;
+use crate::codec::clbvh::ClOptions;
+use crate::codec::hcc::HccOptions;
+use crate::codec::racbvh::RacOptions;
+use crate::codec::settings::Setting;
 use crate::codec::{AnyCodec, CodecKind, OpenOptions};
 use crate::scene::Kind;
 use indicatif::{ProgressBar, ProgressStyle};
+use values::whole;
 
 /// A subcommand's error: printed after `error: `, exit status 1.
 pub type CliResult = Result<(), Box<dyn std::error::Error>>;
@@ -216,17 +224,20 @@ pub struct MeshSource {
     /// hcc-ooc's low-level trees): the cache's budget in MiB. An hcc-ooc
     /// file whose i-HCCMesh fits is decoded whole; one that does not runs
     /// out of core, memory-mapped.
-    #[arg(long, value_name = "MIB", default_value_t = 1024)]
+    #[arg(long, value_name = "MIB", default_value_t = 1024, allow_negative_numbers = true,
+          value_parser = whole::<usize>(0, usize::MAX as u64))]
     pub cache_mib: usize,
     /// Generate the mesh instead: statue, turbine, plant, robot or isosurface.
     #[arg(long = "gen", value_name = "KIND")]
     pub gen_kind: Option<Kind>,
     /// Triangle count to generate, 1 000 to 200 000 000 (default: the
     /// kind's default).
-    #[arg(long, requires = "gen_kind")]
+    #[arg(long, requires = "gen_kind", allow_negative_numbers = true,
+          value_parser = whole::<usize>(0, usize::MAX as u64))]
     pub tris: Option<usize>,
     /// Generator seed.
-    #[arg(long, default_value_t = 0, requires = "gen_kind")]
+    #[arg(long, default_value_t = 0, requires = "gen_kind", allow_negative_numbers = true,
+          value_parser = whole::<u64>(0, u64::MAX))]
     pub seed: u64,
 }
 
@@ -354,7 +365,10 @@ impl std::fmt::Display for Structure {
 /// drop tests): the common ones, and each codec's own as `--set
 /// CODEC.KEY=VALUE`, turned into options by the codecs themselves
 /// ([`crate::codec::settings`]), so that no codec's field is named here
-/// but in the shorthands of the last six flags.
+/// but in the shorthands of the last six flags, which take their keys and
+/// bounds from the codecs' declared settings ([`Setting`]). Every value is
+/// checked against its codec whether that codec is in use or not: a
+/// setting for a codec the command does not build is a mistake.
 #[derive(clap::Args, Debug, Clone)]
 pub struct CodecFlags {
     /// The most triangles a leaf of the canonical tree holds (1, the
@@ -362,30 +376,38 @@ pub struct CodecFlags {
     /// that many (hcc's multi-triangle leaves); CLBVH collapses its own
     /// leaves from that tree, of up to 4 triangles (compact: 6) or this
     /// many if more.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true,
+          value_parser = whole::<u16>(1, u16::MAX.into()))]
     pub leaf_size: u16,
     /// Bits per quantized vertex coordinate; 0 keeps vertices as f32.
     /// Unset: each codec's default (racbvh 16, hcc f32, hcc-ooc 16, which
-    /// always quantizes: 0 gives it 16).
-    #[arg(long)]
+    /// always quantizes: 0 gives it 16). Bits that no codec quantizes to
+    /// are refused, and a codec in use refuses bits it does not take (the
+    /// error says what each takes).
+    #[arg(long, allow_negative_numbers = true, value_parser = values::vertex_bits())]
     pub vertex_bits: Option<u32>,
     /// A codec's own setting, CODEC.KEY=VALUE (repeatable; a later one
-    /// wins). The settings:
+    /// wins). The settings, and the values they take, from the registry:
     #[arg(long = "set", value_name = "CODEC.KEY=VALUE", long_help = settings_help())]
     pub set: Vec<String>,
-    /// RACBVH: nodes per cluster, a power of two in 256..=16384 (shorthand
-    /// for --set racbvh.cluster-nodes=N; 4096 by default).
-    #[arg(long)]
+    /// RACBVH: nodes per cluster (shorthand for --set
+    /// racbvh.cluster-nodes=N, which takes the same values; 4096 by
+    /// default).
+    #[arg(long, allow_negative_numbers = true,
+          value_parser = values::setting::<u32>(CodecKind::Racbvh, RacOptions::CLUSTER_NODES))]
     pub cluster_nodes: Option<u32>,
     /// RACBVH: bits per quantized box coordinate (shorthand for --set
-    /// racbvh.bits=N; 16 by default).
-    #[arg(long)]
+    /// racbvh.bits=N, which takes the same values; 16 by default).
+    #[arg(long, allow_negative_numbers = true,
+          value_parser = values::setting::<u32>(CodecKind::Racbvh, RacOptions::BITS))]
     pub bits: Option<u32>,
     /// CLBVH: `M`, the most triangles its SAH collapse merges into one
-    /// leaf (1 to 10); subtrees of at most `8 · M` triangles become
-    /// compressed multi-leaf nodes (the paper's `N × M` threshold).
-    /// Shorthand for --set clbvh.leaf-size=M --set clbvh-compact.leaf-size=M.
-    #[arg(long, value_name = "M")]
+    /// leaf; subtrees of at most `8 · M` triangles become compressed
+    /// multi-leaf nodes (the paper's `N × M` threshold). Shorthand for
+    /// --set clbvh.leaf-size=M --set clbvh-compact.leaf-size=M, which take
+    /// the same values.
+    #[arg(long, value_name = "M", allow_negative_numbers = true,
+          value_parser = values::setting::<usize>(CodecKind::Clbvh, ClOptions::LEAF_SIZE))]
     pub clbvh_leaf_size: Option<usize>,
     /// CLBVH: regular 8-wide nodes only, no compressed multi-leaf nodes
     /// (the paper's uncompressed BVH8 reference; shorthand for --set
@@ -405,30 +427,36 @@ pub struct CodecFlags {
     pub tree_order: bool,
 }
 
+/// `CODEC.KEY=VALUE` for codec `kind`'s `setting`.
+fn shorthand(kind: CodecKind, setting: Setting, value: impl std::fmt::Display) -> String {
+    format!("{kind}.{}={value}", setting.key)
+}
+
 impl CodecFlags {
     /// The settings, shorthands first and then `--set` in order.
     pub fn settings(&self) -> Result<crate::codec::Settings, crate::codec::SettingsError> {
         let mut s = crate::codec::Settings::new(usize::from(self.leaf_size), self.vertex_bits);
         let mut shorthands = Vec::new();
+        let rac = CodecKind::Racbvh;
         if let Some(n) = self.cluster_nodes {
-            shorthands.push(format!("racbvh.cluster-nodes={n}"));
+            shorthands.push(shorthand(rac, RacOptions::CLUSTER_NODES, n));
         }
         if let Some(n) = self.bits {
-            shorthands.push(format!("racbvh.bits={n}"));
+            shorthands.push(shorthand(rac, RacOptions::BITS, n));
         }
-        for codec in ["clbvh", "clbvh-compact"] {
+        for codec in [CodecKind::Clbvh, CodecKind::ClbvhCompact] {
             if let Some(m) = self.clbvh_leaf_size {
-                shorthands.push(format!("{codec}.leaf-size={m}"));
+                shorthands.push(shorthand(codec, ClOptions::LEAF_SIZE, m));
             }
             if self.clbvh_uncompressed {
-                shorthands.push(format!("{codec}.multi-leaf=false"));
+                shorthands.push(shorthand(codec, ClOptions::MULTI_LEAF, false));
             }
         }
         if self.no_vertex_ids {
-            shorthands.push("hcc.vertex-ids=false".into());
+            shorthands.push(shorthand(CodecKind::Hcc, HccOptions::VERTEX_IDS, false));
         }
         if self.tree_order {
-            shorthands.push("hcc.tree-order=true".into());
+            shorthands.push(shorthand(CodecKind::Hcc, HccOptions::TREE_ORDER, true));
         }
         for spec in shorthands.iter().chain(&self.set) {
             s.set(spec)?;
@@ -437,7 +465,8 @@ impl CodecFlags {
     }
 
     /// The options of the codecs `kinds` from these flags (the others
-    /// keep their defaults).
+    /// keep their defaults, but their settings are checked all the same:
+    /// [`AnyOptions::from_settings`](crate::codec::AnyOptions::from_settings)).
     pub fn options(
         &self,
         kinds: &[CodecKind],
@@ -452,9 +481,22 @@ fn settings_help() -> String {
         "A codec's own setting, CODEC.KEY=VALUE (repeatable; a later one wins). The settings:",
     );
     for k in CodecKind::ALL {
-        let keys = k.settings();
-        if !keys.is_empty() {
+        let settings = k.settings();
+        if !settings.is_empty() {
+            let keys: Vec<&str> = settings.iter().map(|s| s.key).collect();
             help.push_str(&format!("\n  {}: {}", k.name(), keys.join(", ")));
+        }
+    }
+    help.push_str("\nThe values they take (checked for every codec, in use or not):");
+    for k in CodecKind::ALL {
+        for s in k.settings() {
+            help.push_str(&format!("\n  {k}.{}: {}", s.key, s.values));
+        }
+    }
+    help.push_str("\nThe bits per vertex coordinate (--vertex-bits) the codecs quantize to:");
+    for k in CodecKind::ALL {
+        if let Some(v) = k.vertex_bits() {
+            help.push_str(&format!("\n  {k}: {v}"));
         }
     }
     help

@@ -13,6 +13,7 @@ use crate::render::{
     render_turntable, save_animation,
 };
 
+use super::values::whole;
 use super::{CliResult, Loaded, MeshSource, Structure, progress_bar};
 
 /// Arguments of `cbvh render`.
@@ -30,23 +31,27 @@ pub struct RenderArgs {
     #[arg(long, default_value = "depth-first")]
     pub layout: Layout,
     /// Image width in pixels (1 to 16384).
-    #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(long, default_value_t = 800, allow_negative_numbers = true,
+          value_parser = whole::<u32>(1, 16384))]
     pub width: u32,
     /// Image height in pixels (1 to 16384).
-    #[arg(long, default_value_t = 600, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(long, default_value_t = 600, allow_negative_numbers = true,
+          value_parser = whole::<u32>(1, 16384))]
     pub height: u32,
     /// Number of point lights (0 to 32), each with shadow rays.
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=32))]
+    #[arg(long, default_value_t = 3, allow_negative_numbers = true,
+          value_parser = whole::<u32>(0, 32))]
     pub lights: u32,
     /// Mirror reflection bounces (0 to 16).
-    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=16))]
+    #[arg(long, default_value_t = 2, allow_negative_numbers = true,
+          value_parser = whole::<u32>(0, 16))]
     pub reflect_depth: u32,
     /// Primary rays only: no shadow rays and no reflections.
     #[arg(long)]
     pub primary_only: bool,
     /// Render threads (a local rayon pool; at most 4 × the machine's
     /// hardware threads); default: all cores.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<u32>(1, u32::MAX.into()))]
     pub threads: Option<u32>,
     /// Camera direction around the vertical axis, degrees (0: from +z).
     #[arg(long, default_value_t = 25.0, allow_negative_numbers = true)]
@@ -61,7 +66,8 @@ pub struct RenderArgs {
     /// circling the scene), 1 to 3600. The frames are held in memory until
     /// they are written: N × width × height × 3 bytes must be within half
     /// the machine's memory, checked before any work.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=3600))]
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
+          value_parser = whole::<u32>(1, 3600))]
     pub turntable: Option<u32>,
     /// Where to write the turntable: `.png` (animated PNG, lossless) or
     /// `.gif` (256 colours a frame); default: OUT with `-turntable` added
@@ -69,7 +75,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "PNG|GIF", requires = "turntable")]
     pub turntable_out: Option<PathBuf>,
     /// Turntable frames per second.
-    #[arg(long, default_value_t = 24, value_parser = clap::value_parser!(u16).range(1..=1000))]
+    #[arg(long, default_value_t = 24, allow_negative_numbers = true,
+          value_parser = whole::<u16>(1, 1000))]
     pub fps: u16,
     /// Print JSON instead of text.
     #[arg(long)]

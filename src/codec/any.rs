@@ -28,7 +28,7 @@ use super::hcc::HccBvh;
 use super::hcc::ooc::HccOocBvh;
 use super::plain::PlainBvh;
 use super::racbvh::RacBvh;
-use super::settings::{CodecOptions, Settings, SettingsError};
+use super::settings::{CodecOptions, Setting, Settings, SettingsError, Values};
 use crate::build::chunked::{ChunkedMesh, Progress};
 use crate::build::{BuildOptions, CanonicalBvh};
 use crate::contact::EdgeFlags;
@@ -236,16 +236,58 @@ impl CodecKind {
         CodecKind::of_magic(&head)
     }
 
-    /// The keys of the codec's own settings ([`CodecOptions::SETTINGS`]).
-    pub fn settings(self) -> &'static [&'static str] {
+    /// The codec's own settings, with the values each takes
+    /// ([`CodecOptions::SETTINGS`]).
+    pub fn settings(self) -> &'static [Setting] {
         struct Keys;
         impl KindVisitor for Keys {
-            type Output = &'static [&'static str];
-            fn visit<C: Registered>(self) -> &'static [&'static str] {
+            type Output = &'static [Setting];
+            fn visit<C: Registered>(self) -> &'static [Setting] {
                 <C::Options as CodecOptions>::SETTINGS
             }
         }
         self.visit(Keys)
+    }
+
+    /// The codec's own setting `key`, if it has one.
+    pub fn setting(self, key: &str) -> Option<Setting> {
+        self.settings().iter().copied().find(|s| s.key == key)
+    }
+
+    /// The bits per vertex coordinate the codec quantizes to, `None` for
+    /// a codec that keeps `f32` vertices ([`CodecOptions::VERTEX_BITS`]).
+    pub fn vertex_bits(self) -> Option<Values> {
+        struct Bits;
+        impl KindVisitor for Bits {
+            type Output = Option<Values>;
+            fn visit<C: Registered>(self) -> Option<Values> {
+                <C::Options as CodecOptions>::VERTEX_BITS
+            }
+        }
+        self.visit(Bits)
+    }
+
+    /// Checks the common vertex bits against every codec, whether in use
+    /// or not: 0 (`f32` vertices) or bits that some codec quantizes to
+    /// ([`CodecKind::vertex_bits`]); an error lists what the codecs take.
+    /// Whether the codecs in use take them is theirs to check
+    /// ([`AnyOptions::from_settings`]).
+    pub fn check_vertex_bits(bits: u32) -> Result<(), SettingsError> {
+        let quantizing = || {
+            CodecKind::ALL
+                .iter()
+                .filter_map(|k| k.vertex_bits().map(|v| (*k, v)))
+        };
+        if bits == 0 || quantizing().any(|(_, v)| v.allows(u64::from(bits))) {
+            return Ok(());
+        }
+        let codecs: Vec<String> = quantizing()
+            .map(|(k, v)| format!("{k} takes {v}"))
+            .collect();
+        Err(SettingsError::VertexBits {
+            bits,
+            codecs: codecs.join(", "),
+        })
     }
 
     /// The frame of the codec's files ([`Codec::FRAME`]): where their
@@ -324,8 +366,12 @@ impl AnyOptions {
     /// The options of the codecs `kinds` from a front end's settings, each
     /// made and checked by its codec ([`Codec::options_from`]); the other
     /// codecs keep their defaults (a `--vertex-bits 4` for hcc is no error
-    /// because RACBVH could not take it). A setting naming no codec is an
-    /// error.
+    /// because RACBVH could not take it). Every setting is checked whatever
+    /// codecs are in use: one naming no codec, a key its codec does not
+    /// have or a value its codec's declaration does not take
+    /// ([`Settings::check`]), and vertex bits no codec quantizes to
+    /// ([`CodecKind::check_vertex_bits`]), are errors; the codecs in use
+    /// are checked first, with their own messages.
     pub fn from_settings(settings: &Settings, kinds: &[CodecKind]) -> Result<Self, SettingsError> {
         if let Some((codec, key)) = settings
             .named_codecs()
@@ -336,6 +382,9 @@ impl AnyOptions {
                 key: key.into(),
                 known: CodecKind::names(", "),
             });
+        }
+        for k in kinds.iter().chain(CodecKind::ALL) {
+            settings.check(k.name(), k.settings())?;
         }
         struct Make<'a>(&'a mut AnyOptions, &'a Settings);
         impl KindVisitor for Make<'_> {
@@ -348,6 +397,9 @@ impl AnyOptions {
         let mut options = AnyOptions::default();
         for k in kinds {
             k.visit(Make(&mut options, settings))?;
+        }
+        if let Some(bits) = settings.vertex_bits {
+            CodecKind::check_vertex_bits(bits)?;
         }
         Ok(options)
     }

@@ -49,11 +49,12 @@ pub trait Codec: RayCursor + ByteSize + Send + Sync + Sized + 'static {
 
     /// The codec's options from a front end's [`Settings`]: a setting
     /// under the codec's name whose key is not among its options'
-    /// [`CodecOptions::SETTINGS`] is refused, then the options type makes
+    /// [`CodecOptions::SETTINGS`], or whose value its declaration does not
+    /// take, is refused ([`Settings::check`]), then the options type makes
     /// itself ([`CodecOptions::from_settings`]). Errors name the setting,
     /// before any work.
     fn options_from(settings: &Settings) -> Result<Self::Options, SettingsError> {
-        settings.only(Self::KIND.name(), <Self::Options as CodecOptions>::SETTINGS)?;
+        settings.check(Self::KIND.name(), <Self::Options as CodecOptions>::SETTINGS)?;
         Self::Options::from_settings(settings)
     }
 

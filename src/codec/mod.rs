@@ -97,11 +97,14 @@
 //!    `BUILDS_OUT_OF_CORE`; `cbvh build` then offers it out of core, by
 //!    the registry, with no line of its own.
 //! 3. Its options from a front end's [`Settings`]: `impl CodecOptions`
-//!    for its options type, next to it (`SETTINGS`, the keys of its own
-//!    `CODEC.KEY=VALUE` settings, and `from_settings`, which reads them and
-//!    the common settings it uses, leaf size and vertex bits, and checks
-//!    them). The contract refuses any other key under the codec's name
-//!    (`Codec::options_from`). `cbvh build`, the drop tests and their
+//!    for its options type, next to it (`SETTINGS`, its own
+//!    `CODEC.KEY=VALUE` settings with the values each takes, the one
+//!    place their bounds are stated; `VERTEX_BITS`, if it quantizes
+//!    vertices; and `from_settings`, which reads them and the common
+//!    settings it uses, leaf size and vertex bits, and checks them). The
+//!    contract refuses any other key under the codec's name, and any value
+//!    its declaration does not take (`Codec::options_from`), for every
+//!    codec whether in use or not. `cbvh build`, the drop tests and their
 //!    `--set` then take them; no front-end file names a codec's options.
 //! 4. One entry in the `registry!` invocation in [`any`] (variant, type,
 //!    options field, name, summary) and one arm in

@@ -5,6 +5,15 @@
 //! A front end never names a codec's fields: adding a codec, or a setting
 //! to one, touches no front-end file.
 //!
+//! Each codec declares its own settings with the values they take
+//! ([`Setting`], [`CodecOptions::SETTINGS`]) and the bits per vertex
+//! coordinate it quantizes to ([`CodecOptions::VERTEX_BITS`]): the one
+//! place their bounds are stated. [`AnyOptions::from_settings`](super::AnyOptions::from_settings)
+//! checks every setting against its codec's declaration whether or not
+//! that codec is in use (a `--set hcc.nosuch=1` for a plain build is a
+//! mistake, not a no-op), and the vertex bits against the codecs that
+//! quantize; the codecs in use then check their options as a whole.
+//!
 //! ```
 //! use cbvh::codec::{AnyOptions, CodecKind, Settings};
 //!
@@ -18,6 +27,11 @@
 //! s.set("racbvh.cluster-size=1024").unwrap();
 //! let e = AnyOptions::from_settings(&s, CodecKind::ALL).unwrap_err().to_string();
 //! assert!(e.contains("racbvh.cluster-size"), "{e}");
+//! // Also for a codec that is not in use, and for a value out of bounds.
+//! let mut s = Settings::new(1, None);
+//! s.set("racbvh.bits=99").unwrap();
+//! let e = AnyOptions::from_settings(&s, &[CodecKind::Plain]).unwrap_err().to_string();
+//! assert!(e.contains("racbvh.bits takes a whole number from 8 to 24"), "{e}");
 //! ```
 
 use std::str::FromStr;
@@ -34,6 +48,144 @@ pub struct Settings {
     /// codec that always quantizes takes its default).
     pub vertex_bits: Option<u32>,
     own: Vec<Own>,
+}
+
+/// One of a codec's own `CODEC.KEY=VALUE` settings, as the codec declares
+/// it ([`CodecOptions::SETTINGS`]): its key and the values it takes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Setting {
+    /// The key, e.g. `cluster-nodes`.
+    pub key: &'static str,
+    /// The values it takes.
+    pub values: Values,
+}
+
+impl Setting {
+    /// A setting that takes `true` or `false`.
+    pub const fn flag(key: &'static str) -> Self {
+        Self {
+            key,
+            values: Values::Bool,
+        }
+    }
+
+    /// A setting that takes a whole number from `min` to `max`.
+    pub const fn whole(key: &'static str, min: u64, max: u64) -> Self {
+        Self {
+            key,
+            values: Values::whole(min, max),
+        }
+    }
+
+    /// A setting that takes a power of two from `min` to `max`.
+    pub const fn power_of_two(key: &'static str, min: u64, max: u64) -> Self {
+        Self {
+            key,
+            values: Values::Whole {
+                min,
+                max,
+                power_of_two: true,
+            },
+        }
+    }
+}
+
+/// The values a setting or a flag takes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Values {
+    /// `true` or `false`.
+    Bool,
+    /// A whole number from `min` to `max`, a power of two if
+    /// `power_of_two`.
+    Whole {
+        /// The least.
+        min: u64,
+        /// The most.
+        max: u64,
+        /// Only powers of two.
+        power_of_two: bool,
+    },
+}
+
+impl Values {
+    /// A whole number from `min` to `max`.
+    pub const fn whole(min: u64, max: u64) -> Self {
+        Values::Whole {
+            min,
+            max,
+            power_of_two: false,
+        }
+    }
+
+    /// Whether the whole number `v` is among the values (`false` for
+    /// [`Values::Bool`]).
+    pub fn allows(self, v: u64) -> bool {
+        match self {
+            Values::Bool => false,
+            Values::Whole {
+                min,
+                max,
+                power_of_two,
+            } => (min..=max).contains(&v) && (!power_of_two || v.is_power_of_two()),
+        }
+    }
+
+    /// Checks `value`, as a front end gives it, for the setting or flag
+    /// `name` (named in the error, which says what `name` takes): a
+    /// negative number is refused as such, not as something that is no
+    /// number.
+    pub fn check(self, name: &str, value: &str) -> Result<(), String> {
+        let v = value;
+        match self {
+            Values::Bool => match v.parse::<bool>() {
+                Ok(_) => Ok(()),
+                Err(_) => Err(format!("{name} takes {self}, not {value:?}")),
+            },
+            Values::Whole {
+                min,
+                max,
+                power_of_two,
+            } => {
+                let digits = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
+                if v.strip_prefix('-').is_some_and(digits) {
+                    let or_0 = if min == 0 { " or 0" } else { "" };
+                    return Err(if max == u64::MAX && min <= 1 && !power_of_two {
+                        format!("{v} is negative: {name} takes a positive whole number{or_0}")
+                    } else {
+                        format!("{v} is negative: {name} takes a positive number{or_0} ({self})")
+                    });
+                }
+                if !digits(v.strip_prefix('+').unwrap_or(v)) {
+                    return Err(format!("{value:?} is no whole number: {name} takes {self}"));
+                }
+                // All digits: a parse error is an overflow.
+                match v.parse::<u64>() {
+                    Ok(n) if self.allows(n) => Ok(()),
+                    _ => Err(format!("{name} takes {self}, not {v}")),
+                }
+            }
+        }
+    }
+}
+
+/// What the values are, as a noun: "true or false", "a whole number from
+/// 8 to 24", "a power of two from 256 to 16384", "a whole number, 1 or
+/// more" (no upper bound but the type's).
+impl std::fmt::Display for Values {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Values::Bool => f.write_str("true or false"),
+            Values::Whole {
+                min,
+                max,
+                power_of_two: true,
+            } => write!(f, "a power of two from {min} to {max}"),
+            Values::Whole { min, max, .. } if max == u64::MAX => {
+                write!(f, "a whole number, {min} or more")
+            }
+            Values::Whole { min, max, .. } => write!(f, "a whole number from {min} to {max}"),
+        }
+    }
 }
 
 /// One `CODEC.KEY=VALUE`.
@@ -91,6 +243,17 @@ pub enum SettingsError {
         /// Why it is rejected.
         reason: String,
     },
+    /// Common vertex bits that no codec quantizes to.
+    #[error(
+        "vertex bits {bits}: no codec quantizes to {bits} bits ({codecs}); 0 keeps f32 vertices"
+    )]
+    VertexBits {
+        /// The bits given.
+        bits: u32,
+        /// What the codecs that quantize take, e.g. "racbvh takes a whole
+        /// number from 8 to 24, ...".
+        codecs: String,
+    },
     /// Options the codec rejects as a whole (from the common settings,
     /// or its own settings together).
     #[error("{codec}: {reason}")]
@@ -103,15 +266,23 @@ pub enum SettingsError {
 }
 
 /// A codec's options type as front ends make it
-/// ([`Codec::Options`](super::Codec::Options) requires it): the keys of the
-/// codec's own settings, and how those and the common settings the codec
-/// uses become its options. The contract refuses a setting under the
-/// codec's name with another key before calling `from_settings`
-/// ([`Codec::options_from`](super::Codec::options_from)).
+/// ([`Codec::Options`](super::Codec::Options) requires it): the codec's own
+/// settings with the values they take, the vertex bits it quantizes to,
+/// and how those and the common settings the codec uses become its
+/// options. The contract refuses a setting under the codec's name with
+/// another key, or a value its declaration does not take, before calling
+/// `from_settings` ([`Codec::options_from`](super::Codec::options_from)).
 pub trait CodecOptions: Sized {
-    /// The keys of the codec's own `CODEC.KEY=VALUE` settings (for help
-    /// texts, and the only keys the contract lets through).
-    const SETTINGS: &'static [&'static str];
+    /// The codec's own `CODEC.KEY=VALUE` settings and the values each
+    /// takes (for help texts, the only keys the contract lets through,
+    /// and the bounds every front end checks, for every codec).
+    const SETTINGS: &'static [Setting];
+
+    /// The bits per vertex coordinate the codec quantizes to (the common
+    /// [`Settings::vertex_bits`]), or `None` for a codec that keeps `f32`
+    /// vertices whatever they say (the default). Vertex bits that no codec
+    /// takes are refused ([`Settings::vertex_bits`] 0 keeps `f32`).
+    const VERTEX_BITS: Option<Values> = None;
 
     /// The options from `settings`: a bad value, or options the codec
     /// would reject, is an error naming them, before any work.
@@ -120,7 +291,7 @@ pub trait CodecOptions: Sized {
 
 /// The options of a codec with nothing to choose (plain): no keys.
 impl CodecOptions for () {
-    const SETTINGS: &'static [&'static str] = &[];
+    const SETTINGS: &'static [Setting] = &[];
 
     fn from_settings(_: &Settings) -> Result<(), SettingsError> {
         Ok(())
@@ -181,25 +352,35 @@ impl Settings {
             })
     }
 
-    /// An error for the first own setting of `codec` whose key is not
-    /// among `known`.
-    pub fn only(&self, codec: &str, known: &[&str]) -> Result<(), SettingsError> {
-        match self
-            .own
-            .iter()
-            .find(|o| o.codec == codec && !known.contains(&o.key.as_str()))
-        {
-            None => Ok(()),
-            Some(o) => Err(SettingsError::UnknownKey {
-                codec: codec.into(),
-                key: o.key.clone(),
-                known: if known.is_empty() {
-                    "none".into()
-                } else {
-                    known.join(", ")
-                },
-            }),
+    /// Checks the own settings of `codec` against its declared `known`
+    /// settings: an error for the first whose key is not among them, or
+    /// whose value the setting does not take ([`Values::check`]).
+    pub fn check(&self, codec: &str, known: &[Setting]) -> Result<(), SettingsError> {
+        for o in self.own.iter().filter(|o| o.codec == codec) {
+            let Some(setting) = known.iter().find(|k| k.key == o.key) else {
+                let keys: Vec<&str> = known.iter().map(|k| k.key).collect();
+                return Err(SettingsError::UnknownKey {
+                    codec: codec.into(),
+                    key: o.key.clone(),
+                    known: if keys.is_empty() {
+                        "none".into()
+                    } else {
+                        keys.join(", ")
+                    },
+                });
+            };
+            let name = format!("{codec}.{}", o.key);
+            setting
+                .values
+                .check(&name, &o.value)
+                .map_err(|reason| SettingsError::BadValue {
+                    codec: codec.into(),
+                    key: o.key.clone(),
+                    value: o.value.clone(),
+                    reason,
+                })?;
         }
+        Ok(())
     }
 
     /// The common `vertex_bits` for a codec whose default is `default`
@@ -245,15 +426,41 @@ mod tests {
         s.set("racbvh.bits=many").unwrap();
         let e = s.get::<u32>("racbvh", "bits").unwrap_err().to_string();
         assert!(e.contains("racbvh.bits=many"), "{e}");
-        let e = s
-            .only("racbvh", &["cluster-nodes"])
-            .unwrap_err()
-            .to_string();
+        let cluster_nodes = Setting::power_of_two("cluster-nodes", 256, 16384);
+        let e = s.check("racbvh", &[cluster_nodes]).unwrap_err().to_string();
         assert!(
             e.contains("no setting \"bits\"") && e.contains("cluster-nodes"),
             "{e}"
         );
-        assert!(s.only("hcc", &[]).is_ok());
+        assert!(s.check("hcc", &[]).is_ok());
+        // A declared key with a value its declaration does not take.
+        for (value, want) in [
+            (
+                "100",
+                "racbvh.cluster-nodes takes a power of two from 256 to 16384, not 100",
+            ),
+            ("32768", "not 32768"),
+            (
+                "-5",
+                "-5 is negative: racbvh.cluster-nodes takes a positive number",
+            ),
+            ("1e3", "\"1e3\" is no whole number"),
+            ("99999999999999999999", "not 99999999999999999999"),
+        ] {
+            let mut s = Settings::default();
+            s.set(&format!("racbvh.cluster-nodes={value}")).unwrap();
+            let e = s.check("racbvh", &[cluster_nodes]).unwrap_err().to_string();
+            assert!(e.contains(want), "{value}: {e}");
+        }
+        let mut s = Settings::default();
+        s.set("racbvh.cluster-nodes=+512").unwrap();
+        assert!(s.check("racbvh", &[cluster_nodes]).is_ok());
+        s.set("hcc.tree-order=yes").unwrap();
+        let e = s
+            .check("hcc", &[Setting::flag("tree-order")])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("hcc.tree-order takes true or false"), "{e}");
     }
 
     /// No settings give every codec its defaults.
@@ -297,7 +504,7 @@ mod tests {
         for (spec, want) in [
             ("racbvh.cluster-nodes=100", "power of two"),
             ("racbvh.bits=2", "bits"),
-            ("clbvh.leaf-size=11", "use 1 to 10"),
+            ("clbvh.leaf-size=11", "from 1 to 10, not 11"),
             ("hcc.tree-order=maybe", "hcc.tree-order=maybe"),
             ("plain.anything=1", "plain has no setting"),
             ("zip.level=9", "no codec named \"zip\""),
@@ -327,6 +534,58 @@ mod tests {
         let s = Settings::new(1, Some(4));
         assert!(AnyOptions::from_settings(&s, &[CodecKind::Hcc]).is_ok());
         assert!(AnyOptions::from_settings(&s, &[CodecKind::Racbvh]).is_err());
+        assert!(AnyOptions::from_settings(&s, &[CodecKind::Plain]).is_ok());
+    }
+
+    /// Issue 51: a codec's own settings are checked against its
+    /// declaration whether the codec is in use or not, and vertex bits
+    /// against every codec that quantizes: a plain build (or none at all)
+    /// refuses what no codec would take.
+    #[test]
+    fn settings_of_codecs_not_in_use_are_checked_too() {
+        use crate::codec::{AnyOptions, CodecKind};
+        for (spec, want) in [
+            ("hcc.nosuch=1", "hcc has no setting \"nosuch\""),
+            (
+                "racbvh.bits=99",
+                "racbvh.bits takes a whole number from 8 to 24, not 99",
+            ),
+            (
+                "racbvh.cluster-nodes=100",
+                "racbvh.cluster-nodes takes a power of two from 256 to 16384, not 100",
+            ),
+            (
+                "clbvh.leaf-size=0",
+                "clbvh.leaf-size takes a whole number from 1 to 10, not 0",
+            ),
+            ("clbvh-compact.multi-leaf=no", "takes true or false"),
+            ("racbvh.tri-delta-threshold=-3", "-3 is negative"),
+        ] {
+            let mut s = Settings::default();
+            s.set(spec).unwrap();
+            for kinds in [&[CodecKind::Plain][..], &[]] {
+                let e = AnyOptions::from_settings(&s, kinds)
+                    .unwrap_err()
+                    .to_string();
+                assert!(e.contains(want), "{spec} with {kinds:?}: {e}");
+            }
+        }
+        let e = AnyOptions::from_settings(&Settings::new(1, Some(33)), &[CodecKind::Plain])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("vertex bits 33: no codec quantizes to 33 bits")
+                && e.contains("racbvh takes a whole number from 8 to 24")
+                && e.contains("hcc takes a whole number from 1 to 24"),
+            "{e}"
+        );
+        for bits in [0, 1, 24] {
+            let s = Settings::new(1, Some(bits));
+            assert!(
+                AnyOptions::from_settings(&s, &[CodecKind::Plain]).is_ok(),
+                "{bits}"
+            );
+        }
     }
 
     #[test]

@@ -7,7 +7,10 @@
 //! what they read as they go (finite coordinates, face indices in range) so
 //! that errors name the exact line (text) or byte offset (binary). They never
 //! panic and never trust a count from a header for an allocation: capacities
-//! are capped by what the remaining bytes could possibly hold.
+//! are capped by what the remaining bytes could possibly hold. A count must
+//! match the body both ways: a body short of it is truncated, and data
+//! after the records it counts is refused (OFF, PLY, binary STL), never
+//! dropped.
 
 mod obj;
 mod off;

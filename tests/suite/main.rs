@@ -18,6 +18,8 @@ mod builder_depth;
 mod ccd;
 mod characters;
 mod clbvh;
+#[cfg(feature = "app")]
+mod cli_flags;
 mod closed_mass;
 #[cfg(feature = "app")]
 mod codec_files;

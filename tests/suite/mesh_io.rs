@@ -395,6 +395,121 @@ fn binary_stl_with_data_beyond_its_count_is_an_error() {
     );
 }
 
+/// Issue 51: a header whose counts disagree with the body is refused in
+/// both directions, naming the counts. A count short of the body used to
+/// load the records it counts and drop the rest without a word (OFF, PLY);
+/// binary STL refused it already.
+#[test]
+fn header_counts_that_disagree_with_the_body_are_refused() {
+    let load = |bytes: &[u8], format: Format| load_bytes(bytes, format, Path::new("n.x"));
+    // OFF: the counts are on line 3, "5 2 0".
+    for (counts, place, want) in [
+        (
+            "5 1 0",
+            Place::Line(11),
+            "5 vertices and 1 faces that the counts on line 3",
+        ),
+        (
+            "4 2 0",
+            Place::Line(9),
+            "the counts on line 3 announce 4 vertices",
+        ),
+    ] {
+        let err = load(OFF.replacen("5 2 0", counts, 1).as_bytes(), Format::Off).unwrap_err();
+        assert!(
+            matches!(&err, MeshError::Malformed { place: p, .. } if *p == place),
+            "{counts}: {err:?}"
+        );
+        assert!(err.to_string().contains(want), "{counts}: {err}");
+    }
+    for counts in ["5 3 0", "6 2 0"] {
+        let err = load(OFF.replacen("5 2 0", counts, 1).as_bytes(), Format::Off).unwrap_err();
+        assert!(
+            matches!(err, MeshError::Truncated { .. }),
+            "{counts}: {err:?}"
+        );
+    }
+    // Trailing comments and blank lines are no data.
+    let commented = format!("{OFF}\n# the end\n\n");
+    assert_sample(&load(commented.as_bytes(), Format::Off).unwrap());
+    // ASCII PLY: vertex 5 on line 4, edge 1 on line 9, face 2 on line 12.
+    let err = load(
+        PLY_ASCII
+            .replacen("element face 2", "element face 1", 1)
+            .as_bytes(),
+        Format::Ply,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            MeshError::Malformed {
+                place: Place::Line(23),
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    assert!(
+        err.to_string().contains("face 1 on line 12") && err.to_string().contains("count is short"),
+        "{err}"
+    );
+    for (from, to) in [
+        ("element face 2", "element face 3"),
+        ("element vertex 5", "element vertex 4"),
+        ("element vertex 5", "element vertex 6"),
+    ] {
+        let text = PLY_ASCII.replacen(from, to, 1);
+        assert!(load(text.as_bytes(), Format::Ply).is_err(), "{to}");
+    }
+    let blank_end = format!("{PLY_ASCII}\n  \n");
+    assert_sample(&load(blank_end.as_bytes(), Format::Ply).unwrap());
+    // Binary PLY: a face count short of the faces (the second face's bytes
+    // are then read as the extra element and some are left over), and a
+    // byte after the last record.
+    for big in [false, true] {
+        let bytes = ply_binary(big);
+        let at = bytes
+            .windows(14)
+            .position(|w| w == b"element face 2")
+            .unwrap();
+        let mut short = bytes.clone();
+        short[at + 13] = b'1';
+        let mut longer = bytes.clone();
+        longer.push(0);
+        for (what, b) in [("face 1", &short), ("a byte after", &longer)] {
+            let err = load(b, Format::Ply).unwrap_err();
+            assert!(
+                matches!(
+                    err,
+                    MeshError::Malformed {
+                        place: Place::Byte(_),
+                        ..
+                    }
+                ) && err.to_string().contains("count is short"),
+                "{what} (big-endian {big}): {err:?}"
+            );
+        }
+        let mut more = bytes.clone();
+        more[at + 13] = b'3';
+        assert!(
+            load(&more, Format::Ply).is_err(),
+            "face 3 (big-endian {big})"
+        );
+    }
+    // Binary STL, both directions.
+    for (count, truncated) in [(1u32, false), (3, true)] {
+        let mut bytes = stl_binary();
+        bytes[80..84].copy_from_slice(&count.to_le_bytes());
+        let err = load(&bytes, Format::Stl).unwrap_err();
+        assert_eq!(
+            matches!(err, MeshError::Truncated { .. }),
+            truncated,
+            "{count}: {err:?}"
+        );
+    }
+}
+
 #[test]
 fn truncated_binary_stl() {
     let bytes = stl_binary();

@@ -4,6 +4,7 @@
 
 use std::path::PathBuf;
 
+use crate::app::values::whole;
 use crate::scene::Kind;
 
 /// Drop a statue on a turbine and time the narrow phase per step, parry TriMesh vs cbvh.
@@ -11,10 +12,10 @@ use crate::scene::Kind;
 #[command(name = "lucy-on-turbine", version, about)]
 pub struct LucyArgs {
     /// Triangles of the generated statue (1 000 to 200 000 000).
-    #[arg(long, default_value_t = 200_000)]
+    #[arg(long, default_value_t = 200_000, allow_negative_numbers = true, value_parser = whole::<usize>(0, usize::MAX as u64))]
     pub statue_tris: usize,
     /// Triangles of the generated turbine (1 000 to 200 000 000).
-    #[arg(long, default_value_t = 100_000)]
+    #[arg(long, default_value_t = 100_000, allow_negative_numbers = true, value_parser = whole::<usize>(0, usize::MAX as u64))]
     pub turbine_tris: usize,
     /// Use this mesh file (or cbvh codec file) as the statue instead (any units and offset: it is scaled and placed).
     #[arg(long)]

@@ -17,12 +17,13 @@ use crate::sim::droptest::{
 };
 
 use super::progress_bar as bar;
+use super::values::whole;
 
 /// Options common to the sims.
 #[derive(clap::Args, Debug, Clone)]
 pub struct SimArgs {
     /// Number of steps at 60 Hz.
-    #[arg(long, default_value_t = 215)]
+    #[arg(long, default_value_t = 215, allow_negative_numbers = true, value_parser = whole::<usize>(0, usize::MAX as u64))]
     pub steps: usize,
     /// Comma-separated shapes to run (default: all of them): parry
     /// (parry's TriMesh), parry-fixed (the same with FIX_INTERNAL_EDGES,
@@ -50,10 +51,11 @@ pub struct SimArgs {
     #[arg(long)]
     pub plot: Option<PathBuf>,
     /// Worker threads for building trees (rapier's step runs on one thread).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = whole::<usize>(0, usize::MAX as u64))]
     pub threads: Option<usize>,
     /// Generator seed.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true,
+          value_parser = whole::<u64>(0, u64::MAX))]
     pub seed: u64,
     /// Width of the dropped mesh as a fraction of the base's width
     /// (default: 0.5 for lucy-on-turbine, 0.1 for robot-in-plant, whose
@@ -95,7 +97,8 @@ pub struct SimArgs {
     #[arg(
         long,
         default_value_t = droptest::REPLAY_ROUNDS as u32,
-        value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_REPLAY_ROUNDS)),
+        allow_negative_numbers = true,
+        value_parser = whole::<u32>(1, MAX_REPLAY_ROUNDS.into()),
         requires = "replay"
     )]
     pub replay_rounds: u32,
@@ -105,7 +108,8 @@ pub struct SimArgs {
     /// must stay within the 4 294 967 295 triangles a mesh can number
     /// (checked before any work from the generator's plan or the file's
     /// header, and once the mesh is loaded).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true,
+          value_parser = whole::<u32>(0, u32::MAX.into()))]
     pub subdivide: u32,
     /// The cbvh shapes' codec settings.
     #[command(flatten)]

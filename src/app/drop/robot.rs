@@ -4,6 +4,7 @@
 
 use std::path::PathBuf;
 
+use crate::app::values::whole;
 use crate::scene::Kind;
 
 /// Drop a robot into a power plant and time the narrow phase per step, parry TriMesh vs cbvh.
@@ -11,10 +12,10 @@ use crate::scene::Kind;
 #[command(name = "robot-in-plant", version, about)]
 pub struct RobotArgs {
     /// Triangles of the generated robot (1 000 to 200 000 000).
-    #[arg(long, default_value_t = 16_000)]
+    #[arg(long, default_value_t = 16_000, allow_negative_numbers = true, value_parser = whole::<usize>(0, usize::MAX as u64))]
     pub robot_tris: usize,
     /// Triangles of the generated plant (1 000 to 200 000 000).
-    #[arg(long, default_value_t = 200_000)]
+    #[arg(long, default_value_t = 200_000, allow_negative_numbers = true, value_parser = whole::<usize>(0, usize::MAX as u64))]
     pub plant_tris: usize,
     /// Use this mesh file (or cbvh codec file) as the robot instead.
     #[arg(long)]

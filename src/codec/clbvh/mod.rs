@@ -94,7 +94,7 @@ use glam::Vec3A;
 
 use crate::codec::ByteSize;
 use crate::codec::common::MassProps;
-use crate::codec::settings::{CodecOptions, Settings, SettingsError};
+use crate::codec::settings::{CodecOptions, Setting, Settings, SettingsError};
 use crate::contact::EdgeFlags;
 use crate::geom::Aabb;
 use crate::mesh::Mesh;
@@ -325,11 +325,21 @@ impl crate::codec::ByteSize for ClBvhCompact {
     }
 }
 
-/// The keys of both variants' own settings.
-const LEAF_SETTINGS: &[&str] = &["leaf-size", "multi-leaf"];
+impl ClOptions {
+    /// `leaf_size` as a setting (`clbvh.leaf-size`, and
+    /// `clbvh-compact.leaf-size`): `M`, 1 to [`MAX_LEAF_SIZE`].
+    pub const LEAF_SIZE: Setting = Setting::whole("leaf-size", 1, MAX_LEAF_SIZE as u64);
+    /// `multi_leaf` as a setting (`clbvh.multi-leaf`, and
+    /// `clbvh-compact.multi-leaf`): `false` for the uncompressed 8-wide
+    /// reference.
+    pub const MULTI_LEAF: Setting = Setting::flag("multi-leaf");
+}
+
+/// Both variants' own settings.
+const LEAF_SETTINGS: &[Setting] = &[ClOptions::LEAF_SIZE, ClOptions::MULTI_LEAF];
 
 impl CodecOptions for ClOptions {
-    const SETTINGS: &'static [&'static str] = LEAF_SETTINGS;
+    const SETTINGS: &'static [Setting] = LEAF_SETTINGS;
 
     /// The options from a front end's settings ([`crate::codec::settings`]):
     /// `clbvh.leaf-size` (`M`, 1 to [`MAX_LEAF_SIZE`]; unset: 4, or the
@@ -346,7 +356,7 @@ impl CodecOptions for ClOptions {
 }
 
 impl CodecOptions for CompactOptions {
-    const SETTINGS: &'static [&'static str] = LEAF_SETTINGS;
+    const SETTINGS: &'static [Setting] = LEAF_SETTINGS;
 
     /// As [`ClOptions`]' settings, with the keys under `clbvh-compact` and
     /// `M` 6 by default.
@@ -368,13 +378,15 @@ fn leaf_settings(
     codec: &str,
     default_m: usize,
 ) -> Result<(usize, bool), SettingsError> {
-    const KEYS: &[&str] = LEAF_SETTINGS;
-    let m = s.get(codec, KEYS[0])?.unwrap_or(default_m.max(s.leaf_size));
-    if !(1..=MAX_LEAF_SIZE).contains(&m) {
+    let (size, multi) = (ClOptions::LEAF_SIZE, ClOptions::MULTI_LEAF);
+    let m = s
+        .get(codec, size.key)?
+        .unwrap_or(default_m.max(s.leaf_size));
+    if !size.values.allows(m as u64) {
         return Err(SettingsError::Invalid {
             codec: codec.into(),
-            reason: format!("leaf size {m} is not allowed: use 1 to {MAX_LEAF_SIZE}"),
+            reason: format!("leaf size {m} is not allowed: use {}", size.values),
         });
     }
-    Ok((m, s.get(codec, KEYS[1])?.unwrap_or(true)))
+    Ok((m, s.get(codec, multi.key)?.unwrap_or(true)))
 }

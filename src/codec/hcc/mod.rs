@@ -141,7 +141,7 @@ pub use node::HccNode;
 
 use crate::codec::ByteSize;
 use crate::codec::common::MassProps;
-use crate::codec::settings::{CodecOptions, Settings, SettingsError};
+use crate::codec::settings::{CodecOptions, Setting, Settings, SettingsError, Values};
 use crate::contact::EdgeFlags;
 use crate::mesh::Mesh;
 use ids::{IdMap, VertexIds};
@@ -271,21 +271,37 @@ impl HccOptions {
     }
 }
 
+impl HccOptions {
+    /// `vertex_ids` as a setting (`hcc.vertex-ids`).
+    pub const VERTEX_IDS: Setting = Setting::flag("vertex-ids");
+    /// `triangle_ids` as a setting (`hcc.triangle-ids`).
+    pub const TRIANGLE_IDS: Setting = Setting::flag("triangle-ids");
+    /// [`HccOptions::tree_order`] as a setting (`hcc.tree-order`: `true`
+    /// drops both id maps).
+    pub const TREE_ORDER: Setting = Setting::flag("tree-order");
+}
+
+/// The bits per vertex coordinate both HCCMesh forms' grids take: 1 to 24.
+pub const VERTEX_BIT_RANGE: Values = Values::whole(1, 24);
+
 impl CodecOptions for HccOptions {
-    const SETTINGS: &'static [&'static str] = &["vertex-ids", "triangle-ids", "tree-order"];
+    const SETTINGS: &'static [Setting] = &[Self::VERTEX_IDS, Self::TRIANGLE_IDS, Self::TREE_ORDER];
+    const VERTEX_BITS: Option<Values> = Some(VERTEX_BIT_RANGE);
 
     /// The options from a front end's settings ([`crate::codec::settings`]):
     /// `hcc.vertex-ids`, `hcc.triangle-ids` (`true`/`false`), `hcc.tree-order`
     /// (`true`: neither id map, as [`HccOptions::tree_order`]), and the
-    /// common `vertex_bits` (`f32` by default; 1 to 24).
+    /// common `vertex_bits` (`f32` by default; [`VERTEX_BIT_RANGE`]).
     fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
-        const KEYS: &[&str] = <HccOptions as CodecOptions>::SETTINGS;
         let d = Self::default();
-        let tree_order = s.get::<bool>("hcc", KEYS[2])?.unwrap_or(false);
+        let tree_order = s.get::<bool>("hcc", Self::TREE_ORDER.key)?.unwrap_or(false);
         let o = Self {
             vertex_bits: s.vertex_bits_or(d.vertex_bits),
-            vertex_ids: s.get("hcc", KEYS[0])?.unwrap_or(d.vertex_ids) && !tree_order,
-            triangle_ids: s.get("hcc", KEYS[1])?.unwrap_or(d.triangle_ids) && !tree_order,
+            vertex_ids: s.get("hcc", Self::VERTEX_IDS.key)?.unwrap_or(d.vertex_ids) && !tree_order,
+            triangle_ids: s
+                .get("hcc", Self::TRIANGLE_IDS.key)?
+                .unwrap_or(d.triangle_ids)
+                && !tree_order,
         };
         check_vertex_bits("hcc", o.vertex_bits)?;
         Ok(o)
@@ -445,13 +461,15 @@ impl ByteSize for HccBvh {
     }
 }
 
-/// Bits per quantized vertex coordinate, where given: 1 to 24 (both HCCMesh
-/// forms' grids).
+/// Bits per quantized vertex coordinate, where given: [`VERTEX_BIT_RANGE`]
+/// (both HCCMesh forms' grids).
 fn check_vertex_bits(codec: &str, bits: Option<u32>) -> Result<(), SettingsError> {
     match bits {
-        Some(b) if !(1..=24).contains(&b) => Err(SettingsError::Invalid {
+        Some(b) if !VERTEX_BIT_RANGE.allows(u64::from(b)) => Err(SettingsError::Invalid {
             codec: codec.into(),
-            reason: format!("vertex bits {b} is not allowed: use 1 to 24 (0 for f32 vertices)"),
+            reason: format!(
+                "vertex bits {b} is not allowed: use {VERTEX_BIT_RANGE} (0 for f32 vertices)"
+            ),
         }),
         _ => Ok(()),
     }

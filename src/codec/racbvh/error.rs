@@ -14,7 +14,7 @@ pub enum RacError {
         /// Its value.
         value: u64,
         /// What is allowed.
-        expected: &'static str,
+        expected: String,
     },
     /// The mesh cannot be stored.
     #[error("the mesh cannot be compressed: {0}")]

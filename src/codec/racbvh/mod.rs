@@ -254,7 +254,7 @@ pub use stream::{StreamedBuild, encode_streamed};
 
 use crate::codec::common::Store;
 use crate::codec::common::quant::{Grid, QBox};
-use crate::codec::settings::{CodecOptions, Settings, SettingsError};
+use crate::codec::settings::{CodecOptions, Setting, Settings, SettingsError, Values};
 use crate::contact::EdgeFlags;
 use context::*;
 
@@ -419,43 +419,78 @@ impl RacOptions {
         c
     }
 
-    /// Checks every field.
+    /// `cluster_nodes` as a setting (`racbvh.cluster-nodes`): a power of
+    /// two from 256 ([`MIN_CLUSTER_NODES`]) to 16384.
+    pub const CLUSTER_NODES: Setting =
+        Setting::power_of_two("cluster-nodes", MIN_CLUSTER_NODES as u64, 16384);
+
+    /// `bits` as a setting (`racbvh.bits`): 8 to 24.
+    pub const BITS: Setting = Setting::whole("bits", 8, 24);
+
+    /// `tri_delta_threshold` as a setting (`racbvh.tri-delta-threshold`):
+    /// 1 to 4096.
+    pub const TRI_DELTA_THRESHOLD: Setting = Setting::whole("tri-delta-threshold", 1, 4096);
+
+    /// The bits `vertex_bits` may give: 8 to 24.
+    pub const VERTEX_BIT_RANGE: Values = Values::whole(8, 24);
+
+    /// Checks every field, against the bounds its setting declares
+    /// ([`RacOptions::CLUSTER_NODES`], [`RacOptions::BITS`],
+    /// [`RacOptions::TRI_DELTA_THRESHOLD`], [`RacOptions::VERTEX_BIT_RANGE`]).
     pub fn validate(&self) -> Result<(), RacError> {
-        let c = self.cluster_nodes;
-        allowed(
-            (256..=16384).contains(&c) && c.is_power_of_two(),
+        let check = |what, value: u32, values: Values| {
+            allowed(
+                values.allows(u64::from(value)),
+                what,
+                value,
+                values.to_string(),
+            )
+        };
+        check(
             "cluster_nodes",
-            c,
-            "a power of two in 256..=16384",
+            self.cluster_nodes,
+            Self::CLUSTER_NODES.values,
         )?;
-        allowed((8..=24).contains(&self.bits), "bits", self.bits, "8..=24")?;
+        check("bits", self.bits, Self::BITS.values)?;
         if let Some(b) = self.vertex_bits {
-            let expected = "8..=24, or None for lossless f32 vertices";
-            allowed((8..=24).contains(&b), "vertex_bits", b, expected)?;
+            let expected = format!(
+                "{}, or None for lossless f32 vertices",
+                Self::VERTEX_BIT_RANGE
+            );
+            allowed(
+                Self::VERTEX_BIT_RANGE.allows(u64::from(b)),
+                "vertex_bits",
+                b,
+                expected,
+            )?;
         }
-        allowed(
-            (1..=4096).contains(&self.tri_delta_threshold),
+        check(
             "tri_delta_threshold",
             self.tri_delta_threshold,
-            "1..=4096",
+            Self::TRI_DELTA_THRESHOLD.values,
         )
     }
 }
 
 impl CodecOptions for RacOptions {
-    const SETTINGS: &'static [&'static str] = &["cluster-nodes", "bits", "tri-delta-threshold"];
+    const SETTINGS: &'static [Setting] =
+        &[Self::CLUSTER_NODES, Self::BITS, Self::TRI_DELTA_THRESHOLD];
+    const VERTEX_BITS: Option<Values> = Some(RacOptions::VERTEX_BIT_RANGE);
 
     /// The options from a front end's settings ([`crate::codec::settings`]):
     /// `racbvh.cluster-nodes`, `racbvh.bits`, `racbvh.tri-delta-threshold`,
     /// and the common `vertex_bits` (16 by default, 0 for `f32`). Checked
     /// as [`RacOptions::validate`] checks them.
     fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
-        const KEYS: &[&str] = <RacOptions as CodecOptions>::SETTINGS;
         let d = Self::default();
         let o = Self {
-            cluster_nodes: s.get("racbvh", KEYS[0])?.unwrap_or(d.cluster_nodes),
-            bits: s.get("racbvh", KEYS[1])?.unwrap_or(d.bits),
-            tri_delta_threshold: s.get("racbvh", KEYS[2])?.unwrap_or(d.tri_delta_threshold),
+            cluster_nodes: s
+                .get("racbvh", Self::CLUSTER_NODES.key)?
+                .unwrap_or(d.cluster_nodes),
+            bits: s.get("racbvh", Self::BITS.key)?.unwrap_or(d.bits),
+            tri_delta_threshold: s
+                .get("racbvh", Self::TRI_DELTA_THRESHOLD.key)?
+                .unwrap_or(d.tri_delta_threshold),
             vertex_bits: s.vertex_bits_or(d.vertex_bits),
             ..d
         };
@@ -469,12 +504,7 @@ impl CodecOptions for RacOptions {
 
 /// `Ok` when `ok`, else the [`RacError::Option`] that says the option
 /// `what` may not be `value` and what to use instead (`expected`).
-fn allowed(
-    ok: bool,
-    what: &'static str,
-    value: u32,
-    expected: &'static str,
-) -> Result<(), RacError> {
+fn allowed(ok: bool, what: &'static str, value: u32, expected: String) -> Result<(), RacError> {
     if ok {
         Ok(())
     } else {

@@ -6,6 +6,12 @@
 //! vertex per line (columns after x y z, such as colours, are ignored); one
 //! face per line, `n i0 ... i(n-1)` followed by optional colour values.
 //! Polygons are fan-triangulated.
+//!
+//! The counts must match the body in both directions: a file that ends
+//! before them is truncated, and one that goes on after the last face
+//! they announce is refused, naming the counts' line (a short count would
+//! otherwise drop the faces after it without a word, where binary STL
+//! refuses the same).
 
 use std::io::BufRead;
 
@@ -98,13 +104,13 @@ pub(super) fn read<R: BufRead>(
     let header = lines.text();
     let mut toks = tokens_before_comment(header);
     let first = toks.next().unwrap_or_default();
-    let (nv, nf) = if !header_keyword(first, place, src)? {
-        counts(tokens_before_comment(header), place, src)?
+    let ((nv, nf), counts_place) = if !header_keyword(first, place, src)? {
+        (counts(tokens_before_comment(header), place, src)?, place)
     } else if let Some(t) = toks.next() {
         if t.eq_ignore_ascii_case(b"BINARY") {
             return Err(src.malformed(place, "binary OFF files are not supported"));
         }
-        counts(std::iter::once(t).chain(toks), place, src)?
+        (counts(std::iter::once(t).chain(toks), place, src)?, place)
     } else {
         if !next_record(&mut lines, src)? {
             return Err(src.truncated(
@@ -112,7 +118,23 @@ pub(super) fn read<R: BufRead>(
                 "the counts line \"vertices faces edges\"",
             ));
         }
-        counts(tokens_before_comment(lines.text()), lines.place(), src)?
+        let place = lines.place();
+        (
+            counts(tokens_before_comment(lines.text()), place, src)?,
+            place,
+        )
+    };
+    // What a face error adds while the first face is read: a line that is
+    // no face there is most likely a vertex the vertex count left out.
+    let first_face_hint = |face: u64| {
+        if face == 0 {
+            format!(
+                " (the counts on {counts_place} announce {nv} vertices: if the file holds more, \
+                 the count is short)"
+            )
+        } else {
+            String::new()
+        }
     };
     if nv > u64::from(u32::MAX) + 1 {
         return Err(src.malformed(
@@ -181,15 +203,19 @@ pub(super) fn read<R: BufRead>(
             src.malformed(
                 lines.place(),
                 format!(
-                    "face {face}: expected the number of corners, found {}",
-                    show(first)
+                    "face {face}: expected the number of corners, found {}{}",
+                    show(first),
+                    first_face_hint(face)
                 ),
             )
         })?;
         if n < 3 {
             return Err(src.malformed(
                 lines.place(),
-                format!("face {face} has {n} corners; a face needs at least 3"),
+                format!(
+                    "face {face} has {n} corners; a face needs at least 3{}",
+                    first_face_hint(face)
+                ),
             ));
         }
         polygon.clear();
@@ -215,6 +241,19 @@ pub(super) fn read<R: BufRead>(
         }
         triangles.fan(&polygon);
         face += 1;
+    }
+    // A face count short of the file's faces would drop the faces after
+    // it (a vertex count short of the vertices shifts them into the faces,
+    // which then either fail to parse or run past the face count).
+    if next_record(&mut lines, src)? {
+        return Err(src.malformed(
+            lines.place(),
+            format!(
+                "the file goes on after the {nv} vertices and {nf} faces that the counts on \
+                 {counts_place} announce: a count is short, and what follows would be lost; \
+                 correct the counts"
+            ),
+        ));
     }
     Ok(vertices)
 }

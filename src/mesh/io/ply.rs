@@ -7,6 +7,12 @@
 //! index types); polygons are fan-triangulated. Other elements and
 //! properties are skipped. Errors name the line (ASCII) or the byte offset
 //! of the record (binary).
+//!
+//! The elements' counts must match the body in both directions: a file
+//! that ends before them is truncated, and one with data after the last
+//! record they announce (a line with content, or any byte in a binary
+//! file) is refused, naming the counts (a short count would otherwise drop
+//! the records after it without a word, where binary STL refuses the same).
 
 use std::io::{self, BufRead, Write};
 
@@ -312,6 +318,11 @@ pub(super) fn read<R: BufRead>(
                 reserve(&mut sink, which, element, lines.offset(), src, 6, 8);
                 read_ascii_element(&mut lines, element, which, &mut sink, src)?;
             }
+            while lines.advance().map_err(|e| src.io(e))? {
+                if tokens(lines.text()).next().is_some() {
+                    return Err(data_after_elements(lines.place(), &elements, src));
+                }
+            }
         }
         Encoding::BinaryLittleEndian | Encoding::BinaryBigEndian => {
             let big = encoding == Encoding::BinaryBigEndian;
@@ -322,9 +333,30 @@ pub(super) fn read<R: BufRead>(
                 reserve(&mut sink, which, element, bytes.offset(), src, 3, 4);
                 read_binary_element(&mut bytes, element, which, big, &mut sink, src)?;
             }
+            let end = bytes.offset();
+            if bytes.fill(&mut [0u8]).map_err(|e| src.io(e))? {
+                return Err(data_after_elements(Place::Byte(end), &elements, src));
+            }
         }
     }
     Ok((sink.vertices, encoding))
+}
+
+/// The error for data at `place`, after the last record the header's
+/// `elements` announce: a count is short.
+fn data_after_elements(place: Place, elements: &[Element], src: &Src) -> MeshError {
+    let counts: Vec<String> = elements
+        .iter()
+        .map(|e| format!("{} {} on line {}", element_name(e), e.count, e.line))
+        .collect();
+    src.malformed(
+        place,
+        format!(
+            "the file goes on after the records the header announces (element {}): a count is \
+             short, and what follows would be lost; correct the counts",
+            counts.join(", element ")
+        ),
+    )
 }
 
 fn which(i: usize, vi: usize, fi: usize) -> Which {

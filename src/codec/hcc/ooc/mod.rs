@@ -217,7 +217,7 @@ pub use stream::{Progress, StreamedBuild, encode_streamed};
 use super::{HccBvh, HccOptions};
 use crate::codec::ByteSize;
 use crate::codec::common::page_cache::CacheStats;
-use crate::codec::settings::{CodecOptions, Settings, SettingsError};
+use crate::codec::settings::{CodecOptions, Setting, Settings, SettingsError, Values};
 use crate::contact::EdgeFlags;
 use paged::Paged;
 
@@ -262,14 +262,15 @@ impl OocOptions {
 }
 
 impl CodecOptions for OocOptions {
-    const SETTINGS: &'static [&'static str] = &["vertex-ids", "triangle-ids"];
+    const SETTINGS: &'static [Setting] = &[HccOptions::VERTEX_IDS, HccOptions::TRIANGLE_IDS];
+    const VERTEX_BITS: Option<Values> = Some(super::VERTEX_BIT_RANGE);
 
     /// The options from a front end's settings ([`crate::codec::settings`]):
     /// `hcc-ooc.vertex-ids`, `hcc-ooc.triangle-ids` (`true`/`false`, both off
     /// by default: the paper's tree order), and the common `vertex_bits`
-    /// (1 to 24; it always quantizes, so unset or 0 gives 16).
+    /// ([`VERTEX_BIT_RANGE`](super::VERTEX_BIT_RANGE); it always quantizes,
+    /// so unset or 0 gives 16).
     fn from_settings(s: &Settings) -> Result<Self, SettingsError> {
-        const KEYS: &[&str] = <OocOptions as CodecOptions>::SETTINGS;
         let d = Self::default();
         let vertex_bits = s
             .vertex_bits_or(Some(d.vertex_bits))
@@ -277,8 +278,12 @@ impl CodecOptions for OocOptions {
         super::check_vertex_bits("hcc-ooc", Some(vertex_bits))?;
         Ok(Self {
             vertex_bits,
-            vertex_ids: s.get("hcc-ooc", KEYS[0])?.unwrap_or(d.vertex_ids),
-            triangle_ids: s.get("hcc-ooc", KEYS[1])?.unwrap_or(d.triangle_ids),
+            vertex_ids: s
+                .get("hcc-ooc", HccOptions::VERTEX_IDS.key)?
+                .unwrap_or(d.vertex_ids),
+            triangle_ids: s
+                .get("hcc-ooc", HccOptions::TRIANGLE_IDS.key)?
+                .unwrap_or(d.triangle_ids),
             ..d
         })
     }
